@@ -1,0 +1,121 @@
+//! The reference head, in SI units: axis gearing, travel, speed limits, the
+//! arm's blind zone, detector gains and the ADC. The chip binary's board
+//! module maps these onto pins; the simulated head builds the same machine.
+
+use gonio_shared::Axis;
+
+/// One stage axis.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AxisConfig {
+    /// Microsteps per revolution of the *output* (motor steps × microstepping × gear).
+    pub microsteps_per_rev: u32,
+    /// Soft limits (degrees); moves outside are refused before anything moves.
+    pub min_deg: f32,
+    pub max_deg: f32,
+    /// Angle of the home switch (degrees), just beyond `min_deg`.
+    pub home_deg: f32,
+    /// Cruise speed (deg/s) of moves and of the fast homing approach.
+    pub max_speed_dps: f32,
+    /// Slow homing re-approach speed (deg/s).
+    pub home_slow_dps: f32,
+    /// Back-off distance after the switch is found (degrees).
+    pub home_backoff_deg: f32,
+}
+
+impl AxisConfig {
+    /// Microsteps per degree (for documentation and tolerances).
+    pub fn steps_per_deg(&self) -> f32 {
+        self.microsteps_per_rev as f32 / 360.0
+    }
+}
+
+/// STEP/DIR driver timing (seconds).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DriverTiming {
+    /// DIR must be stable this long before the first STEP edge.
+    pub dir_setup_s: f32,
+    /// Width of each STEP pulse.
+    pub step_pulse_s: f32,
+}
+
+/// Geometry of the beam-splitter plate on the arm.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArmOptics {
+    /// Up to this |ψ| the return is seen through the splitter (retro zone).
+    pub retro_max_deg: f32,
+    /// From `retro_max_deg` up to this |ψ| the plate cuts the incident beam.
+    pub blind_max_deg: f32,
+}
+
+/// Photodiode front end.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DetectorConfig {
+    /// Transimpedance gains (V/A) selected by the two gain bits, lowest first.
+    pub gains_v_per_a: [f32; 4],
+    /// ADC reference voltage (V).
+    pub adc_vref: f32,
+    /// Periods discarded after a gain change while the amplifier settles.
+    pub settle_periods: u16,
+}
+
+/// The whole head.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeadConfig {
+    pub axes: [AxisConfig; 3],
+    pub driver: DriverTiming,
+    pub optics: ArmOptics,
+    pub detector: DetectorConfig,
+}
+
+impl HeadConfig {
+    pub fn axis(&self, axis: Axis) -> &AxisConfig {
+        &self.axes[axis.index()]
+    }
+}
+
+/// 200-step motors at 16 microsteps: rotation stage on a 90:1 worm (800 µsteps/°),
+/// cradle on a 180:1 worm (1600 µsteps/°), arm on a 45:1 reduction (400 µsteps/°).
+pub const REFERENCE: HeadConfig = HeadConfig {
+    axes: [
+        AxisConfig {
+            microsteps_per_rev: 200 * 16 * 90,
+            min_deg: -100.0,
+            max_deg: 100.0,
+            home_deg: -101.0,
+            max_speed_dps: 20.0,
+            home_slow_dps: 1.0,
+            home_backoff_deg: 2.0,
+        },
+        AxisConfig {
+            microsteps_per_rev: 200 * 16 * 180,
+            min_deg: -90.0,
+            max_deg: 90.0,
+            home_deg: -91.0,
+            max_speed_dps: 10.0,
+            home_slow_dps: 0.5,
+            home_backoff_deg: 2.0,
+        },
+        AxisConfig {
+            microsteps_per_rev: 200 * 16 * 45,
+            min_deg: -170.0,
+            max_deg: 170.0,
+            home_deg: -171.0,
+            max_speed_dps: 30.0,
+            home_slow_dps: 1.0,
+            home_backoff_deg: 2.0,
+        },
+    ],
+    driver: DriverTiming {
+        dir_setup_s: 5.0e-6,
+        step_pulse_s: 3.0e-6,
+    },
+    optics: ArmOptics {
+        retro_max_deg: 0.25,
+        blind_max_deg: 5.0,
+    },
+    detector: DetectorConfig {
+        gains_v_per_a: [1.0e4, 1.0e5, 1.0e6, 1.0e7],
+        adc_vref: 3.3,
+        settle_periods: 1,
+    },
+};

@@ -1,0 +1,87 @@
+//! Frames ↔ commands. Decoding is a pure function of the bytes, so it is the
+//! same on the chip and on the host, is property-tested, and is the target the
+//! fuzzers hit. Keys are matched at the width the host chose (postcard-rpc
+//! shrinks keys when unambiguous) and replies use the same width.
+
+use gonio_shared::icd::{
+    AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint,
+    SanityEndpoint, ScanEndpoint, StatusEndpoint,
+};
+use gonio_shared::{DetectionSettings, Geometry, SanityConfig, ScanSpec};
+use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
+use postcard_rpc::standard_icd::WireError;
+use postcard_rpc::{Endpoint, Key};
+use serde::{Deserialize, Serialize};
+
+/// A request from the host, decoded.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Command {
+    Identify,
+    Status,
+    Home(HomeRequest),
+    Move(Geometry),
+    Measure(MeasureRequest),
+    Scan(ScanSpec),
+    Abort,
+    Detection(DetectionSettings),
+    Sanity(SanityConfig),
+}
+
+/// A frame that is not a valid request.
+#[derive(Debug, PartialEq)]
+pub enum DecodeError {
+    /// No header could be read: nothing to answer to, the frame is dropped.
+    NoHeader,
+    /// The header is fine but the key is unknown or the body does not decode:
+    /// answered on the standard error path.
+    Wire(VarHeader, WireError),
+}
+
+fn is<E: Endpoint>(key: &VarKey) -> bool {
+    let mut k = VarKey::Key8(E::REQ_KEY);
+    k.shrink_to(key.kind());
+    k == *key
+}
+
+fn body<'a, T: Deserialize<'a>>(hdr: VarHeader, bytes: &'a [u8]) -> Result<T, DecodeError> {
+    postcard::from_bytes(bytes).map_err(|_| DecodeError::Wire(hdr, WireError::DeserFailed))
+}
+
+/// Decodes one frame into its header and command.
+pub fn decode(frame: &[u8]) -> Result<(VarHeader, Command), DecodeError> {
+    let (hdr, rest) = VarHeader::take_from_slice(frame).ok_or(DecodeError::NoHeader)?;
+    let k = &hdr.key;
+    let cmd = if is::<IdentifyEndpoint>(k) {
+        body::<()>(hdr, rest).map(|_| Command::Identify)
+    } else if is::<StatusEndpoint>(k) {
+        body::<()>(hdr, rest).map(|_| Command::Status)
+    } else if is::<HomeEndpoint>(k) {
+        body(hdr, rest).map(Command::Home)
+    } else if is::<MoveEndpoint>(k) {
+        body(hdr, rest).map(Command::Move)
+    } else if is::<MeasureEndpoint>(k) {
+        body(hdr, rest).map(Command::Measure)
+    } else if is::<ScanEndpoint>(k) {
+        body(hdr, rest).map(Command::Scan)
+    } else if is::<AbortEndpoint>(k) {
+        body::<()>(hdr, rest).map(|_| Command::Abort)
+    } else if is::<DetectionEndpoint>(k) {
+        body(hdr, rest).map(Command::Detection)
+    } else if is::<SanityEndpoint>(k) {
+        body(hdr, rest).map(Command::Sanity)
+    } else {
+        Err(DecodeError::Wire(hdr, WireError::UnknownKey))
+    };
+    cmd.map(|c| (hdr, c))
+}
+
+/// Encodes a message under `key` (shrunk to `kind`) into `buf`; returns the
+/// frame length, or `None` if it does not fit.
+pub fn encode<T: Serialize + ?Sized>(key: Key, kind: VarKeyKind, seq_no: VarSeq, msg: &T, buf: &mut [u8]) -> Option<usize> {
+    let mut key = VarKey::Key8(key);
+    key.shrink_to(kind);
+    let (hdr, rest) = VarHeader { key, seq_no }.write_to_slice(buf)?;
+    let hdr_len = hdr.len();
+    let body = postcard::to_slice(msg, rest).ok()?;
+    Some(hdr_len + body.len())
+}

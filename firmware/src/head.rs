@@ -1,0 +1,303 @@
+//! The head: owns the hardware and the state, answers commands, runs scans.
+//!
+//! Requests are served one at a time in arrival order. A scan is accepted at
+//! once and then advanced one point per loop turn; between points the head
+//! looks for waiting requests, so status and abort are answered mid-scan.
+
+use crate::board::HeadConfig;
+use crate::detector::Detector;
+use crate::hw::{Board, Clock, Hardware, StepTimer};
+use crate::kinematics;
+use crate::motion::{self, Position};
+use crate::{homing, units};
+use embedded_hal::digital::OutputPin;
+use embedded_hal_async::delay::DelayNs;
+use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
+use gonio_shared::sample::ScanPosition;
+use gonio_shared::{
+    Axis, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, Reply, Sample, SampleFlags, SanityConfig, ScanAccepted,
+    ScanEvent, ScanSpec, Status,
+};
+use postcard_rpc::header::VarKeyKind;
+
+/// Who this head is; the board and the serial come from the binary.
+#[derive(Debug, Clone)]
+pub struct HeadInfo {
+    pub board: &'static str,
+    pub serial: heapless::String<24>,
+    pub simulated: bool,
+    /// Reported protocol version; the real value except in mismatch tests.
+    pub protocol_version: u16,
+}
+
+pub(crate) struct ScanRun {
+    pub(crate) spec: ScanSpec,
+    pub(crate) total: u32,
+    pub(crate) next_order: u32,
+    pub(crate) measured: u32,
+    pub(crate) skipped: u32,
+}
+
+pub struct Head<B: Board> {
+    cfg: HeadConfig,
+    hw: Hardware<B>,
+    info: HeadInfo,
+    pos: Position,
+    detector: Detector,
+    sanity: Option<SanityConfig>,
+    pub(crate) scan: Option<ScanRun>,
+    /// A scan event to publish after the current reply (an abort's `Stopped`).
+    pub(crate) pending_event: Option<ScanEvent>,
+    laser_on: bool,
+    seq: u32,
+    pub(crate) topic_seq: u32,
+    /// Key width the host uses; replies and topics follow it.
+    pub(crate) key_kind: VarKeyKind,
+    samples_flagged: u32,
+    pub(crate) last_fault: Option<Fault>,
+}
+
+impl<B: Board> Head<B> {
+    pub fn new(cfg: HeadConfig, hw: Hardware<B>, info: HeadInfo) -> Self {
+        let mut head = Self {
+            cfg,
+            hw,
+            info,
+            pos: Position::default(),
+            detector: Detector::new::<B::Adc>(DetectionSettings::default()),
+            sanity: None,
+            scan: None,
+            pending_event: None,
+            laser_on: false,
+            seq: 0,
+            topic_seq: 0,
+            key_kind: VarKeyKind::Key8,
+            samples_flagged: 0,
+            last_fault: None,
+        };
+        head.safe_state();
+        head
+    }
+
+    /// The hardware, for the binary's watchdog and for tests.
+    pub fn hardware(&mut self) -> &mut Hardware<B> {
+        &mut self.hw
+    }
+
+    /// Laser off, conversions stopped, drivers disabled, step queues emptied.
+    /// Pin errors are ignored here: there is nothing safer left to do.
+    pub fn safe_state(&mut self) {
+        self.hw.steps.clear();
+        self.detector.stop(&mut self.hw);
+        let _ = self.hw.laser.set_low();
+        self.laser_on = false;
+        for en in self.hw.enable_n.iter_mut() {
+            let _ = en.set_high();
+        }
+    }
+
+    fn laser(&mut self, on: bool) -> Result<(), Fault> {
+        let r = if on { self.hw.laser.set_high() } else { self.hw.laser.set_low() };
+        r.map_err(|_| Fault::Gpio)?;
+        self.laser_on = on;
+        Ok(())
+    }
+
+    pub fn identity(&self) -> Identity {
+        let d = &self.cfg.detector;
+        Identity {
+            protocol_version: self.info.protocol_version,
+            firmware_version: heapless::String::try_from(env!("CARGO_PKG_VERSION")).unwrap_or_default(),
+            board: heapless::String::try_from(self.info.board).unwrap_or_default(),
+            serial: self.info.serial.clone(),
+            simulated: self.info.simulated,
+            capabilities: Capabilities {
+                axes: 3,
+                gain_ranges: d.gains_v_per_a.len() as u8,
+                adc_bits: <B::Adc as crate::hw::AdcStream>::BITS,
+                max_scan_incidences: 8,
+                gains_v_per_a: d.gains_v_per_a,
+            },
+        }
+    }
+
+    pub fn status(&self) -> Status {
+        Status {
+            state: match &self.scan {
+                Some(s) => HeadState::Scanning {
+                    next_order: s.next_order,
+                    total: s.total,
+                },
+                None => HeadState::Idle,
+            },
+            homed: self.pos.all_homed(),
+            laser_on: self.laser_on,
+            axes: self.pos.angles(&self.cfg),
+            detection: *self.detector.settings(),
+            samples_sent: self.seq,
+            samples_flagged: self.samples_flagged,
+            samples_remeasured: 0,
+            sanity_loaded: self.sanity.is_some(),
+            last_fault: self.last_fault,
+            uptime_us: self.hw.clock.now_us(),
+        }
+    }
+
+    fn note<T>(&mut self, r: Reply<T>) -> Reply<T> {
+        if let Err(f) = &r {
+            self.last_fault = Some(*f);
+        }
+        r
+    }
+
+    pub async fn home(&mut self, req: HomeRequest) -> Reply<gonio_shared::AxisAngles> {
+        if self.scan.is_some() {
+            return Err(Fault::Busy);
+        }
+        let wanted = [req.rotation, req.cradle, req.arm];
+        let mut r = Ok(());
+        for axis in Axis::ALL {
+            if wanted[axis.index()] {
+                r = homing::home_axis(&mut self.hw, &self.cfg, &mut self.pos, axis).await;
+                if r.is_err() {
+                    break;
+                }
+            }
+        }
+        if r.is_err() {
+            self.safe_state();
+        }
+        let r = r.map(|_| self.pos.angles(&self.cfg));
+        self.note(r)
+    }
+
+    /// Moves to a geometry; refuses before moving when it is unreachable.
+    async fn goto(&mut self, g: &Geometry) -> Reply<MoveReport> {
+        let axes = kinematics::inverse(&self.cfg, g)?;
+        if !self.pos.all_homed() {
+            return Err(Fault::NotHomed);
+        }
+        let t0 = self.hw.clock.now_us();
+        let target = motion::target_steps(&self.cfg, &axes);
+        if let Err(f) = motion::move_to(&mut self.hw, &self.cfg, &mut self.pos, target).await {
+            self.safe_state();
+            return Err(f);
+        }
+        let reached_axes = self.pos.angles(&self.cfg);
+        Ok(MoveReport {
+            reached: kinematics::forward(&reached_axes),
+            axes: reached_axes,
+            duration_s: (self.hw.clock.now_us().saturating_sub(t0)) as f32 * 1e-6,
+        })
+    }
+
+    pub async fn move_to(&mut self, g: Geometry) -> Reply<MoveReport> {
+        if self.scan.is_some() {
+            return Err(Fault::Busy);
+        }
+        let r = self.goto(&g).await;
+        self.note(r)
+    }
+
+    /// Moves (if asked), settles, and takes one sample with the laser on.
+    pub(crate) async fn acquire(&mut self, at: Option<Geometry>, scan: Option<ScanPosition>) -> Reply<Sample> {
+        let target = match at {
+            Some(g) => {
+                self.goto(&g).await?;
+                let settle = units::seconds_to_us(self.detector.settings().settle_s);
+                self.hw.delay.delay_us(settle).await;
+                g
+            }
+            None => kinematics::forward(&self.pos.angles(&self.cfg)),
+        };
+        self.laser(true)?;
+        let m = match self.detector.measure(&mut self.hw, &self.cfg).await {
+            Ok(m) => m,
+            Err(f) => {
+                self.safe_state();
+                return Err(f);
+            }
+        };
+        let axes = self.pos.angles(&self.cfg);
+        let mut flags = m.flags;
+        if kinematics::through_splitter(&self.cfg, &axes) {
+            flags.set(SampleFlags::THROUGH_SPLITTER);
+        }
+        if flags.0 & !SampleFlags::THROUGH_SPLITTER != 0 {
+            self.samples_flagged = self.samples_flagged.wrapping_add(1);
+        }
+        let s = Sample {
+            seq: self.seq,
+            scan,
+            timestamp_us: self.hw.clock.now_us(),
+            target,
+            reached: kinematics::forward(&axes),
+            axes,
+            in_phase_v: m.in_phase_v,
+            quadrature_v: m.quadrature_v,
+            amplitude_v: m.amplitude_v,
+            phase_deg: m.phase_deg,
+            noise_v: m.noise_v,
+            gain_v_per_a: m.gain_v_per_a,
+            gain_index: m.gain_index,
+            periods: m.periods,
+            flags,
+        };
+        self.seq = self.seq.wrapping_add(1);
+        Ok(s)
+    }
+
+    pub async fn measure(&mut self, req: MeasureRequest) -> Reply<Sample> {
+        if self.scan.is_some() {
+            return Err(Fault::Busy);
+        }
+        let r = self.acquire(req.at, None).await;
+        self.detector.stop(&mut self.hw);
+        let _ = self.laser(false);
+        self.note(r)
+    }
+
+    pub fn start_scan(&mut self, spec: ScanSpec) -> Reply<ScanAccepted> {
+        if self.scan.is_some() {
+            return Err(Fault::Busy);
+        }
+        let total = spec.validate()?;
+        if !self.pos.all_homed() {
+            return Err(Fault::NotHomed);
+        }
+        let first_order = spec.first_order;
+        self.scan = Some(ScanRun {
+            spec,
+            total,
+            next_order: first_order,
+            measured: 0,
+            skipped: 0,
+        });
+        Ok(ScanAccepted { points: total, first_order })
+    }
+
+    pub fn abort(&mut self) -> Status {
+        if let Some(run) = self.scan.take() {
+            self.last_fault = Some(Fault::Aborted);
+            self.pending_event = Some(ScanEvent::Stopped {
+                next_order: run.next_order,
+                reason: Fault::Aborted,
+            });
+        }
+        self.safe_state();
+        self.status()
+    }
+
+    pub fn configure_detection(&mut self, s: DetectionSettings) -> Reply<gonio_shared::DetectionReport> {
+        if self.scan.is_some() {
+            return Err(Fault::Busy);
+        }
+        self.detector.configure(&mut self.hw, s)
+    }
+
+    pub fn load_sanity(&mut self, c: SanityConfig) -> Reply<()> {
+        c.validate()?;
+        self.sanity = Some(c);
+        Ok(())
+    }
+}

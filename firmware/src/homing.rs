@@ -1,0 +1,73 @@
+//! Homing on a switch at the negative end of each axis: fast approach in
+//! chunks until the switch closes, back off until it opens, re-approach
+//! slowly in microstep-sized chunks, and set the position to the switch angle.
+//! The switch is read between chunks, so the fast approach overshoots by at
+//! most one chunk (taken up by the back-off) and the slow one by at most one
+//! fine chunk.
+
+use crate::board::HeadConfig;
+use crate::hw::{Board, Hardware};
+use crate::motion::{move_by, Position};
+use crate::units;
+use embedded_hal::digital::InputPin;
+use gonio_shared::{Axis, Fault};
+
+/// Fast approach chunk (degrees).
+const FAST_CHUNK_DEG: f32 = 0.5;
+/// Slow re-approach chunk (microsteps).
+const SLOW_CHUNK_STEPS: i32 = 4;
+
+fn pressed<B: Board>(hw: &mut Hardware<B>, axis: Axis) -> Result<bool, Fault> {
+    hw.home[axis.index()].is_high().map_err(|_| Fault::HomeSwitchNotFound(axis))
+}
+
+/// Steps `chunk` microsteps at a time (negative = towards the switch) until the
+/// switch reads `until`, for at most `limit` microsteps. Returns whether it did.
+async fn seek<B: Board>(
+    hw: &mut Hardware<B>,
+    cfg: &HeadConfig,
+    pos: &mut Position,
+    axis: Axis,
+    chunk: i32,
+    speed_dps: f32,
+    until: bool,
+    limit: u32,
+) -> Result<bool, Fault> {
+    let i = axis.index();
+    let mut travelled = 0u32;
+    while pressed(hw, axis)? != until {
+        if travelled >= limit {
+            return Ok(false);
+        }
+        let mut delta = [0; 3];
+        delta[i] = chunk;
+        let mut speed = [0.0; 3];
+        speed[i] = speed_dps;
+        move_by(hw, cfg, pos, delta, speed).await?;
+        travelled += chunk.unsigned_abs();
+    }
+    Ok(true)
+}
+
+/// Homes one axis. On success the axis is at its switch angle and marked homed.
+pub async fn home_axis<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, pos: &mut Position, axis: Axis) -> Result<(), Fault> {
+    let c = cfg.axis(axis);
+    let i = axis.index();
+    pos.homed[i] = false;
+    // Full travel plus margin: from anywhere, the switch must be met within it.
+    let travel = units::deg_to_steps(c, c.max_deg - c.home_deg + 2.0 * c.home_backoff_deg).unsigned_abs();
+    let fast = -units::deg_to_steps(c, FAST_CHUNK_DEG).max(1);
+    if !seek(hw, cfg, pos, axis, fast, c.max_speed_dps, true, travel).await? {
+        return Err(Fault::HomeSwitchNotFound(axis));
+    }
+    let backoff = units::deg_to_steps(c, c.home_backoff_deg).unsigned_abs();
+    if !seek(hw, cfg, pos, axis, -fast, c.max_speed_dps, false, backoff).await? {
+        return Err(Fault::HomeSwitchStuck(axis));
+    }
+    if !seek(hw, cfg, pos, axis, -SLOW_CHUNK_STEPS, c.home_slow_dps, true, 2 * backoff).await? {
+        return Err(Fault::HomeSwitchNotFound(axis));
+    }
+    pos.steps[i] = units::deg_to_steps(c, c.home_deg);
+    pos.homed[i] = true;
+    Ok(())
+}

@@ -1,0 +1,102 @@
+//! The hardware the core needs, as traits. `embedded-hal` covers pins and
+//! delays; three small traits of our own cover what it has no word for: the
+//! timer-triggered ADC stream, the hardware step timer and a monotonic clock.
+
+use embedded_hal::digital::{InputPin, OutputPin};
+use embedded_hal_async::delay::DelayNs;
+use gonio_shared::Axis;
+
+/// Timing of the chop timer, already converted to the timer's units.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct ChopTiming {
+    /// Timer ticks per ADC sample (the ADC trigger period).
+    pub ticks_per_sample: u32,
+    /// ADC samples per chop period; the chop output toggles every half of it.
+    pub samples_per_period: u16,
+}
+
+/// A block of ADC codes was lost or arrived late (DMA overrun).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Overrun;
+
+/// One timer chops the laser and triggers the ADC, so each chop period holds a
+/// whole number of samples; DMA fills a double buffer whose halves are one
+/// chop period each.
+pub trait AdcStream {
+    /// Timer input clock (Hz) that [`ChopTiming::ticks_per_sample`] counts.
+    const TIMER_HZ: u32;
+    /// ADC resolution in bits.
+    const BITS: u8;
+
+    /// (Re)start the chop output and the triggered conversions.
+    fn start(&mut self, timing: ChopTiming);
+    /// Stop conversions and hold the chop output low (laser dark).
+    fn stop(&mut self);
+    /// Copy the next chop period of codes into `out` (length
+    /// `samples_per_period`). The first sample of each block is taken at the
+    /// rising chop edge. `Err(Overrun)` when a block was lost before this one.
+    async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun>;
+}
+
+/// A Klipper-style step command: `count` steps, the first `interval` ticks
+/// after the previous one, each next interval changed by `add` ticks.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct StepBlock {
+    pub interval: u32,
+    pub count: u32,
+    pub add: i32,
+}
+
+/// The step queue of one axis is full.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct QueueFull;
+
+/// A hardware timer that emits STEP pulses at scheduled times for the three
+/// axes. The core sets DIR (and waits the driver's setup time) before it
+/// queues steps, and never toggles STEP itself.
+pub trait StepTimer {
+    /// Timer tick rate (Hz) of [`StepBlock::interval`].
+    const TICK_HZ: u32;
+
+    /// Queue steps for one axis; nothing is emitted before [`StepTimer::run`].
+    fn push(&mut self, axis: Axis, block: StepBlock) -> Result<(), QueueFull>;
+    /// Start every queue at the same instant and wait until all are empty.
+    /// Returns the number of steps emitted per axis.
+    async fn run(&mut self) -> [u32; 3];
+    /// Drop whatever is queued (the axes stop at the next tick).
+    fn clear(&mut self);
+}
+
+/// Monotonic time since boot.
+pub trait Clock {
+    fn now_us(&self) -> u64;
+}
+
+/// The set of types a board provides. Pins are one type each, as embassy's
+/// `Output`/`Input` and embedded-hal-mock's pin mock are.
+pub trait Board {
+    type Out: OutputPin;
+    type In: InputPin;
+    type Adc: AdcStream;
+    type Steps: StepTimer;
+    type Delay: DelayNs;
+    type Clock: Clock;
+}
+
+/// Everything the core drives, owned by [`crate::Head`].
+pub struct Hardware<B: Board> {
+    /// DIR output per axis (rotation, cradle, arm); high = positive direction.
+    pub dir: [B::Out; 3],
+    /// Driver enable per axis, active low as on common STEP/DIR drivers.
+    pub enable_n: [B::Out; 3],
+    /// Home switch per axis, at the negative end of travel; high = pressed.
+    pub home: [B::In; 3],
+    /// Transimpedance gain select, two bits: four decades.
+    pub gain: [B::Out; 2],
+    /// Laser enable (the chop timer gates the modulation input).
+    pub laser: B::Out,
+    pub adc: B::Adc,
+    pub steps: B::Steps,
+    pub delay: B::Delay,
+    pub clock: B::Clock,
+}

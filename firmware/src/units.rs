@@ -1,0 +1,68 @@
+//! The edge between SI units and hardware units: degrees ↔ microsteps,
+//! seconds ↔ timer ticks, hertz ↔ timer reloads, ADC codes ↔ volts. Nothing
+//! else in the firmware converts.
+
+use crate::board::AxisConfig;
+use crate::hw::ChopTiming;
+use gonio_shared::DetectionSettings;
+
+/// Degrees → microsteps (nearest).
+pub fn deg_to_steps(axis: &AxisConfig, deg: f32) -> i32 {
+    libm::round(deg as f64 * axis.microsteps_per_rev as f64 / 360.0) as i32
+}
+
+/// Microsteps → degrees.
+pub fn steps_to_deg(axis: &AxisConfig, steps: i32) -> f32 {
+    (steps as f64 * 360.0 / axis.microsteps_per_rev as f64) as f32
+}
+
+/// Speed (deg/s) → step interval in ticks of a `tick_hz` timer (at least 1).
+pub fn speed_to_interval(axis: &AxisConfig, dps: f32, tick_hz: u32) -> u32 {
+    let steps_per_s = dps as f64 * axis.microsteps_per_rev as f64 / 360.0;
+    let ticks = libm::round(tick_hz as f64 / steps_per_s);
+    if ticks.is_finite() && ticks >= 1.0 {
+        ticks.min(u32::MAX as f64) as u32
+    } else {
+        1
+    }
+}
+
+/// Seconds → ticks of a `tick_hz` timer (rounded up, saturating).
+pub fn seconds_to_ticks(s: f32, tick_hz: u32) -> u32 {
+    let t = libm::ceil(s as f64 * tick_hz as f64);
+    if t <= 0.0 {
+        0
+    } else {
+        t.min(u32::MAX as f64) as u32
+    }
+}
+
+/// Seconds → nanoseconds for `DelayNs` (rounded up, saturating).
+pub fn seconds_to_ns(s: f32) -> u32 {
+    seconds_to_ticks(s, 1_000_000_000)
+}
+
+/// Seconds → microseconds for `DelayNs::delay_us` (rounded up, saturating).
+pub fn seconds_to_us(s: f32) -> u32 {
+    seconds_to_ticks(s, 1_000_000)
+}
+
+/// Chop settings → ADC trigger period of a `timer_hz` timer. The chop
+/// frequency actually produced is returned by [`chop_hz_actual`].
+pub fn chop_timing(s: &DetectionSettings, timer_hz: u32) -> ChopTiming {
+    let ticks = libm::round(timer_hz as f64 / s.sample_rate_hz() as f64).max(1.0);
+    ChopTiming {
+        ticks_per_sample: ticks.min(u32::MAX as f64) as u32,
+        samples_per_period: s.samples_per_period,
+    }
+}
+
+/// Chop frequency (Hz) that a timing really produces.
+pub fn chop_hz_actual(t: ChopTiming, timer_hz: u32) -> f32 {
+    (timer_hz as f64 / (t.ticks_per_sample as f64 * t.samples_per_period as f64)) as f32
+}
+
+/// ADC codes → volts at the ADC input.
+pub fn codes_to_volts(codes: f32, bits: u8, vref: f32) -> f32 {
+    codes * vref / (1u32 << bits) as f32
+}

@@ -1,0 +1,100 @@
+//! Chop and integration settings of the synchronous detector, in SI units.
+//! Conversion to timer reloads and ADC trigger rates happens in the firmware's
+//! `units` module, never here.
+
+use crate::fault::{Fault, Field};
+use postcard_schema::Schema;
+use serde::{Deserialize, Serialize};
+
+/// The reference waveform the photodiode signal is demodulated against.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Reference {
+    /// ±1 square wave in phase with the chop (boxcar demodulation).
+    Square,
+    /// Sine at the chop frequency.
+    Sine,
+}
+
+/// What the host asks of the detector.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DetectionSettings {
+    /// Laser chop frequency (Hz); the ADC is triggered from the same timer.
+    pub chop_hz: f32,
+    /// ADC samples per chop period (even, so each half-period is whole).
+    pub samples_per_period: u16,
+    /// Chop periods integrated per sample (23 at 230 Hz = 100 ms, a whole
+    /// number of 50 Hz and 60 Hz mains periods).
+    pub periods: u16,
+    /// Settle time after a move, before integrating (s).
+    pub settle_s: f32,
+    pub reference: Reference,
+    /// Pick the transimpedance gain per sample.
+    pub auto_range: bool,
+}
+
+impl DetectionSettings {
+    /// Limits of the reference hardware (ADC rate ≤ 1 MS/s, integration ≤ 10 s).
+    pub const CHOP_HZ_MIN: f32 = 1.0;
+    pub const CHOP_HZ_MAX: f32 = 5_000.0;
+    pub const SAMPLES_PER_PERIOD_MAX: u16 = 512;
+    pub const ADC_RATE_MAX_HZ: f32 = 1.0e6;
+    pub const INTEGRATION_MAX_S: f32 = 10.0;
+    pub const SETTLE_MAX_S: f32 = 60.0;
+
+    /// Integration time (s) of one sample.
+    pub fn integration_s(&self) -> f32 {
+        self.periods as f32 / self.chop_hz
+    }
+
+    /// ADC sampling rate (Hz).
+    pub fn sample_rate_hz(&self) -> f32 {
+        self.chop_hz * self.samples_per_period as f32
+    }
+
+    /// Checks every field; the head applies nothing of a refused setting.
+    pub fn validate(&self) -> Result<(), Fault> {
+        let bad = |f| Err(Fault::InvalidValue(f));
+        if !(self.chop_hz.is_finite() && (Self::CHOP_HZ_MIN..=Self::CHOP_HZ_MAX).contains(&self.chop_hz)) {
+            return bad(Field::ChopFrequency);
+        }
+        let m = self.samples_per_period;
+        if m < 4 || m > Self::SAMPLES_PER_PERIOD_MAX || m % 4 != 0 || self.sample_rate_hz() > Self::ADC_RATE_MAX_HZ {
+            return bad(Field::SamplesPerPeriod);
+        }
+        if self.periods == 0 || self.integration_s() > Self::INTEGRATION_MAX_S {
+            return bad(Field::Periods);
+        }
+        if !(self.settle_s.is_finite() && (0.0..=Self::SETTLE_MAX_S).contains(&self.settle_s)) {
+            return bad(Field::SettleTime);
+        }
+        Ok(())
+    }
+}
+
+impl Default for DetectionSettings {
+    /// 230 Hz chop, 64 samples per period, 23 periods (100 ms), 50 ms settle.
+    fn default() -> Self {
+        Self {
+            chop_hz: 230.0,
+            samples_per_period: 64,
+            periods: 23,
+            settle_s: 0.05,
+            reference: Reference::Square,
+            auto_range: true,
+        }
+    }
+}
+
+/// The settings as applied, with derived figures.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct DetectionReport {
+    pub settings: DetectionSettings,
+    /// Chop frequency actually produced by the timer (Hz).
+    pub chop_hz_actual: f32,
+    pub integration_s: f32,
+    /// Equivalent noise bandwidth of the integration, `1/(2T)` (Hz).
+    pub enbw_hz: f32,
+}

@@ -1,0 +1,155 @@
+//! Why a command was refused or a scan stopped. Every variant maps to a code
+//! and a sentence on the host; the head never answers a bad command by moving.
+
+use core::fmt;
+use postcard_schema::Schema;
+use serde::{Deserialize, Serialize};
+
+/// One of the three stage axes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Axis {
+    /// Rotation stage: sample yaw ω.
+    Rotation,
+    /// Goniometric cradle: sample tilt τ.
+    Cradle,
+    /// Detector arm: azimuth ψ.
+    Arm,
+}
+
+impl Axis {
+    pub const ALL: [Axis; 3] = [Axis::Rotation, Axis::Cradle, Axis::Arm];
+
+    pub const fn index(self) -> usize {
+        match self {
+            Axis::Rotation => 0,
+            Axis::Cradle => 1,
+            Axis::Arm => 2,
+        }
+    }
+
+    pub const fn name(self) -> &'static str {
+        match self {
+            Axis::Rotation => "rotation",
+            Axis::Cradle => "cradle",
+            Axis::Arm => "arm",
+        }
+    }
+}
+
+/// A command field that was refused.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Field {
+    ThetaI,
+    ThetaO,
+    Dphi,
+    ChopFrequency,
+    SamplesPerPeriod,
+    Periods,
+    SettleTime,
+    ScanRange,
+    ScanStart,
+    ModelParameter,
+    Tolerance,
+}
+
+impl Field {
+    pub const fn name(self) -> &'static str {
+        match self {
+            Field::ThetaI => "theta_i",
+            Field::ThetaO => "theta_o",
+            Field::Dphi => "dphi",
+            Field::ChopFrequency => "chop frequency",
+            Field::SamplesPerPeriod => "samples per period",
+            Field::Periods => "integration periods",
+            Field::SettleTime => "settle time",
+            Field::ScanRange => "scan range",
+            Field::ScanStart => "scan start position",
+            Field::ModelParameter => "model parameter",
+            Field::Tolerance => "sanity tolerance",
+        }
+    }
+}
+
+/// Why a geometry cannot be reached.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Unreachable {
+    /// The direction lies at or below the sample plane (θ ≥ 90°).
+    BehindSample,
+    /// The axis would leave its travel.
+    AxisTravel(Axis),
+    /// The arm would sit where the beam-splitter plate cuts the incident beam.
+    BlindZone,
+}
+
+/// A refusal or a fault, with what it concerns.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Fault {
+    /// A field is NaN, infinite or out of its documented range.
+    InvalidValue(Field),
+    /// The geometry cannot be reached; nothing moved.
+    Unreachable(Unreachable),
+    /// A move or measurement was asked for before homing.
+    NotHomed,
+    /// Another command (a scan) is running; abort it first.
+    Busy,
+    /// The operation was stopped by an abort command.
+    Aborted,
+    /// Homing ran the full travel without seeing the switch.
+    HomeSwitchNotFound(Axis),
+    /// The home switch of an axis stays active after backing off.
+    HomeSwitchStuck(Axis),
+    /// The step timer could not accept or finish a move.
+    StepTimer(Axis),
+    /// The ADC stream lost a block (DMA overrun).
+    AdcOverrun,
+    /// The detector saturates even at the lowest gain.
+    Saturated,
+    /// A GPIO write (DIR, enable, gain select, laser) failed.
+    Gpio,
+}
+
+impl Fault {
+    /// A stable numeric code for logs and files.
+    pub const fn code(&self) -> u16 {
+        match self {
+            Fault::InvalidValue(_) => 100,
+            Fault::Unreachable(Unreachable::BehindSample) => 200,
+            Fault::Unreachable(Unreachable::AxisTravel(_)) => 201,
+            Fault::Unreachable(Unreachable::BlindZone) => 202,
+            Fault::NotHomed => 300,
+            Fault::Busy => 301,
+            Fault::Aborted => 302,
+            Fault::HomeSwitchNotFound(_) => 400,
+            Fault::HomeSwitchStuck(_) => 401,
+            Fault::StepTimer(_) => 402,
+            Fault::AdcOverrun => 500,
+            Fault::Saturated => 501,
+            Fault::Gpio => 600,
+        }
+    }
+}
+
+impl fmt::Display for Fault {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "E{}: ", self.code())?;
+        match self {
+            Fault::InvalidValue(field) => write!(f, "invalid {} (NaN, infinite or out of range)", field.name()),
+            Fault::Unreachable(Unreachable::BehindSample) => f.write_str("unreachable: direction at or behind the sample plane"),
+            Fault::Unreachable(Unreachable::AxisTravel(a)) => write!(f, "unreachable: outside the travel of the {} axis", a.name()),
+            Fault::Unreachable(Unreachable::BlindZone) => f.write_str("unreachable: arm in the blind zone of the beam-splitter plate"),
+            Fault::NotHomed => f.write_str("axes not homed; run home first"),
+            Fault::Busy => f.write_str("head busy with a scan; abort it first"),
+            Fault::Aborted => f.write_str("aborted"),
+            Fault::HomeSwitchNotFound(a) => write!(f, "home switch of the {} axis not found within its travel", a.name()),
+            Fault::HomeSwitchStuck(a) => write!(f, "home switch of the {} axis stuck active", a.name()),
+            Fault::StepTimer(a) => write!(f, "step timer fault on the {} axis", a.name()),
+            Fault::AdcOverrun => f.write_str("ADC block lost (DMA overrun)"),
+            Fault::Saturated => f.write_str("detector saturated at the lowest gain"),
+            Fault::Gpio => f.write_str("GPIO write failed"),
+        }
+    }
+}

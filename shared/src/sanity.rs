@@ -1,0 +1,64 @@
+//! The model the head checks samples against (RetroPhong / ABC-Retro /
+//! Lambert, `../shared/spec/models.md` §2), uploaded by the host.
+
+use crate::fault::{Fault, Field};
+use postcard_schema::Schema;
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SanityModel {
+    Lambert { kd: f32 },
+    RetroPhong { kd: f32, n: f32, k1: f32, k2: f32, k3: f32, k4: f32 },
+    /// `back` selects the back-vector cosine for the retro lobe, else the view cosine.
+    AbcRetro { kd: f32, r0: f32, ab: f32, bb: f32, cb: f32, ar: f32, br: f32, cr: f32, back: bool },
+}
+
+impl SanityModel {
+    fn params(&self) -> heapless::Vec<f32, 8> {
+        let mut v = heapless::Vec::new();
+        let s: &[f32] = match self {
+            SanityModel::Lambert { kd } => &[*kd],
+            SanityModel::RetroPhong { kd, n, k1, k2, k3, k4 } => &[*kd, *n, *k1, *k2, *k3, *k4],
+            SanityModel::AbcRetro { kd, r0, ab, bb, cb, ar, br, cr, .. } => &[*kd, *r0, *ab, *bb, *cb, *ar, *br, *cr],
+        };
+        // At most eight parameters by construction.
+        let _ = v.extend_from_slice(s);
+        v
+    }
+
+    /// Every parameter finite and non-negative (all of them are magnitudes,
+    /// exponents or reflectances in `models.md`), exponents ≤ 1e5.
+    pub fn validate(&self) -> Result<(), Fault> {
+        if self.params().iter().any(|p| !p.is_finite() || *p < 0.0 || *p > 1.0e5) {
+            return Err(Fault::InvalidValue(Field::ModelParameter));
+        }
+        Ok(())
+    }
+}
+
+/// Model, scale and tolerance band of the on-device check.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SanityConfig {
+    pub model: SanityModel,
+    /// Volts at the ADC per unit of `f_r·cosθo` at unit gain (from the reference plate).
+    pub volts_per_sr_inv: f32,
+    /// Tolerance: relative, absolute (V) and in units of the sample's noise.
+    pub rel_tol: f32,
+    pub abs_tol_v: f32,
+    pub k_noise: f32,
+    /// Measure a failing point once more before flagging it.
+    pub remeasure: bool,
+}
+
+impl SanityConfig {
+    pub fn validate(&self) -> Result<(), Fault> {
+        self.model.validate()?;
+        let ok = |x: f32| x.is_finite() && x >= 0.0;
+        if !(ok(self.volts_per_sr_inv) && ok(self.rel_tol) && ok(self.abs_tol_v) && ok(self.k_noise)) {
+            return Err(Fault::InvalidValue(Field::Tolerance));
+        }
+        Ok(())
+    }
+}

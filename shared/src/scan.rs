@@ -1,0 +1,168 @@
+//! A scan: a grid of isotropic geometries, expanded point by point on the
+//! head (it never holds the whole grid) and on the host (to check coverage).
+//!
+//! Two orders matter. The *canonical index* enumerates the grid θi-major,
+//! then θo, then Δφ; files and resumption use it. The *visit order* is what
+//! the head follows: a serpentine that reverses the θo sweep on every other
+//! Δφ row and the Δφ sweep on every other incidence, so the arm and the
+//! sample never swing back across the whole range between neighbours.
+
+use crate::fault::{Fault, Field};
+use crate::geometry::Geometry;
+use crate::sample::Sample;
+use postcard_schema::Schema;
+use serde::{Deserialize, Serialize};
+
+/// Inclusive, evenly stepped range of angles (degrees).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AngleRange {
+    pub start_deg: f32,
+    pub stop_deg: f32,
+    pub step_deg: f32,
+}
+
+impl AngleRange {
+    pub const fn new(start_deg: f32, stop_deg: f32, step_deg: f32) -> Self {
+        Self {
+            start_deg,
+            stop_deg,
+            step_deg,
+        }
+    }
+
+    /// Number of values, or `None` for a malformed range.
+    pub fn len(&self) -> Option<u32> {
+        let (a, b, s) = (self.start_deg, self.stop_deg, self.step_deg);
+        if !(a.is_finite() && b.is_finite() && s.is_finite()) || s <= 0.0 || b < a || b - a > 360.0 {
+            return None;
+        }
+        // The stop value is included when it lies on the grid (to 1e-4 step).
+        let steps = ((b - a) / s + 1.0e-4) as u32;
+        Some(steps + 1)
+    }
+
+    /// The k-th value.
+    pub fn at(&self, k: u32) -> f32 {
+        self.start_deg + k as f32 * self.step_deg
+    }
+}
+
+/// The scan asked of the head.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ScanSpec {
+    pub theta_i_deg: heapless::Vec<f32, 8>,
+    pub theta_o: AngleRange,
+    pub dphi: AngleRange,
+    /// Visit-order position to start at: 0 for a new scan, the first missing
+    /// position to resume an interrupted one.
+    pub first_order: u32,
+}
+
+/// The shape of a validated grid.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Dims {
+    n_ti: u32,
+    n_to: u32,
+    n_dp: u32,
+}
+
+impl ScanSpec {
+    /// The Belcour et al. grid: θi ∈ {15, 30, 60}°, θo 0–90° step 3°,
+    /// Δφ −180°..180° step 10°.
+    pub fn belcour() -> Self {
+        let mut theta_i_deg = heapless::Vec::new();
+        for t in [15.0, 30.0, 60.0] {
+            // Capacity 8 > 3.
+            let _ = theta_i_deg.push(t);
+        }
+        Self {
+            theta_i_deg,
+            theta_o: AngleRange::new(0.0, 90.0, 3.0),
+            dphi: AngleRange::new(-180.0, 180.0, 10.0),
+            first_order: 0,
+        }
+    }
+
+    fn dims(&self) -> Result<Dims, Fault> {
+        let bad = Err(Fault::InvalidValue(Field::ScanRange));
+        if self.theta_i_deg.is_empty() || self.theta_i_deg.iter().any(|t| !t.is_finite()) {
+            return bad;
+        }
+        let (Some(n_to), Some(n_dp)) = (self.theta_o.len(), self.dphi.len()) else {
+            return bad;
+        };
+        let n_ti = self.theta_i_deg.len() as u32;
+        // Bounded so every index fits in u32 with room to spare.
+        if (n_ti as u64) * (n_to as u64) * (n_dp as u64) > 10_000_000 {
+            return bad;
+        }
+        Ok(Dims { n_ti, n_to, n_dp })
+    }
+
+    /// Checks the grid and the start position; returns the number of points.
+    pub fn validate(&self) -> Result<u32, Fault> {
+        let d = self.dims()?;
+        let n = d.n_ti * d.n_to * d.n_dp;
+        if self.first_order > n {
+            return Err(Fault::InvalidValue(Field::ScanStart));
+        }
+        Ok(n)
+    }
+
+    /// Number of grid points (0 for an invalid spec).
+    pub fn len(&self) -> u32 {
+        self.validate().unwrap_or(0)
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// The geometry of canonical index `index`.
+    pub fn point(&self, index: u32) -> Option<Geometry> {
+        let d = self.dims().ok()?;
+        if index >= d.n_ti * d.n_to * d.n_dp {
+            return None;
+        }
+        let (a, rest) = (index / (d.n_to * d.n_dp), index % (d.n_to * d.n_dp));
+        let (b, c) = (rest / d.n_dp, rest % d.n_dp);
+        Some(Geometry::new(self.theta_i_deg[a as usize], self.theta_o.at(b), self.dphi.at(c)))
+    }
+
+    /// Canonical index of the point visited at position `order`.
+    pub fn index_at_order(&self, order: u32) -> Option<u32> {
+        let d = self.dims().ok()?;
+        if order >= d.n_ti * d.n_to * d.n_dp {
+            return None;
+        }
+        let (a, rest) = (order / (d.n_to * d.n_dp), order % (d.n_to * d.n_dp));
+        let (row, col) = (rest / d.n_to, rest % d.n_to);
+        let c = if a % 2 == 0 { row } else { d.n_dp - 1 - row };
+        let b = if row % 2 == 0 { col } else { d.n_to - 1 - col };
+        Some((a * d.n_to + b) * d.n_dp + c)
+    }
+}
+
+/// The head's answer to a scan request.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ScanAccepted {
+    pub points: u32,
+    pub first_order: u32,
+}
+
+/// Streamed on the scan-event topic alongside the samples.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ScanEvent {
+    /// A measured point.
+    Sample(Sample),
+    /// A point that cannot be reached, and why; nothing moved for it.
+    Skipped { index: u32, order: u32, reason: Fault },
+    /// Every point from `first_order` on was visited.
+    Finished { measured: u32, skipped: u32 },
+    /// The scan stopped early; `next_order` resumes it.
+    Stopped { next_order: u32, reason: Fault },
+}

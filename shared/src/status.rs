@@ -1,0 +1,31 @@
+//! What the head is doing, for the host's status display and health checks.
+
+use crate::detection::DetectionSettings;
+use crate::fault::Fault;
+use crate::geometry::AxisAngles;
+use postcard_schema::Schema;
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum HeadState {
+    Idle,
+    /// A scan is running; `next_order` is the next point to visit.
+    Scanning { next_order: u32, total: u32 },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Status {
+    pub state: HeadState,
+    pub homed: bool,
+    pub laser_on: bool,
+    pub axes: AxisAngles,
+    pub detection: DetectionSettings,
+    pub samples_sent: u32,
+    pub samples_flagged: u32,
+    pub samples_remeasured: u32,
+    pub sanity_loaded: bool,
+    pub last_fault: Option<Fault>,
+    pub uptime_us: u64,
+}
