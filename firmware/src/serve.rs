@@ -40,7 +40,7 @@ impl<B: Board> Head<B> {
             if let Err(e) = r {
                 self.scan = None;
                 self.safe_state();
-                crate::warn!("link lost; head in safe state");
+                crate::info!("link lost; head in safe state");
                 return e;
             }
         }

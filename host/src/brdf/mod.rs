@@ -1,0 +1,99 @@
+//! BRDF models of `../shared/spec/models.md` §2, in f64, with the parameter
+//! names of the contract. The simulated head's virtual material is one of
+//! these; the fitting engine builds on the same evaluations.
+
+pub mod frame;
+mod lambert;
+mod retro_phong;
+
+pub use frame::Directions;
+
+use anyhow::{bail, Context, Result};
+use serde::Serialize;
+
+/// A model id and its parameters, in the order of `models.md`.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Material {
+    pub model: ModelId,
+    pub params: Vec<f64>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum ModelId {
+    Lambert,
+    RetroPhong,
+}
+
+impl ModelId {
+    pub const ALL: [ModelId; 2] = [ModelId::Lambert, ModelId::RetroPhong];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelId::Lambert => "lambert",
+            ModelId::RetroPhong => "retro-phong",
+        }
+    }
+
+    pub fn param_names(self) -> &'static [&'static str] {
+        match self {
+            ModelId::Lambert => &["kd"],
+            ModelId::RetroPhong => &["kd", "n", "k1", "k2", "k3", "k4"],
+        }
+    }
+
+    pub fn parse(s: &str) -> Result<Self> {
+        ModelId::ALL.into_iter().find(|m| m.name() == s).with_context(|| {
+            let valid: Vec<_> = ModelId::ALL.iter().map(|m| m.name()).collect();
+            format!("unknown model `{s}`; valid models: {}", valid.join(", "))
+        })
+    }
+}
+
+impl Material {
+    /// A retroreflective tape: sharp retro lobe (≈ 40 sr⁻¹ at θi = 60°) over a
+    /// 0.016 sr⁻¹ diffuse floor, a weak mirror lobe; `kd + ks + kr < 1` up to
+    /// θi = 60°.
+    pub fn tape() -> Self {
+        Material {
+            model: ModelId::RetroPhong,
+            params: vec![0.05, 500.0, 0.8, 0.1, 0.02, 3.0],
+        }
+    }
+
+    /// Parses `NAME=V,NAME=V,...` for a model; every parameter must be given.
+    pub fn parse(model: ModelId, spec: &str) -> Result<Self> {
+        let names = model.param_names();
+        let mut params = vec![f64::NAN; names.len()];
+        for item in spec.split(',').filter(|s| !s.trim().is_empty()) {
+            let (k, v) = item.split_once('=').with_context(|| format!("`{item}` is not NAME=VALUE"))?;
+            let Some(i) = names.iter().position(|n| *n == k.trim()) else {
+                bail!("unknown parameter `{}` for {}; valid: {}", k.trim(), model.name(), names.join(", "));
+            };
+            let v: f64 = v.trim().parse().with_context(|| format!("parameter {k}: `{v}` is not a number"))?;
+            if !v.is_finite() {
+                bail!("parameter {k} must be finite");
+            }
+            params[i] = v;
+        }
+        if let Some(i) = params.iter().position(|p| p.is_nan()) {
+            bail!("parameter `{}` of {} missing", names[i], model.name());
+        }
+        Ok(Material { model, params })
+    }
+
+    /// `f_r` (sr⁻¹) for a pair of directions.
+    pub fn eval(&self, d: &Directions) -> f64 {
+        let p = &self.params;
+        match self.model {
+            ModelId::Lambert => lambert::eval(p[0]),
+            ModelId::RetroPhong => retro_phong::eval(d, p[0], p[1], p[2], p[3], p[4], p[5]),
+        }
+    }
+
+    /// `NAME=V,...` as accepted by [`Material::parse`].
+    pub fn params_string(&self) -> String {
+        let names = self.model.param_names();
+        names.iter().zip(&self.params).map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(",")
+    }
+}

@@ -1,0 +1,149 @@
+//! `gonio demo` and `gonio scan`: connect, home, scan, store, summarise.
+
+use super::grid::GridArgs;
+use crate::brdf::{Material, ModelId};
+use crate::client::{Head, Target};
+use crate::run_record::RunRecord;
+use crate::samples_csv::SampleWriter;
+use crate::scan::{self, ScanOutcome};
+use crate::sim::SimConfig;
+use anyhow::{bail, Context, Result};
+use gonio_shared::{DetectionSettings, ScanSpec};
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, clap::Args)]
+pub struct DemoArgs {
+    /// Output directory.
+    #[arg(long, default_value = "gonio-demo")]
+    pub out: PathBuf,
+    /// Seed of the simulated head's noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Overwrite a scan already in the output directory.
+    #[arg(long)]
+    pub force: bool,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, clap::Args)]
+#[command(group(clap::ArgGroup::new("head").required(true).args(["sim", "port"])))]
+pub struct ScanArgs {
+    /// Scan the simulated head (in this process).
+    #[arg(long)]
+    pub sim: bool,
+    /// Serial port of a head (its USB port, or a `gonio sim` pseudo-terminal).
+    #[arg(long, value_name = "PATH")]
+    pub port: Option<String>,
+    /// Output directory.
+    #[arg(long)]
+    pub out: PathBuf,
+    #[command(flatten)]
+    pub grid: GridArgs,
+    /// Virtual material of `--sim`: a model id of models.md.
+    #[arg(long, default_value = "retro-phong")]
+    pub material: String,
+    /// Its parameters, NAME=V,... (default: a retroreflective tape).
+    #[arg(long)]
+    pub params: Option<String>,
+    /// Seed of the simulated head's noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Overwrite a scan already in the output directory.
+    #[arg(long)]
+    pub force: bool,
+    /// Print the summary as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+pub async fn demo(a: DemoArgs) -> Result<()> {
+    let sim = SimConfig {
+        seed: a.seed,
+        ..SimConfig::default()
+    };
+    scan_to_dir(&Target::Sim(sim), &ScanSpec::belcour(), &a.out, a.force, a.json).await
+}
+
+pub async fn scan(a: ScanArgs) -> Result<()> {
+    let spec = a.grid.spec()?;
+    let target = match &a.port {
+        Some(p) => Target::Port(p.clone()),
+        None => {
+            let model = ModelId::parse(&a.material)?;
+            let material = match &a.params {
+                Some(p) => Material::parse(model, p)?,
+                None if model == ModelId::RetroPhong => Material::tape(),
+                None => bail!("--params is required for --material {}", model.name()),
+            };
+            Target::Sim(SimConfig {
+                material,
+                seed: a.seed,
+                ..SimConfig::default()
+            })
+        }
+    };
+    scan_to_dir(&target, &spec, &a.out, a.force, a.json).await
+}
+
+/// Refuses to mix a new scan into a directory that holds one.
+fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    for f in ["samples.csv", "run.json"] {
+        let p = dir.join(f);
+        if p.exists() {
+            if !force {
+                bail!("{} already holds a scan ({f}); choose another --out or pass --force", dir.display());
+            }
+            std::fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// Connects first, so a head that cannot be reached leaves no files behind.
+async fn scan_to_dir(target: &Target, spec: &ScanSpec, dir: &Path, force: bool, json: bool) -> Result<()> {
+    let head = Head::connect(target).await?;
+    let id = head.identity().clone();
+    if !json {
+        eprintln!(
+            "head: {} (serial {}, firmware {}, protocol v{}{})",
+            id.board,
+            id.serial,
+            id.firmware_version,
+            id.protocol_version,
+            if id.simulated { ", simulated" } else { "" }
+        );
+    }
+    prepare_dir(dir, force)?;
+    let detection = head.detection(DetectionSettings::default()).await?;
+    head.home().await?;
+    let mut writer = SampleWriter::create(dir)?;
+    let pb = scan::progress_bar(spec.len() as u64, json);
+    let outcome = scan::run(&head, spec, &mut writer, &pb).await?;
+    let samples = writer.finish()?;
+    let material = match target {
+        Target::Sim(c) => Some(c.material.clone()),
+        Target::Port(_) => None,
+    };
+    RunRecord::new(&id, material, spec, &detection, outcome.clone()).write(dir)?;
+    head.close().await;
+    summarise(&outcome, &samples, json)
+}
+
+fn summarise(o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
+    if json {
+        println!("{}", serde_json::to_string_pretty(o)?);
+        return Ok(());
+    }
+    println!(
+        "{} points: {} measured, {} unreachable, {} flagged; {:.0} s of head time in {:.1} s",
+        o.points, o.measured, o.skipped, o.flagged, o.head_time_s, o.wall_time_s
+    );
+    for (reason, n) in &o.skipped_by_reason {
+        println!("  {n:5} × {reason}");
+    }
+    println!("samples: {}", samples.display());
+    Ok(())
+}

@@ -1,0 +1,153 @@
+//! A connected head: typed requests with a timeout on every one, and the
+//! identity check that names a protocol mismatch as such.
+
+use crate::link;
+use crate::sim::SimConfig;
+use anyhow::{anyhow, bail, Context, Result};
+use gonio_shared::icd::{
+    AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint,
+    MoveReport, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+};
+use gonio_shared::{AxisAngles, DetectionReport, DetectionSettings, Geometry, Identity, Sample, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION};
+use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
+use postcard_rpc::standard_icd::WireError;
+use postcard_rpc::Endpoint;
+use postcard_schema::Schema;
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+use std::thread::JoinHandle;
+use std::time::Duration;
+
+/// Where the head is.
+#[derive(Debug, Clone)]
+pub enum Target {
+    /// A simulated head in this process.
+    Sim(SimConfig),
+    /// A serial port: the head's USB port or a simulated head's pseudo-terminal.
+    Port(String),
+}
+
+/// Timeouts: quick requests, and the ones that move the stages.
+const QUICK: Duration = Duration::from_secs(5);
+const HOMING: Duration = Duration::from_secs(300);
+const MOTION: Duration = Duration::from_secs(120);
+
+pub struct Head {
+    client: HostClient<WireError>,
+    identity: Identity,
+    sim_thread: Option<JoinHandle<()>>,
+}
+
+impl Head {
+    /// Connects and identifies the head. Must run within a tokio runtime.
+    pub async fn connect(target: &Target) -> Result<Head> {
+        let (client, sim_thread) = match target {
+            Target::Sim(cfg) => {
+                let (c, t) = link::in_process_client(cfg.clone());
+                (c, Some(t))
+            }
+            Target::Port(p) => (link::serial_client(p)?, None),
+        };
+        let identity = match call::<IdentifyEndpoint>(&client, &(), QUICK).await {
+            Ok(i) => i,
+            Err(CallError::UnknownKey(_)) => {
+                bail!("protocol mismatch: the head does not know this host's identify request (host speaks protocol v{PROTOCOL_VERSION}); update the firmware or the host")
+            }
+            Err(e) => return Err(anyhow::Error::new(e).context("the head did not identify itself")),
+        };
+        if identity.protocol_version != PROTOCOL_VERSION {
+            bail!(
+                "protocol version mismatch: head {} speaks v{}, this host v{}; update the firmware or the host",
+                identity.serial,
+                identity.protocol_version,
+                PROTOCOL_VERSION
+            );
+        }
+        Ok(Head { client, identity, sim_thread })
+    }
+
+    pub fn identity(&self) -> &Identity {
+        &self.identity
+    }
+
+    pub async fn status(&self) -> Result<Status> {
+        Ok(call::<StatusEndpoint>(&self.client, &(), QUICK).await?)
+    }
+
+    pub async fn home(&self) -> Result<AxisAngles> {
+        fault(call::<HomeEndpoint>(&self.client, &HomeRequest::ALL, HOMING).await?).context("homing failed")
+    }
+
+    pub async fn move_to(&self, g: Geometry) -> Result<MoveReport> {
+        fault(call::<MoveEndpoint>(&self.client, &g, MOTION).await?).context("move refused")
+    }
+
+    pub async fn measure(&self, at: Option<Geometry>) -> Result<Sample> {
+        fault(call::<MeasureEndpoint>(&self.client, &MeasureRequest { at }, MOTION).await?).context("measurement failed")
+    }
+
+    pub async fn detection(&self, s: DetectionSettings) -> Result<DetectionReport> {
+        fault(call::<DetectionEndpoint>(&self.client, &s, QUICK).await?).context("detection settings refused")
+    }
+
+    pub async fn abort(&self) -> Result<Status> {
+        Ok(call::<AbortEndpoint>(&self.client, &(), QUICK).await?)
+    }
+
+    /// Starts a scan; its events arrive on the returned subscription, which is
+    /// opened before the request so none is missed.
+    pub async fn start_scan(&self, spec: &ScanSpec) -> Result<(ScanAccepted, Subscription<ScanEvent>)> {
+        let sub = self
+            .client
+            .subscribe_exclusive::<ScanEventTopic>(1024)
+            .await
+            .map_err(|e| anyhow!("cannot subscribe to scan events: {e:?}"))?;
+        let accepted = fault(call::<ScanEndpoint>(&self.client, spec, QUICK).await?).context("scan refused")?;
+        Ok((accepted, sub))
+    }
+
+    /// Closes the link and waits for a simulated head to reach its safe
+    /// state and stop. The join runs off the runtime's thread, so the wire
+    /// workers can still finish (and drop the channel the head waits on).
+    pub async fn close(mut self) {
+        self.client.close();
+        drop(self.client);
+        if let Some(t) = self.sim_thread.take() {
+            let _ = tokio::task::spawn_blocking(move || t.join()).await;
+        }
+    }
+}
+
+fn fault<T>(r: gonio_shared::Reply<T>) -> Result<T> {
+    r.map_err(|f| anyhow!("head refused: {f}"))
+}
+
+/// Why a request got no valid answer.
+#[derive(Debug, thiserror::Error)]
+pub enum CallError {
+    #[error("no answer from the head to {0} within {1:.0} s")]
+    Timeout(&'static str, f64),
+    #[error("{0}: the head does not know this request (protocol mismatch)")]
+    UnknownKey(&'static str),
+    #[error("{0}: the head reported a wire error: {1}")]
+    Wire(&'static str, WireError),
+    #[error("{0}: the link to the head closed")]
+    Closed(&'static str),
+    #[error("{0}: undecodable answer: {1}")]
+    BadAnswer(&'static str, String),
+}
+
+async fn call<E: Endpoint>(client: &HostClient<WireError>, req: &E::Request, timeout: Duration) -> Result<E::Response, CallError>
+where
+    E::Request: Serialize + Schema,
+    E::Response: DeserializeOwned + Schema,
+{
+    match tokio::time::timeout(timeout, client.send_resp::<E>(req)).await {
+        Err(_) => Err(CallError::Timeout(E::PATH, timeout.as_secs_f64())),
+        Ok(Ok(r)) => Ok(r),
+        Ok(Err(HostErr::Wire(WireError::UnknownKey))) => Err(CallError::UnknownKey(E::PATH)),
+        Ok(Err(HostErr::Wire(e))) => Err(CallError::Wire(E::PATH, e)),
+        Ok(Err(HostErr::Closed)) => Err(CallError::Closed(E::PATH)),
+        Ok(Err(e)) => Err(CallError::BadAnswer(E::PATH, e.to_string())),
+    }
+}

@@ -1,0 +1,14 @@
+//! The host side of the gonioreflectometer: the `gonio` tool's library.
+//!
+//! [`client`] talks to a head (real, or simulated in [`sim`]) over the
+//! transports in [`link`]; [`scan`] runs scans and [`samples_csv`] /
+//! [`run_record`] store them; [`brdf`] holds the models of `models.md`.
+
+pub mod brdf;
+pub mod cli;
+pub mod client;
+pub mod link;
+pub mod run_record;
+pub mod samples_csv;
+pub mod scan;
+pub mod sim;

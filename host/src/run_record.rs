@@ -1,0 +1,105 @@
+//! `run.json`: what was scanned, with what, and how it went. Written once the
+//! scan completed, next to `samples.csv`.
+
+use crate::brdf::Material;
+use crate::scan::ScanOutcome;
+use anyhow::{Context, Result};
+use gonio_shared::{DetectionReport, Identity, ScanSpec};
+use serde::Serialize;
+use std::path::Path;
+
+#[derive(Debug, Serialize)]
+pub struct Versions {
+    pub gonio: &'static str,
+    pub protocol: u16,
+    pub firmware: String,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Head {
+    pub board: String,
+    pub serial: String,
+    pub simulated: bool,
+}
+
+#[derive(Debug, Serialize)]
+pub struct Grid {
+    pub theta_i_deg: Vec<f32>,
+    pub theta_o_deg: [f32; 3],
+    pub dphi_deg: [f32; 3],
+    pub points: u32,
+}
+
+impl From<&ScanSpec> for Grid {
+    fn from(s: &ScanSpec) -> Self {
+        Grid {
+            theta_i_deg: s.theta_i_deg.to_vec(),
+            theta_o_deg: [s.theta_o.start_deg, s.theta_o.stop_deg, s.theta_o.step_deg],
+            dphi_deg: [s.dphi.start_deg, s.dphi.stop_deg, s.dphi.step_deg],
+            points: s.len(),
+        }
+    }
+}
+
+#[derive(Debug, Serialize)]
+pub struct Detection {
+    pub chop_hz: f32,
+    pub samples_per_period: u16,
+    pub periods: u16,
+    pub integration_s: f32,
+    pub enbw_hz: f32,
+    pub settle_s: f32,
+}
+
+impl From<&DetectionReport> for Detection {
+    fn from(r: &DetectionReport) -> Self {
+        Detection {
+            chop_hz: r.chop_hz_actual,
+            samples_per_period: r.settings.samples_per_period,
+            periods: r.settings.periods,
+            integration_s: r.integration_s,
+            enbw_hz: r.enbw_hz,
+            settle_s: r.settings.settle_s,
+        }
+    }
+}
+
+#[derive(Debug, Serialize)]
+pub struct RunRecord {
+    pub versions: Versions,
+    pub head: Head,
+    /// The simulated head's material; absent for a real head.
+    pub material: Option<Material>,
+    pub grid: Grid,
+    pub detection: Detection,
+    pub counts: ScanOutcome,
+    pub complete: bool,
+}
+
+impl RunRecord {
+    pub fn new(id: &Identity, material: Option<Material>, spec: &ScanSpec, det: &DetectionReport, counts: ScanOutcome) -> Self {
+        RunRecord {
+            versions: Versions {
+                gonio: env!("CARGO_PKG_VERSION"),
+                protocol: id.protocol_version,
+                firmware: id.firmware_version.to_string(),
+            },
+            head: Head {
+                board: id.board.to_string(),
+                serial: id.serial.to_string(),
+                simulated: id.simulated,
+            },
+            material,
+            grid: Grid::from(spec),
+            detection: Detection::from(det),
+            counts,
+            complete: true,
+        }
+    }
+
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        let path = dir.join("run.json");
+        let text = serde_json::to_string_pretty(self)?;
+        std::fs::write(&path, text + "\n").with_context(|| format!("writing {}", path.display()))
+    }
+}

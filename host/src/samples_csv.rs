@@ -1,0 +1,111 @@
+//! `samples.csv`: one row per measured sample, raw values as the head
+//! reported them. Each row is written and flushed as it arrives. The file is
+//! named `samples.csv.part` until the scan completes, so a file called
+//! `samples.csv` is always a whole scan. Columns: `docs/samples-csv.md`.
+
+use anyhow::{Context, Result};
+use gonio_shared::{Sample, SampleFlags};
+use serde::{Deserialize, Serialize};
+use std::fs::File;
+use std::path::{Path, PathBuf};
+
+/// One row; field names are the CSV header.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Row {
+    pub seq: u32,
+    pub index: Option<u32>,
+    pub order: Option<u32>,
+    pub timestamp_s: f64,
+    pub target_theta_i_deg: f32,
+    pub target_theta_o_deg: f32,
+    pub target_dphi_deg: f32,
+    pub theta_i_deg: f32,
+    pub theta_o_deg: f32,
+    pub dphi_deg: f32,
+    pub omega_deg: f32,
+    pub tau_deg: f32,
+    pub psi_deg: f32,
+    pub in_phase_v: f32,
+    pub quadrature_v: f32,
+    pub amplitude_v: f32,
+    pub phase_deg: f32,
+    pub noise_v: f32,
+    pub gain_v_per_a: f32,
+    pub gain_index: u8,
+    pub periods: u16,
+    pub flags: u16,
+    pub flag_names: String,
+}
+
+impl From<&Sample> for Row {
+    fn from(s: &Sample) -> Self {
+        let names: Vec<&str> = SampleFlags::NAMES.iter().filter(|(b, _)| s.flags.contains(*b)).map(|(_, n)| *n).collect();
+        Row {
+            seq: s.seq,
+            index: s.scan.map(|p| p.index),
+            order: s.scan.map(|p| p.order),
+            timestamp_s: s.timestamp_us as f64 * 1e-6,
+            target_theta_i_deg: s.target.theta_i_deg,
+            target_theta_o_deg: s.target.theta_o_deg,
+            target_dphi_deg: s.target.dphi_deg,
+            theta_i_deg: s.reached.theta_i_deg,
+            theta_o_deg: s.reached.theta_o_deg,
+            dphi_deg: s.reached.dphi_deg,
+            omega_deg: s.axes.omega_deg,
+            tau_deg: s.axes.tau_deg,
+            psi_deg: s.axes.psi_deg,
+            in_phase_v: s.in_phase_v,
+            quadrature_v: s.quadrature_v,
+            amplitude_v: s.amplitude_v,
+            phase_deg: s.phase_deg,
+            noise_v: s.noise_v,
+            gain_v_per_a: s.gain_v_per_a,
+            gain_index: s.gain_index,
+            periods: s.periods,
+            flags: s.flags.0,
+            flag_names: names.join("|"),
+        }
+    }
+}
+
+/// Appends rows durably while a scan runs.
+pub struct SampleWriter {
+    csv: csv::Writer<File>,
+    part: PathBuf,
+    done: PathBuf,
+}
+
+impl SampleWriter {
+    pub fn create(dir: &Path) -> Result<Self> {
+        let part = dir.join("samples.csv.part");
+        let file = File::create(&part).with_context(|| format!("creating {}", part.display()))?;
+        Ok(SampleWriter {
+            csv: csv::Writer::from_writer(file),
+            part,
+            done: dir.join("samples.csv"),
+        })
+    }
+
+    /// Writes one sample and flushes it to the operating system.
+    pub fn push(&mut self, s: &Sample) -> Result<()> {
+        self.csv.serialize(Row::from(s)).context("writing a sample row")?;
+        self.csv.flush().context("flushing samples")
+    }
+
+    /// Syncs the file and gives it its final name.
+    pub fn finish(mut self) -> Result<PathBuf> {
+        self.csv.flush()?;
+        self.csv.get_ref().sync_all().context("syncing samples")?;
+        std::fs::rename(&self.part, &self.done).with_context(|| format!("renaming to {}", self.done.display()))?;
+        Ok(self.done)
+    }
+}
+
+/// Reads a samples file back.
+pub fn read(path: &Path) -> Result<Vec<Row>> {
+    let mut r = csv::Reader::from_path(path).with_context(|| format!("opening {}", path.display()))?;
+    r.deserialize()
+        .enumerate()
+        .map(|(i, row)| row.with_context(|| format!("{}: row {}", path.display(), i + 2)))
+        .collect()
+}

@@ -1,0 +1,216 @@
+//! Virtual peripherals implementing the firmware's hardware traits over the
+//! shared [`World`]. Every future completes at once: time is simulated.
+
+use super::world::World;
+use gonio_firmware::hw::{AdcStream, Board, ChopTiming, Clock, Hardware, Overrun, QueueFull, StepBlock, StepTimer};
+use gonio_firmware::motion::block_ticks;
+use gonio_shared::Axis;
+use std::cell::RefCell;
+use std::convert::Infallible;
+use std::rc::Rc;
+
+type Shared = Rc<RefCell<World>>;
+
+pub struct SimBoard;
+
+impl Board for SimBoard {
+    type Out = SimPin;
+    type In = SimSwitch;
+    type Adc = SimAdc;
+    type Steps = SimSteps;
+    type Delay = SimDelay;
+    type Clock = SimClock;
+}
+
+/// What an output pin is wired to.
+#[derive(Clone, Copy)]
+enum Role {
+    Dir(usize),
+    EnableN(usize),
+    Gain(usize),
+    Laser,
+}
+
+pub struct SimPin {
+    world: Shared,
+    role: Role,
+}
+
+impl embedded_hal::digital::ErrorType for SimPin {
+    type Error = Infallible;
+}
+
+impl embedded_hal::digital::OutputPin for SimPin {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        self.set(false);
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.set(true);
+        Ok(())
+    }
+}
+
+impl SimPin {
+    fn set(&mut self, high: bool) {
+        let mut w = self.world.borrow_mut();
+        match self.role {
+            Role::Dir(i) => w.dir_positive[i] = high,
+            Role::EnableN(i) => w.enable_n[i] = high,
+            Role::Gain(b) => w.gain_bits[b] = high,
+            Role::Laser => w.laser = high,
+        }
+    }
+}
+
+pub struct SimSwitch {
+    world: Shared,
+    axis: usize,
+}
+
+impl embedded_hal::digital::ErrorType for SimSwitch {
+    type Error = Infallible;
+}
+
+impl embedded_hal::digital::InputPin for SimSwitch {
+    fn is_high(&mut self) -> Result<bool, Infallible> {
+        Ok(self.world.borrow().home_pressed(self.axis))
+    }
+    fn is_low(&mut self) -> Result<bool, Infallible> {
+        self.is_high().map(|h| !h)
+    }
+}
+
+/// The chop timer, the amplifier and the ADC.
+pub struct SimAdc {
+    world: Shared,
+    /// Amplifier output state (V), for its first-order response.
+    amp_v: f64,
+}
+
+impl AdcStream for SimAdc {
+    const TIMER_HZ: u32 = 84_000_000;
+    const BITS: u8 = 12;
+
+    fn start(&mut self, timing: ChopTiming) {
+        self.world.borrow_mut().chop = Some(timing);
+    }
+
+    fn stop(&mut self) {
+        self.world.borrow_mut().chop = None;
+    }
+
+    async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
+        let mut w = self.world.borrow_mut();
+        let Some(timing) = w.chop else {
+            out.fill(0);
+            return Err(Overrun);
+        };
+        let dt = timing.ticks_per_sample as f64 / Self::TIMER_HZ as f64;
+        let m = out.len();
+        let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64;
+        let vref = w.cfg.detector.adc_vref as f64;
+        let sig_a = if w.laser { w.photodiode.signal_a(&w.material, &w.cfg, w.angles()) } else { 0.0 };
+        let alpha = 1.0 - (-dt / w.photodiode.tau_s).exp();
+        let full = ((1u32 << Self::BITS) - 1) as f64;
+        let World { photodiode, rng, t_s, .. } = &mut *w;
+        for (k, o) in out.iter_mut().enumerate() {
+            let on = if k < m / 2 { 1.0 } else { 0.0 };
+            let target = gain * (sig_a * on + photodiode.ambient_a);
+            self.amp_v += (target - self.amp_v) * alpha;
+            let t = *t_s + k as f64 * dt;
+            let v = photodiode.offset_v + self.amp_v + photodiode.interference_v(t, rng);
+            *o = (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16;
+        }
+        *t_s += m as f64 * dt;
+        Ok(())
+    }
+}
+
+/// The step timer: queues per axis; a run moves the true positions (unless a
+/// driver is disabled or an end stop blocks) and advances time by the longest
+/// queue.
+pub struct SimSteps {
+    world: Shared,
+    queues: [Vec<StepBlock>; 3],
+}
+
+impl SimSteps {
+    const QUEUE_DEPTH: usize = 8;
+}
+
+impl StepTimer for SimSteps {
+    const TICK_HZ: u32 = 1_000_000;
+
+    fn push(&mut self, axis: Axis, block: StepBlock) -> Result<(), QueueFull> {
+        let q = &mut self.queues[axis.index()];
+        if q.len() >= Self::QUEUE_DEPTH {
+            return Err(QueueFull);
+        }
+        q.push(block);
+        Ok(())
+    }
+
+    async fn run(&mut self) -> [u32; 3] {
+        let mut w = self.world.borrow_mut();
+        let mut emitted = [0u32; 3];
+        let mut longest = 0u64;
+        for (i, q) in self.queues.iter_mut().enumerate() {
+            let n: u32 = q.iter().map(|b| b.count).sum();
+            longest = longest.max(q.iter().map(block_ticks).sum());
+            q.clear();
+            emitted[i] = n;
+            if w.enable_n[i] {
+                continue; // driver disabled: pulses go nowhere
+            }
+            let (lo, hi) = w.hard_stops(i);
+            let delta = if w.dir_positive[i] { n as i64 } else { -(n as i64) };
+            w.steps[i] = (w.steps[i] as i64 + delta).clamp(lo as i64, hi as i64) as i32;
+        }
+        w.t_s += longest as f64 / Self::TICK_HZ as f64;
+        emitted
+    }
+
+    fn clear(&mut self) {
+        self.queues.iter_mut().for_each(Vec::clear);
+    }
+}
+
+pub struct SimDelay {
+    world: Shared,
+}
+
+impl embedded_hal_async::delay::DelayNs for SimDelay {
+    async fn delay_ns(&mut self, ns: u32) {
+        self.world.borrow_mut().t_s += ns as f64 * 1e-9;
+    }
+}
+
+pub struct SimClock {
+    world: Shared,
+}
+
+impl Clock for SimClock {
+    fn now_us(&self) -> u64 {
+        (self.world.borrow().t_s * 1e6) as u64
+    }
+}
+
+/// Wires a firmware `Hardware` set to the virtual world.
+pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
+    let pin = |role| SimPin { world: world.clone(), role };
+    Hardware {
+        dir: [0, 1, 2].map(|i| pin(Role::Dir(i))),
+        enable_n: [0, 1, 2].map(|i| pin(Role::EnableN(i))),
+        home: [0, 1, 2].map(|axis| SimSwitch { world: world.clone(), axis }),
+        gain: [0, 1].map(|b| pin(Role::Gain(b))),
+        laser: pin(Role::Laser),
+        adc: SimAdc { world: world.clone(), amp_v: 0.0 },
+        steps: SimSteps {
+            world: world.clone(),
+            queues: Default::default(),
+        },
+        delay: SimDelay { world: world.clone() },
+        clock: SimClock { world: world.clone() },
+    }
+}

@@ -1,0 +1,65 @@
+//! The simulated head in a thread of this process, linked by channels: what
+//! `gonio demo` and the end-to-end tests use. Frames cross the channels in
+//! exactly the bytes the USB link would carry.
+
+use super::{build, SimConfig};
+use gonio_firmware::link::{Link, LinkError};
+use std::sync::mpsc;
+use std::thread::JoinHandle;
+use tokio::sync::mpsc as tmpsc;
+
+/// The head's end of the channels.
+struct ChannelLink {
+    rx: mpsc::Receiver<Vec<u8>>,
+    tx: tmpsc::UnboundedSender<Vec<u8>>,
+}
+
+fn take(frame: Vec<u8>, buf: &mut [u8]) -> usize {
+    // Frames longer than the head's buffer are cut, as a real receive buffer
+    // would; the decoder then refuses them.
+    let n = frame.len().min(buf.len());
+    buf[..n].copy_from_slice(&frame[..n]);
+    n
+}
+
+impl Link for ChannelLink {
+    async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
+        // The sim thread has nothing else to do while idle: blocking is fine.
+        self.rx.recv().map(|f| take(f, buf)).map_err(|_| LinkError::Closed)
+    }
+
+    fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
+        match self.rx.try_recv() {
+            Ok(f) => Some(Ok(take(f, buf))),
+            Err(mpsc::TryRecvError::Empty) => None,
+            Err(mpsc::TryRecvError::Disconnected) => Some(Err(LinkError::Closed)),
+        }
+    }
+
+    async fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        self.tx.send(frame.to_vec()).map_err(|_| LinkError::Closed)
+    }
+}
+
+/// The host's ends of an in-process link.
+pub struct InProcessLink {
+    pub to_head: mpsc::Sender<Vec<u8>>,
+    pub from_head: tmpsc::UnboundedReceiver<Vec<u8>>,
+    /// Ends when the host side is dropped and the head has reached its safe state.
+    pub thread: JoinHandle<()>,
+}
+
+/// Starts a simulated head in a new thread.
+pub fn spawn_in_process(cfg: SimConfig) -> InProcessLink {
+    let (to_head, rx) = mpsc::channel();
+    let (tx, from_head) = tmpsc::unbounded_channel();
+    let thread = std::thread::Builder::new()
+        .name("sim-head".into())
+        .spawn(move || {
+            let (mut head, _world) = build(&cfg);
+            let mut link = ChannelLink { rx, tx };
+            futures::executor::block_on(head.serve(&mut link));
+        })
+        .expect("spawning the simulated head's thread");
+    InProcessLink { to_head, from_head, thread }
+}

@@ -1,0 +1,58 @@
+//! The simulated head: the firmware core (`gonio_firmware::Head`) driven by
+//! virtual hardware in simulated time. Moves and integrations take zero wall
+//! time, so a six-hour scan runs in seconds, yet every sample comes out of
+//! the firmware's own motion, auto-range and demodulation code.
+
+mod board;
+mod inproc;
+mod optics;
+mod pty;
+mod world;
+
+pub use inproc::spawn_in_process;
+pub use optics::Photodiode;
+pub use pty::serve_pty;
+pub use world::World;
+
+use crate::brdf::Material;
+use gonio_firmware::board::REFERENCE;
+use gonio_firmware::head::HeadInfo;
+use gonio_firmware::Head;
+use gonio_shared::PROTOCOL_VERSION;
+use std::cell::RefCell;
+use std::rc::Rc;
+
+/// What the simulated head is made of.
+#[derive(Debug, Clone)]
+pub struct SimConfig {
+    pub material: Material,
+    pub photodiode: Photodiode,
+    /// Seed of the noise generator: the same seed gives the same samples.
+    pub seed: u64,
+    /// Protocol version the head claims (tests of the mismatch report).
+    pub protocol_version: u16,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            material: Material::tape(),
+            photodiode: Photodiode::default(),
+            seed: 1,
+            protocol_version: PROTOCOL_VERSION,
+        }
+    }
+}
+
+/// Builds a firmware head on a fresh virtual world.
+pub(crate) fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World>>) {
+    let world = Rc::new(RefCell::new(World::new(REFERENCE, cfg)));
+    let hw = board::hardware(&world);
+    let info = HeadInfo {
+        board: "simulated STM32F405 head",
+        serial: heapless::String::try_from("SIM-0001").unwrap_or_default(),
+        simulated: true,
+        protocol_version: cfg.protocol_version,
+    };
+    (Head::new(REFERENCE, hw, info), world)
+}

@@ -1,0 +1,98 @@
+//! The virtual photodiode and its transimpedance front end: the optical
+//! signal from the material's BRDF at the true stage angles, computed from
+//! the lab-frame vectors (independently of the firmware's kinematics), plus
+//! ambient light, mains pickup, amplifier bandwidth, noise, offset,
+//! quantisation and saturation.
+
+use crate::brdf::frame::dot;
+use crate::brdf::{Directions, Material};
+use gonio_firmware::board::HeadConfig;
+use rand::Rng;
+use rand_distr::StandardNormal;
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct Photodiode {
+    /// Laser power on the sample (W).
+    pub laser_w: f64,
+    pub responsivity_a_per_w: f64,
+    /// Solid angle of the detector seen from the sample (sr); Belcour et al.'s head: 3.6e-5.
+    pub solid_angle_sr: f64,
+    /// Reflectance × transmission of the 70/30 splitter on the retro path.
+    pub splitter_factor: f64,
+    /// Photocurrent of room light (A), not chopped.
+    pub ambient_a: f64,
+    /// Mains pickup at the ADC input: amplitude (V) of the fundamental, its
+    /// frequency (Hz), and the third harmonic relative to the fundamental.
+    pub mains_v: f64,
+    pub mains_hz: f64,
+    pub mains_h3: f64,
+    /// White noise at the ADC input (V rms).
+    pub noise_v: f64,
+    /// Amplifier output offset (V), keeps the noise off the lower rail.
+    pub offset_v: f64,
+    /// First-order time constant of the amplifier (s).
+    pub tau_s: f64,
+}
+
+impl Default for Photodiode {
+    fn default() -> Self {
+        Photodiode {
+            laser_w: 0.01,
+            responsivity_a_per_w: 0.4,
+            solid_angle_sr: 3.6e-5,
+            splitter_factor: 0.7 * 0.3,
+            ambient_a: 2.0e-9,
+            mains_v: 0.002,
+            mains_hz: 50.0,
+            mains_h3: 0.3,
+            noise_v: 0.001,
+            offset_v: 0.05,
+            tau_s: 80.0e-6,
+        }
+    }
+}
+
+fn normalize(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+impl Photodiode {
+    /// Signal photocurrent (A) with the laser on, at stage angles `(ω, τ, ψ)` in degrees:
+    /// `P·R·f_r·cosθo·Ω`, times the splitter factor in the retro zone, zero in
+    /// the blind zone or behind the sample.
+    pub fn signal_a(&self, material: &Material, cfg: &HeadConfig, angles: [f64; 3]) -> f64 {
+        let [om, ta, ps] = angles.map(f64::to_radians);
+        let n = [ta.cos() * om.cos(), ta.cos() * om.sin(), ta.sin()];
+        let l_lab = [1.0, 0.0, 0.0];
+        let d_lab = [ps.cos(), ps.sin(), 0.0];
+        let (cl, cd) = (dot(n, l_lab), dot(n, d_lab));
+        let psi_abs = angles[2].abs();
+        let optics = &cfg.optics;
+        if cl <= 0.0 || cd <= 0.0 || (psi_abs > optics.retro_max_deg as f64 && psi_abs < optics.blind_max_deg as f64) {
+            return 0.0;
+        }
+        // Sample frame: z = n, x along the light's projection.
+        let proj = [l_lab[0] - cl * n[0], l_lab[1] - cl * n[1], l_lab[2] - cl * n[2]];
+        let x = if dot(proj, proj) > 1e-24 { normalize(proj) } else { normalize(cross(n, [0.0, 0.0, 1.0])) };
+        let y = cross(n, x);
+        let to_sample = |w: [f64; 3]| [dot(w, x), dot(w, y), dot(w, n)];
+        let d = Directions {
+            l: to_sample(l_lab),
+            v: to_sample(d_lab),
+        };
+        let splitter = if psi_abs <= optics.retro_max_deg as f64 { self.splitter_factor } else { 1.0 };
+        self.laser_w * self.responsivity_a_per_w * material.eval(&d) * d.cos_o() * self.solid_angle_sr * splitter
+    }
+
+    /// Pickup and noise (V) at time `t`.
+    pub fn interference_v(&self, t: f64, rng: &mut impl Rng) -> f64 {
+        let w = 2.0 * std::f64::consts::PI * self.mains_hz * t;
+        let noise: f64 = rng.sample(StandardNormal);
+        self.mains_v * (w.sin() + self.mains_h3 * (3.0 * w + 0.4).sin()) + self.noise_v * noise
+    }
+}

@@ -1,0 +1,75 @@
+//! The physical state of the virtual head: simulated time, motor positions,
+//! pin levels, the chop timer, and the photodiode front end.
+
+use super::optics::Photodiode;
+use super::SimConfig;
+use crate::brdf::Material;
+use gonio_firmware::board::HeadConfig;
+use gonio_firmware::hw::ChopTiming;
+use gonio_firmware::units;
+use rand::rngs::StdRng;
+use rand::SeedableRng;
+
+/// Mechanical end stops lie this far beyond the home switch and the soft limit.
+const HARD_STOP_MARGIN_DEG: f32 = 3.0;
+
+pub struct World {
+    pub cfg: HeadConfig,
+    /// Simulated time (s).
+    pub t_s: f64,
+    /// True motor positions (microsteps); unknown to the firmware until homed.
+    pub steps: [i32; 3],
+    pub dir_positive: [bool; 3],
+    pub enable_n: [bool; 3],
+    pub gain_bits: [bool; 2],
+    pub laser: bool,
+    /// Running chop timer and the time its current period started.
+    pub chop: Option<ChopTiming>,
+    pub material: Material,
+    pub photodiode: Photodiode,
+    pub rng: StdRng,
+}
+
+impl World {
+    pub fn new(cfg: HeadConfig, sim: &SimConfig) -> Self {
+        // Power-up: the stages are wherever they were left.
+        let start = [12.3f32, -4.0, 33.0];
+        let steps = [0, 1, 2].map(|i| units::deg_to_steps(&cfg.axes[i], start[i]));
+        World {
+            cfg,
+            t_s: 0.0,
+            steps,
+            dir_positive: [true; 3],
+            enable_n: [true; 3],
+            gain_bits: [false; 2],
+            laser: false,
+            chop: None,
+            material: sim.material.clone(),
+            photodiode: sim.photodiode.clone(),
+            rng: StdRng::seed_from_u64(sim.seed),
+        }
+    }
+
+    /// Microstep range the mechanics allow for an axis (end stops).
+    pub fn hard_stops(&self, axis: usize) -> (i32, i32) {
+        let a = &self.cfg.axes[axis];
+        (
+            units::deg_to_steps(a, a.home_deg - HARD_STOP_MARGIN_DEG),
+            units::deg_to_steps(a, a.max_deg + HARD_STOP_MARGIN_DEG),
+        )
+    }
+
+    /// True when the home switch of an axis is pressed.
+    pub fn home_pressed(&self, axis: usize) -> bool {
+        self.steps[axis] <= units::deg_to_steps(&self.cfg.axes[axis], self.cfg.axes[axis].home_deg)
+    }
+
+    /// True stage angles (degrees).
+    pub fn angles(&self) -> [f64; 3] {
+        [0, 1, 2].map(|i| units::steps_to_deg(&self.cfg.axes[i], self.steps[i]) as f64)
+    }
+
+    pub fn gain_index(&self) -> usize {
+        self.gain_bits[0] as usize | (self.gain_bits[1] as usize) << 1
+    }
+}
