@@ -149,7 +149,11 @@ impl Accumulator {
             ((sxx as f64 - sx * sy / n) / (n - 1.0)).max(0.0)
         };
         let (vii, vqq) = (var(self.sum_ii, self.sum_i, self.sum_i), var(self.sum_qq, self.sum_q, self.sum_q));
-        let viq = if self.periods < 2 { 0.0 } else { (self.sum_iq as f64 - self.sum_i as f64 * self.sum_q as f64 / n) / (n - 1.0) };
+        let viq = if self.periods < 2 {
+            0.0
+        } else {
+            (self.sum_iq as f64 - self.sum_i as f64 * self.sum_q as f64 / n) / (n - 1.0)
+        };
         let var_a = (c * c * vii + s * s * vqq + 2.0 * c * s * viq).max(0.0);
         Estimate {
             i: mi / norm,

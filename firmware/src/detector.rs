@@ -101,7 +101,13 @@ impl Detector {
 
     /// Chooses the gain: discard the settling periods after each change, look
     /// at one period, step down on saturation, up when there is headroom.
-    async fn auto_range<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, buf: &mut [u16], flags: &mut SampleFlags) -> Result<(), Fault> {
+    async fn auto_range<B: Board>(
+        &mut self,
+        hw: &mut Hardware<B>,
+        cfg: &HeadConfig,
+        buf: &mut [u16],
+        flags: &mut SampleFlags,
+    ) -> Result<(), Fault> {
         let full = ((1u32 << <B::Adc as AdcStream>::BITS) - 1) as u16;
         let n_gains = cfg.detector.gains_v_per_a.len() as u8;
         for _ in 0..2 * n_gains {

@@ -33,7 +33,9 @@ impl Default for Decoder {
 
 impl Decoder {
     pub const fn new() -> Self {
-        Self { acc: CobsAccumulator::new() }
+        Self {
+            acc: CobsAccumulator::new(),
+        }
     }
 
     /// Feeds bytes; calls `on_frame` for every complete, well-formed frame.

@@ -273,7 +273,10 @@ impl<B: Board> Head<B> {
             measured: 0,
             skipped: 0,
         });
-        Ok(ScanAccepted { points: total, first_order })
+        Ok(ScanAccepted {
+            points: total,
+            first_order,
+        })
     }
 
     pub fn abort(&mut self) -> Status {

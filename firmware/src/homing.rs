@@ -21,30 +21,31 @@ fn pressed<B: Board>(hw: &mut Hardware<B>, axis: Axis) -> Result<bool, Fault> {
     hw.home[axis.index()].is_high().map_err(|_| Fault::HomeSwitchNotFound(axis))
 }
 
-/// Steps `chunk` microsteps at a time (negative = towards the switch) until the
-/// switch reads `until`, for at most `limit` microsteps. Returns whether it did.
-async fn seek<B: Board>(
-    hw: &mut Hardware<B>,
-    cfg: &HeadConfig,
-    pos: &mut Position,
+/// One homing sweep: step `chunk` microsteps at a time (negative = towards
+/// the switch) at `speed_dps` until the switch reads `until`, for at most
+/// `limit` microsteps.
+struct Sweep {
     axis: Axis,
     chunk: i32,
     speed_dps: f32,
     until: bool,
     limit: u32,
-) -> Result<bool, Fault> {
-    let i = axis.index();
+}
+
+/// Runs a sweep; returns whether the switch reached the wanted state.
+async fn sweep<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, pos: &mut Position, s: Sweep) -> Result<bool, Fault> {
+    let i = s.axis.index();
     let mut travelled = 0u32;
-    while pressed(hw, axis)? != until {
-        if travelled >= limit {
+    while pressed(hw, s.axis)? != s.until {
+        if travelled >= s.limit {
             return Ok(false);
         }
         let mut delta = [0; 3];
-        delta[i] = chunk;
+        delta[i] = s.chunk;
         let mut speed = [0.0; 3];
-        speed[i] = speed_dps;
+        speed[i] = s.speed_dps;
         move_by(hw, cfg, pos, delta, speed).await?;
-        travelled += chunk.unsigned_abs();
+        travelled += s.chunk.unsigned_abs();
     }
     Ok(true)
 }
@@ -57,14 +58,35 @@ pub async fn home_axis<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, pos: &m
     // Full travel plus margin: from anywhere, the switch must be met within it.
     let travel = units::deg_to_steps(c, c.max_deg - c.home_deg + 2.0 * c.home_backoff_deg).unsigned_abs();
     let fast = -units::deg_to_steps(c, FAST_CHUNK_DEG).max(1);
-    if !seek(hw, cfg, pos, axis, fast, c.max_speed_dps, true, travel).await? {
+    let approach = Sweep {
+        axis,
+        chunk: fast,
+        speed_dps: c.max_speed_dps,
+        until: true,
+        limit: travel,
+    };
+    if !sweep(hw, cfg, pos, approach).await? {
         return Err(Fault::HomeSwitchNotFound(axis));
     }
     let backoff = units::deg_to_steps(c, c.home_backoff_deg).unsigned_abs();
-    if !seek(hw, cfg, pos, axis, -fast, c.max_speed_dps, false, backoff).await? {
+    let release = Sweep {
+        axis,
+        chunk: -fast,
+        speed_dps: c.max_speed_dps,
+        until: false,
+        limit: backoff,
+    };
+    if !sweep(hw, cfg, pos, release).await? {
         return Err(Fault::HomeSwitchStuck(axis));
     }
-    if !seek(hw, cfg, pos, axis, -SLOW_CHUNK_STEPS, c.home_slow_dps, true, 2 * backoff).await? {
+    let touch = Sweep {
+        axis,
+        chunk: -SLOW_CHUNK_STEPS,
+        speed_dps: c.home_slow_dps,
+        until: true,
+        limit: 2 * backoff,
+    };
+    if !sweep(hw, cfg, pos, touch).await? {
         return Err(Fault::HomeSwitchNotFound(axis));
     }
     pos.steps[i] = units::deg_to_steps(c, c.home_deg);

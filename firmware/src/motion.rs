@@ -51,32 +51,47 @@ pub fn target_steps(cfg: &HeadConfig, a: &AxisAngles) -> [i32; 3] {
 /// The blocks of a move of `n` steps at cruise speed `dps`: ramp up, cruise,
 /// ramp down. At most three blocks; empty ones are omitted.
 pub fn profile(axis: &AxisConfig, n: u32, dps: f32, tick_hz: u32) -> heapless::Vec<StepBlock, 3> {
-    let mut out = heapless::Vec::new();
-    if n == 0 {
-        return out;
-    }
     let cruise = units::speed_to_interval(axis, dps, tick_hz);
     let start = cruise.saturating_mul(START_RATE_DIVISOR);
     let ramp = RAMP_STEPS.min(n / 2);
-    let blocks = if ramp == 0 {
-        [StepBlock { interval: start, count: n, add: 0 }, StepBlock { interval: 0, count: 0, add: 0 }, StepBlock { interval: 0, count: 0, add: 0 }]
-    } else {
-        let add = ((start - cruise) / ramp) as i32;
-        // The ramp ends one `add` above cruise so the cruise block starts smoothly.
-        let up = StepBlock { interval: start, count: ramp, add: -add };
-        let last_up = start as i64 - add as i64 * (ramp as i64 - 1);
-        let down_start = (last_up.max(cruise as i64)) as u32;
-        [
-            up,
-            StepBlock { interval: cruise, count: n - 2 * ramp, add: 0 },
-            StepBlock { interval: down_start, count: ramp, add },
-        ]
-    };
-    for b in blocks {
-        if b.count > 0 {
-            // Capacity three, at most three blocks.
-            let _ = out.push(b);
+    let blocks = match (start - cruise).checked_div(ramp) {
+        // One or two steps: no room to ramp, go at the start rate.
+        None => [
+            Some(StepBlock {
+                interval: start,
+                count: n,
+                add: 0,
+            }),
+            None,
+            None,
+        ],
+        Some(step) => {
+            let add = step as i32;
+            // The ramp ends one `add` above cruise; the ramp down mirrors it.
+            let last_up = (start as i64 - add as i64 * (ramp as i64 - 1)).max(cruise as i64) as u32;
+            [
+                Some(StepBlock {
+                    interval: start,
+                    count: ramp,
+                    add: -add,
+                }),
+                Some(StepBlock {
+                    interval: cruise,
+                    count: n - 2 * ramp,
+                    add: 0,
+                }),
+                Some(StepBlock {
+                    interval: last_up,
+                    count: ramp,
+                    add,
+                }),
+            ]
         }
+    };
+    let mut out = heapless::Vec::new();
+    for b in blocks.into_iter().flatten().filter(|b| b.count > 0) {
+        // At most three blocks fit the capacity of three.
+        let _ = out.push(b);
     }
     out
 }

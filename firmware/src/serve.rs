@@ -23,7 +23,11 @@ impl<B: Board> Head<B> {
     pub async fn serve<L: Link>(&mut self, link: &mut L) -> LinkError {
         let mut rx = [0u8; MAX_FRAME];
         loop {
-            let got = if self.scan.is_some() { link.try_recv(&mut rx) } else { Some(link.recv(&mut rx).await) };
+            let got = if self.scan.is_some() {
+                link.try_recv(&mut rx)
+            } else {
+                Some(link.recv(&mut rx).await)
+            };
             let handled = match got {
                 Some(Ok(n)) => self.handle(&rx[..n], link).await,
                 Some(Err(e)) => Err(e),

@@ -8,7 +8,9 @@ use gonio_shared::icd::{
     AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint,
     MoveReport, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
-use gonio_shared::{AxisAngles, DetectionReport, DetectionSettings, Geometry, Identity, Sample, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION};
+use gonio_shared::{
+    AxisAngles, DetectionReport, DetectionSettings, Geometry, Identity, Sample, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
+};
 use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
 use postcard_rpc::standard_icd::WireError;
 use postcard_rpc::Endpoint;
@@ -63,7 +65,11 @@ impl Head {
                 PROTOCOL_VERSION
             );
         }
-        Ok(Head { client, identity, sim_thread })
+        Ok(Head {
+            client,
+            identity,
+            sim_thread,
+        })
     }
 
     pub fn identity(&self) -> &Identity {

@@ -39,7 +39,11 @@ pub struct Row {
 
 impl From<&Sample> for Row {
     fn from(s: &Sample) -> Self {
-        let names: Vec<&str> = SampleFlags::NAMES.iter().filter(|(b, _)| s.flags.contains(*b)).map(|(_, n)| *n).collect();
+        let names: Vec<&str> = SampleFlags::NAMES
+            .iter()
+            .filter(|(b, _)| s.flags.contains(*b))
+            .map(|(_, n)| *n)
+            .collect();
         Row {
             seq: s.seq,
             index: s.scan.map(|p| p.index),

@@ -60,7 +60,10 @@ pub async fn run(head: &Head, spec: &ScanSpec, out: &mut SampleWriter, pb: &Prog
     let (mut first_ts, mut last_ts) = (None, 0u64);
     loop {
         let ev = match tokio::time::timeout(EVENT_TIMEOUT, events.recv()).await {
-            Err(_) => bail!("the head went silent during the scan (no event for {} s); resume from position {expected}", EVENT_TIMEOUT.as_secs()),
+            Err(_) => bail!(
+                "the head went silent during the scan (no event for {} s); resume from position {expected}",
+                EVENT_TIMEOUT.as_secs()
+            ),
             Ok(None) => bail!("the link to the head closed during the scan; resume from position {expected}"),
             Ok(Some(ev)) => ev,
         };

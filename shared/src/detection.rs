@@ -60,7 +60,7 @@ impl DetectionSettings {
             return bad(Field::ChopFrequency);
         }
         let m = self.samples_per_period;
-        if m < 4 || m > Self::SAMPLES_PER_PERIOD_MAX || m % 4 != 0 || self.sample_rate_hz() > Self::ADC_RATE_MAX_HZ {
+        if !(4..=Self::SAMPLES_PER_PERIOD_MAX).contains(&m) || m % 4 != 0 || self.sample_rate_hz() > Self::ADC_RATE_MAX_HZ {
             return bad(Field::SamplesPerPeriod);
         }
         if self.periods == 0 || self.integration_s() > Self::INTEGRATION_MAX_S {

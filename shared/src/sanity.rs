@@ -8,10 +8,29 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum SanityModel {
-    Lambert { kd: f32 },
-    RetroPhong { kd: f32, n: f32, k1: f32, k2: f32, k3: f32, k4: f32 },
+    Lambert {
+        kd: f32,
+    },
+    RetroPhong {
+        kd: f32,
+        n: f32,
+        k1: f32,
+        k2: f32,
+        k3: f32,
+        k4: f32,
+    },
     /// `back` selects the back-vector cosine for the retro lobe, else the view cosine.
-    AbcRetro { kd: f32, r0: f32, ab: f32, bb: f32, cb: f32, ar: f32, br: f32, cr: f32, back: bool },
+    AbcRetro {
+        kd: f32,
+        r0: f32,
+        ab: f32,
+        bb: f32,
+        cb: f32,
+        ar: f32,
+        br: f32,
+        cr: f32,
+        back: bool,
+    },
 }
 
 impl SanityModel {
@@ -20,7 +39,17 @@ impl SanityModel {
         let s: &[f32] = match self {
             SanityModel::Lambert { kd } => &[*kd],
             SanityModel::RetroPhong { kd, n, k1, k2, k3, k4 } => &[*kd, *n, *k1, *k2, *k3, *k4],
-            SanityModel::AbcRetro { kd, r0, ab, bb, cb, ar, br, cr, .. } => &[*kd, *r0, *ab, *bb, *cb, *ar, *br, *cr],
+            SanityModel::AbcRetro {
+                kd,
+                r0,
+                ab,
+                bb,
+                cb,
+                ar,
+                br,
+                cr,
+                ..
+            } => &[*kd, *r0, *ab, *bb, *cb, *ar, *br, *cr],
         };
         // At most eight parameters by construction.
         let _ = v.extend_from_slice(s);

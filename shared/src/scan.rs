@@ -32,7 +32,7 @@ impl AngleRange {
     }
 
     /// Number of values, or `None` for a malformed range.
-    pub fn len(&self) -> Option<u32> {
+    pub fn count(&self) -> Option<u32> {
         let (a, b, s) = (self.start_deg, self.stop_deg, self.step_deg);
         if !(a.is_finite() && b.is_finite() && s.is_finite()) || s <= 0.0 || b < a || b - a > 360.0 {
             return None;
@@ -90,7 +90,7 @@ impl ScanSpec {
         if self.theta_i_deg.is_empty() || self.theta_i_deg.iter().any(|t| !t.is_finite()) {
             return bad;
         }
-        let (Some(n_to), Some(n_dp)) = (self.theta_o.len(), self.dphi.len()) else {
+        let (Some(n_to), Some(n_dp)) = (self.theta_o.count(), self.dphi.count()) else {
             return bad;
         };
         let n_ti = self.theta_i_deg.len() as u32;

@@ -11,7 +11,10 @@ use serde::{Deserialize, Serialize};
 pub enum HeadState {
     Idle,
     /// A scan is running; `next_order` is the next point to visit.
-    Scanning { next_order: u32, total: u32 },
+    Scanning {
+        next_order: u32,
+        total: u32,
+    },
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]

@@ -94,6 +94,11 @@ impl Material {
     /// `NAME=V,...` as accepted by [`Material::parse`].
     pub fn params_string(&self) -> String {
         let names = self.model.param_names();
-        names.iter().zip(&self.params).map(|(n, v)| format!("{n}={v}")).collect::<Vec<_>>().join(",")
+        names
+            .iter()
+            .zip(&self.params)
+            .map(|(n, v)| format!("{n}={v}"))
+            .collect::<Vec<_>>()
+            .join(",")
     }
 }

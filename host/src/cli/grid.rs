@@ -30,7 +30,7 @@ fn range(s: &str, what: &str) -> Result<AngleRange> {
         bail!("{what}: `{s}` is not START:STOP:STEP");
     };
     let r = AngleRange::new(number(a, what)?, number(b, what)?, number(c, what)?);
-    if r.len().is_none() {
+    if r.count().is_none() {
         bail!("{what}: `{s}` is empty or malformed (STEP > 0, START ≤ STOP, span ≤ 360°)");
     }
     Ok(r)
@@ -40,7 +40,10 @@ impl GridArgs {
     pub fn spec(&self) -> Result<ScanSpec> {
         let mut theta_i_deg = heapless::Vec::new();
         for t in self.theta_i.split(',') {
-            theta_i_deg.push(number(t, "--theta-i")?).ok().context("--theta-i: at most 8 incidence angles")?;
+            theta_i_deg
+                .push(number(t, "--theta-i")?)
+                .ok()
+                .context("--theta-i: at most 8 incidence angles")?;
         }
         let spec = ScanSpec {
             theta_i_deg,
@@ -70,12 +73,14 @@ mod tests {
 
     #[test]
     fn bad_grids_are_refused() {
-        let g = |ti: &str, to: &str| GridArgs {
-            theta_i: ti.into(),
-            theta_o: to.into(),
-            dphi: "0:0:1".into(),
-        }
-        .spec();
+        let g = |ti: &str, to: &str| {
+            GridArgs {
+                theta_i: ti.into(),
+                theta_o: to.into(),
+                dphi: "0:0:1".into(),
+            }
+            .spec()
+        };
         assert!(g("15", "0:90").is_err());
         assert!(g("15", "0:90:0").is_err());
         assert!(g("x", "0:90:3").is_err());

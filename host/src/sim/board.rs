@@ -110,7 +110,11 @@ impl AdcStream for SimAdc {
         let m = out.len();
         let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64;
         let vref = w.cfg.detector.adc_vref as f64;
-        let sig_a = if w.laser { w.photodiode.signal_a(&w.material, &w.cfg, w.angles()) } else { 0.0 };
+        let sig_a = if w.laser {
+            w.photodiode.signal_a(&w.material, &w.cfg, w.angles())
+        } else {
+            0.0
+        };
         let alpha = 1.0 - (-dt / w.photodiode.tau_s).exp();
         let full = ((1u32 << Self::BITS) - 1) as f64;
         let World { photodiode, rng, t_s, .. } = &mut *w;
@@ -198,14 +202,23 @@ impl Clock for SimClock {
 
 /// Wires a firmware `Hardware` set to the virtual world.
 pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
-    let pin = |role| SimPin { world: world.clone(), role };
+    let pin = |role| SimPin {
+        world: world.clone(),
+        role,
+    };
     Hardware {
         dir: [0, 1, 2].map(|i| pin(Role::Dir(i))),
         enable_n: [0, 1, 2].map(|i| pin(Role::EnableN(i))),
-        home: [0, 1, 2].map(|axis| SimSwitch { world: world.clone(), axis }),
+        home: [0, 1, 2].map(|axis| SimSwitch {
+            world: world.clone(),
+            axis,
+        }),
         gain: [0, 1].map(|b| pin(Role::Gain(b))),
         laser: pin(Role::Laser),
-        adc: SimAdc { world: world.clone(), amp_v: 0.0 },
+        adc: SimAdc {
+            world: world.clone(),
+            amp_v: 0.0,
+        },
         steps: SimSteps {
             world: world.clone(),
             queues: Default::default(),

@@ -61,5 +61,9 @@ pub fn spawn_in_process(cfg: SimConfig) -> InProcessLink {
             futures::executor::block_on(head.serve(&mut link));
         })
         .expect("spawning the simulated head's thread");
-    InProcessLink { to_head, from_head, thread }
+    InProcessLink {
+        to_head,
+        from_head,
+        thread,
+    }
 }

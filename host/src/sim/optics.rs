@@ -78,14 +78,22 @@ impl Photodiode {
         }
         // Sample frame: z = n, x along the light's projection.
         let proj = [l_lab[0] - cl * n[0], l_lab[1] - cl * n[1], l_lab[2] - cl * n[2]];
-        let x = if dot(proj, proj) > 1e-24 { normalize(proj) } else { normalize(cross(n, [0.0, 0.0, 1.0])) };
+        let x = if dot(proj, proj) > 1e-24 {
+            normalize(proj)
+        } else {
+            normalize(cross(n, [0.0, 0.0, 1.0]))
+        };
         let y = cross(n, x);
         let to_sample = |w: [f64; 3]| [dot(w, x), dot(w, y), dot(w, n)];
         let d = Directions {
             l: to_sample(l_lab),
             v: to_sample(d_lab),
         };
-        let splitter = if psi_abs <= optics.retro_max_deg as f64 { self.splitter_factor } else { 1.0 };
+        let splitter = if psi_abs <= optics.retro_max_deg as f64 {
+            self.splitter_factor
+        } else {
+            1.0
+        };
         self.laser_w * self.responsivity_a_per_w * material.eval(&d) * d.cos_o() * self.solid_angle_sr * splitter
     }
 

@@ -1,0 +1,129 @@
+//! Chop and sampling on one clock. TIM2 overflows once per ADC sample and its
+//! update event (TRGO) both triggers ADC1 and clocks TIM3, whose period is M
+//! TIM2 events and whose channel 1 is the 50 % chop output. Every chop period
+//! therefore holds exactly M samples, and sample 0 of each block falls on the
+//! chop's rising edge. DMA2 stream 0 moves the codes into a circular buffer;
+//! the ring buffer reports an overrun when the core falls behind, and the core
+//! flags the sample.
+
+use embassy_stm32::adc::{Adc, RxDma, SampleTime};
+use embassy_stm32::dma::{ReadableRingBuffer, TransferOptions};
+use embassy_stm32::gpio::{Flex, OutputType};
+use embassy_stm32::pac;
+use embassy_stm32::peripherals::{ADC1, DMA2_CH0, PA1, PA6, TIM2, TIM3};
+use embassy_stm32::timer::low_level::{MasterMode, OutputCompareMode, SlaveMode, Timer, TriggerSource};
+use embassy_stm32::timer::simple_pwm::PwmPin;
+use embassy_stm32::timer::{Ch1, Channel};
+use embassy_stm32::Peri;
+use gonio_firmware::demod::MAX_M;
+use gonio_firmware::hw::{AdcStream, ChopTiming, Overrun};
+use static_cell::StaticCell;
+
+/// ADC1 external trigger selection for TIM2 TRGO (RM0090, ADC_CR2.EXTSEL).
+const EXTSEL_TIM2_TRGO: u8 = 0b0110;
+/// Photodiode input: ADC123_IN1 on PA1.
+const CHANNEL: usize = 1;
+
+static DMA_BUF: StaticCell<[u16; 2 * MAX_M]> = StaticCell::new();
+
+pub struct TimedAdc {
+    ring: ReadableRingBuffer<'static, u16>,
+    sample_clock: Timer<'static, TIM2>,
+    chop: Timer<'static, TIM3>,
+    running: bool,
+    // Kept so the ADC clock and the pins stay configured.
+    _adc: Adc<'static, ADC1>,
+    _input: Flex<'static>,
+    _chop_pin: PwmPin<'static, TIM3, Ch1>,
+}
+
+impl TimedAdc {
+    pub fn new(
+        adc1: Peri<'static, ADC1>,
+        input: Peri<'static, PA1>,
+        dma: Peri<'static, DMA2_CH0>,
+        tim2: Peri<'static, TIM2>,
+        tim3: Peri<'static, TIM3>,
+        chop_pin: Peri<'static, PA6>,
+    ) -> Self {
+        let adc = Adc::new(adc1);
+        let mut input = Flex::new(input);
+        input.set_as_analog();
+        let r = pac::ADC1;
+        r.sqr1().modify(|w| w.set_l(0));
+        r.sqr3().modify(|w| w.set_sq(0, CHANNEL as u8));
+        r.smpr2().modify(|w| w.set_smp(CHANNEL, SampleTime::CYCLES84));
+        r.cr1().modify(|w| w.set_scan(false));
+        r.cr2().modify(|w| {
+            w.set_cont(false);
+            w.set_dma(true);
+            w.set_dds(pac::adc::vals::Dds::CONTINUOUS);
+            w.set_extsel(EXTSEL_TIM2_TRGO);
+            w.set_exten(pac::adc::vals::Exten::DISABLED);
+            w.set_adon(true);
+        });
+        let request = <DMA2_CH0 as RxDma<ADC1>>::request(&dma);
+        let buf = DMA_BUF.init([0; 2 * MAX_M]);
+        // SAFETY: the DMA reads ADC1's data register, a valid 16-bit
+        // peripheral address, into a buffer that lives for the program.
+        let ring = unsafe { ReadableRingBuffer::new(dma, request, r.dr().as_ptr() as *mut u16, buf, TransferOptions::default()) };
+
+        let sample_clock = Timer::new(tim2);
+        sample_clock.set_master_mode(MasterMode::UPDATE);
+        let chop = Timer::new(tim3);
+        chop.set_trigger_source(TriggerSource::ITR1); // TIM2 TRGO
+        chop.set_slave_mode(SlaveMode::EXT_CLOCK_MODE);
+        chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::PwmMode1);
+        let chop_pin = PwmPin::new(chop_pin, OutputType::PushPull);
+        TimedAdc {
+            ring,
+            sample_clock,
+            chop,
+            running: false,
+            _adc: adc,
+            _input: input,
+            _chop_pin: chop_pin,
+        }
+    }
+}
+
+impl AdcStream for TimedAdc {
+    /// APB1 timer clock with the reference clock tree (168 MHz / 4 × 2).
+    const TIMER_HZ: u32 = 84_000_000;
+    const BITS: u8 = 12;
+
+    fn start(&mut self, t: ChopTiming) {
+        self.stop();
+        let m = t.samples_per_period.max(2) as u32;
+        self.sample_clock.regs_core().psc().write_value(0);
+        self.sample_clock.set_max_compare_value(t.ticks_per_sample.max(2) - 1);
+        self.sample_clock.regs_core().cnt().write(|w| w.set_cnt(0));
+        self.chop.set_max_compare_value((m - 1) as u16);
+        self.chop.set_compare_value(Channel::Ch1, (m / 2) as u16);
+        self.chop.regs_core().cnt().write(|w| w.set_cnt(0));
+        self.chop.enable_channel(Channel::Ch1, true);
+        self.chop.start();
+        self.ring.clear();
+        self.ring.start();
+        pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::RISING_EDGE));
+        self.sample_clock.start();
+        self.running = true;
+    }
+
+    fn stop(&mut self) {
+        self.sample_clock.stop();
+        pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::DISABLED));
+        // Chop output held low: the laser is dark between measurements.
+        self.chop.enable_channel(Channel::Ch1, false);
+        self.chop.stop();
+        self.ring.request_pause();
+        self.running = false;
+    }
+
+    async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
+        if !self.running {
+            return Err(Overrun);
+        }
+        self.ring.read_exact(out).await.map(|_| ()).map_err(|_| Overrun)
+    }
+}

@@ -1,0 +1,72 @@
+//! Pin assignment of the reference board (STM32F405RG, LQFP64).
+//!
+//! | function              | pin  | notes                                        |
+//! |-----------------------|------|----------------------------------------------|
+//! | photodiode (ADC1 IN1) | PA1  | transimpedance amplifier output              |
+//! | chop (TIM3 CH1, AF2)  | PA6  | laser modulation input, 50 % duty            |
+//! | laser enable          | PB0  | high = laser may emit                        |
+//! | gain select bit 0/1   | PB1, PB2 | four decades of transimpedance           |
+//! | rotation STEP/DIR/EN/HOME | PC0–PC3 | EN active low, HOME high = pressed   |
+//! | cradle STEP/DIR/EN/HOME   | PC4–PC7 |                                      |
+//! | arm STEP/DIR/EN/HOME      | PC8–PC11 |                                     |
+//! | USB FS D−/D+          | PA11, PA12 |                                        |
+//!
+//! Home switches are normally closed to ground with the internal pull-up, so a
+//! pressed switch and a broken wire both read high: homing then stops at once
+//! instead of driving into the end stop.
+
+use embassy_stm32::gpio::{Input, Level, Output, Pull, Speed};
+use embassy_stm32::peripherals::*;
+use embassy_stm32::Peri;
+
+pub const NAME: &str = "gonio head STM32F405RG rev A";
+
+pub struct Pins {
+    pub photodiode: Peri<'static, PA1>,
+    pub chop: Peri<'static, PA6>,
+    pub laser: Output<'static>,
+    pub gain: [Output<'static>; 2],
+    pub step: [Output<'static>; 3],
+    pub dir: [Output<'static>; 3],
+    pub enable_n: [Output<'static>; 3],
+    pub home: [Input<'static>; 3],
+}
+
+fn out(pin: Peri<'static, impl embassy_stm32::gpio::Pin>, level: Level) -> Output<'static> {
+    Output::new(pin, level, Speed::VeryHigh)
+}
+
+impl Pins {
+    #[allow(clippy::too_many_arguments)]
+    pub fn new(
+        pa1: Peri<'static, PA1>,
+        pa6: Peri<'static, PA6>,
+        pb0: Peri<'static, PB0>,
+        pb1: Peri<'static, PB1>,
+        pb2: Peri<'static, PB2>,
+        pc0: Peri<'static, PC0>,
+        pc1: Peri<'static, PC1>,
+        pc2: Peri<'static, PC2>,
+        pc3: Peri<'static, PC3>,
+        pc4: Peri<'static, PC4>,
+        pc5: Peri<'static, PC5>,
+        pc6: Peri<'static, PC6>,
+        pc7: Peri<'static, PC7>,
+        pc8: Peri<'static, PC8>,
+        pc9: Peri<'static, PC9>,
+        pc10: Peri<'static, PC10>,
+        pc11: Peri<'static, PC11>,
+    ) -> Self {
+        Pins {
+            photodiode: pa1,
+            chop: pa6,
+            // Power-up state is the safe state: laser off, drivers disabled.
+            laser: out(pb0, Level::Low),
+            gain: [out(pb1, Level::Low), out(pb2, Level::Low)],
+            step: [out(pc0, Level::Low), out(pc4, Level::Low), out(pc8, Level::Low)],
+            dir: [out(pc1, Level::Low), out(pc5, Level::Low), out(pc9, Level::Low)],
+            enable_n: [out(pc2, Level::High), out(pc6, Level::High), out(pc10, Level::High)],
+            home: [Input::new(pc3, Pull::Up), Input::new(pc7, Pull::Up), Input::new(pc11, Pull::Up)],
+        }
+    }
+}

@@ -1,0 +1,102 @@
+//! Chip entry point: clocks, peripherals, tasks.
+
+mod adc_stream;
+mod board;
+mod step_timer;
+mod usb_link;
+
+use adc_stream::TimedAdc;
+use embassy_executor::Spawner;
+use embassy_stm32::{bind_interrupts, peripherals, usb, Config};
+use gonio_firmware::head::HeadInfo;
+use gonio_firmware::hw::{Board, Clock, Hardware};
+use gonio_firmware::Head;
+use step_timer::StepTimer5;
+use {defmt_rtt as _, panic_probe as _};
+
+bind_interrupts!(pub struct Irqs {
+    OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
+    TIM5 => step_timer::StepInterrupt;
+});
+
+/// The chip's types for the core.
+pub struct Stm32Board;
+
+impl Board for Stm32Board {
+    type Out = embassy_stm32::gpio::Output<'static>;
+    type In = embassy_stm32::gpio::Input<'static>;
+    type Adc = TimedAdc;
+    type Steps = StepTimer5;
+    type Delay = embassy_time::Delay;
+    type Clock = UptimeClock;
+}
+
+/// Microseconds since boot, from embassy-time (1 MHz tick).
+pub struct UptimeClock;
+
+impl Clock for UptimeClock {
+    fn now_us(&self) -> u64 {
+        embassy_time::Instant::now().as_micros()
+    }
+}
+
+/// 8 MHz crystal → 168 MHz system clock; PLL Q gives the 48 MHz USB clock.
+fn clocks() -> Config {
+    use embassy_stm32::rcc::{mux, AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllPreDiv, PllQDiv, PllSource, Sysclk};
+    use embassy_stm32::time::Hertz;
+    let mut config = Config::default();
+    config.rcc.hse = Some(Hse {
+        freq: Hertz(8_000_000),
+        mode: HseMode::Oscillator,
+    });
+    config.rcc.pll_src = PllSource::HSE;
+    config.rcc.pll = Some(Pll {
+        prediv: PllPreDiv::DIV4,
+        mul: PllMul::MUL168,
+        divp: Some(PllPDiv::DIV2),
+        divq: Some(PllQDiv::DIV7),
+        divr: None,
+    });
+    config.rcc.ahb_pre = AHBPrescaler::DIV1;
+    config.rcc.apb1_pre = APBPrescaler::DIV4;
+    config.rcc.apb2_pre = APBPrescaler::DIV2;
+    config.rcc.sys = Sysclk::PLL1_P;
+    config.rcc.mux.clk48sel = mux::Clk48sel::PLL1_Q;
+    config
+}
+
+#[embassy_executor::main]
+async fn main(spawner: Spawner) {
+    let p = embassy_stm32::init(clocks());
+    defmt::info!("gonio head {} starting", env!("CARGO_PKG_VERSION"));
+    let pins = board::Pins::new(
+        p.PA1, p.PA6, p.PB0, p.PB1, p.PB2, p.PC0, p.PC1, p.PC2, p.PC3, p.PC4, p.PC5, p.PC6, p.PC7, p.PC8, p.PC9, p.PC10, p.PC11,
+    );
+    let adc = TimedAdc::new(p.ADC1, pins.photodiode, p.DMA2_CH0, p.TIM2, p.TIM3, pins.chop);
+    let steps = StepTimer5::new(p.TIM5, pins.step);
+    let hw = Hardware::<Stm32Board> {
+        dir: pins.dir,
+        enable_n: pins.enable_n,
+        home: pins.home,
+        gain: pins.gain,
+        laser: pins.laser,
+        adc,
+        steps,
+        delay: embassy_time::Delay,
+        clock: UptimeClock,
+    };
+    let mut link = usb_link::start(&spawner, p.USB_OTG_FS, p.PA12, p.PA11);
+    let info = HeadInfo {
+        board: board::NAME,
+        serial: heapless::String::try_from(embassy_stm32::uid::uid_hex()).unwrap_or_default(),
+        simulated: false,
+        protocol_version: gonio_shared::PROTOCOL_VERSION,
+    };
+    let mut head = Head::new(gonio_firmware::board::REFERENCE, hw, info);
+    loop {
+        // Serve until the host goes away (the head is then in its safe
+        // state), then wait for the next connection.
+        head.serve(&mut link).await;
+        link.wait_connection().await;
+    }
+}

@@ -1,0 +1,151 @@
+//! The USB link: a CDC-ACM port carrying COBS frames (postcard-rpc's serial
+//! framing). Two tasks move packets between the endpoints and two bounded
+//! channels of whole frames; the core sees only [`UsbLink`].
+//!
+//! Why CDC-ACM rather than postcard-rpc's raw bulk interface: the simulated
+//! head is reached on a pseudo-terminal with the same framing, so `gonio scan
+//! --port PATH` drives both through one code path, and the head needs no
+//! driver on any operating system.
+
+use embassy_executor::Spawner;
+use embassy_futures::select::{select, Either};
+use embassy_stm32::peripherals::{PA11, PA12, USB_OTG_FS};
+use embassy_stm32::usb::Driver;
+use embassy_stm32::Peri;
+use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::channel::Channel;
+use embassy_sync::signal::Signal;
+use embassy_usb::class::cdc_acm::{CdcAcmClass, Receiver, Sender, State};
+use embassy_usb::{Builder, UsbDevice};
+use gonio_firmware::framing::{self, Decoder, MAX_ENCODED, MAX_FRAME};
+use gonio_firmware::link::{Link, LinkError};
+use gonio_shared::identity::{USB_PID, USB_VID};
+use static_cell::StaticCell;
+
+type UsbDriver = Driver<'static, USB_OTG_FS>;
+type Frame = heapless::Vec<u8, MAX_FRAME>;
+
+const PACKET: u16 = 64;
+
+static RX: Channel<CriticalSectionRawMutex, Frame, 4> = Channel::new();
+static TX: Channel<CriticalSectionRawMutex, Frame, 8> = Channel::new();
+static DISCONNECTED: Signal<CriticalSectionRawMutex, ()> = Signal::new();
+static CONNECTED: Signal<CriticalSectionRawMutex, ()> = Signal::new();
+
+/// The core's end of the USB link.
+pub struct UsbLink;
+
+impl UsbLink {
+    pub async fn wait_connection(&mut self) {
+        CONNECTED.wait().await;
+    }
+}
+
+fn copy(f: Frame, buf: &mut [u8]) -> usize {
+    let n = f.len().min(buf.len());
+    buf[..n].copy_from_slice(&f[..n]);
+    n
+}
+
+impl Link for UsbLink {
+    async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
+        match select(RX.receive(), DISCONNECTED.wait()).await {
+            Either::First(f) => Ok(copy(f, buf)),
+            Either::Second(()) => Err(LinkError::Closed),
+        }
+    }
+
+    fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
+        if DISCONNECTED.signaled() {
+            DISCONNECTED.reset();
+            return Some(Err(LinkError::Closed));
+        }
+        RX.try_receive().ok().map(|f| Ok(copy(f, buf)))
+    }
+
+    async fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        let f = Frame::from_slice(frame).map_err(|_| LinkError::Closed)?;
+        TX.send(f).await;
+        Ok(())
+    }
+}
+
+#[embassy_executor::task]
+async fn usb_device(mut dev: UsbDevice<'static, UsbDriver>) -> ! {
+    dev.run().await
+}
+
+#[embassy_executor::task]
+async fn rx_task(mut rx: Receiver<'static, UsbDriver>) -> ! {
+    let mut dec = Decoder::new();
+    let mut pkt = [0u8; PACKET as usize];
+    loop {
+        rx.wait_connection().await;
+        CONNECTED.signal(());
+        DISCONNECTED.reset();
+        while let Ok(n) = rx.read_packet(&mut pkt).await {
+            dec.feed(&pkt[..n], |f| {
+                // A full queue drops the frame; the host's request times out
+                // and is retried.
+                if let Ok(f) = Frame::from_slice(f) {
+                    let _ = RX.try_send(f);
+                }
+            });
+        }
+        dec = Decoder::new();
+        DISCONNECTED.signal(());
+    }
+}
+
+#[embassy_executor::task]
+async fn tx_task(mut tx: Sender<'static, UsbDriver>) -> ! {
+    let mut enc = [0u8; MAX_ENCODED];
+    loop {
+        let f = TX.receive().await;
+        let Some(n) = framing::encode(&f, &mut enc) else { continue };
+        // Frames go out in full packets; a frame ending on a packet boundary
+        // is closed by a zero-length packet. With no host, frames are dropped.
+        let mut ok = true;
+        for chunk in enc[..n].chunks(PACKET as usize) {
+            ok &= tx.write_packet(chunk).await.is_ok();
+        }
+        if ok && n % PACKET as usize == 0 {
+            let _ = tx.write_packet(&[]).await;
+        }
+    }
+}
+
+/// Builds the USB device and starts its tasks.
+pub fn start(spawner: &Spawner, usb: Peri<'static, USB_OTG_FS>, dp: Peri<'static, PA12>, dm: Peri<'static, PA11>) -> UsbLink {
+    static EP_OUT: StaticCell<[u8; 256]> = StaticCell::new();
+    static CONFIG_DESC: StaticCell<[u8; 256]> = StaticCell::new();
+    static BOS_DESC: StaticCell<[u8; 256]> = StaticCell::new();
+    static CONTROL: StaticCell<[u8; 64]> = StaticCell::new();
+    static STATE: StaticCell<State> = StaticCell::new();
+
+    let mut cfg = embassy_stm32::usb::Config::default();
+    cfg.vbus_detection = false;
+    let driver = Driver::new_fs(usb, super::Irqs, dp, dm, EP_OUT.init([0; 256]), cfg);
+
+    let mut dev_cfg = embassy_usb::Config::new(USB_VID, USB_PID);
+    dev_cfg.manufacturer = Some("gonio");
+    dev_cfg.product = Some("Retroreflection BRDF head");
+    dev_cfg.serial_number = Some(embassy_stm32::uid::uid_hex());
+    dev_cfg.max_power = 100;
+    dev_cfg.max_packet_size_0 = 64;
+
+    let mut builder = Builder::new(
+        driver,
+        dev_cfg,
+        CONFIG_DESC.init([0; 256]),
+        BOS_DESC.init([0; 256]),
+        &mut [],
+        CONTROL.init([0; 64]),
+    );
+    let class = CdcAcmClass::new(&mut builder, STATE.init(State::new()), PACKET);
+    let (tx, rx) = class.split();
+    spawner.must_spawn(usb_device(builder.build()));
+    spawner.must_spawn(rx_task(rx));
+    spawner.must_spawn(tx_task(tx));
+    UsbLink
+}
