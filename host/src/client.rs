@@ -1,7 +1,7 @@
 //! A connected head: typed requests with a timeout on every one, and the
 //! identity check that names a protocol mismatch as such.
 
-use crate::link;
+use crate::link::{self, Workers};
 use crate::sim::SimConfig;
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_shared::icd::{
@@ -36,6 +36,7 @@ const MOTION: Duration = Duration::from_secs(120);
 
 pub struct Head {
     client: HostClient<WireError>,
+    workers: Workers,
     identity: Identity,
     sim_thread: Option<JoinHandle<()>>,
 }
@@ -43,12 +44,15 @@ pub struct Head {
 impl Head {
     /// Connects and identifies the head. Must run within a tokio runtime.
     pub async fn connect(target: &Target) -> Result<Head> {
-        let (client, sim_thread) = match target {
+        let (client, workers, sim_thread) = match target {
             Target::Sim(cfg) => {
-                let (c, t) = link::in_process_client(cfg.clone());
-                (c, Some(t))
+                let (c, w, t) = link::in_process_client(cfg.clone());
+                (c, w, Some(t))
             }
-            Target::Port(p) => (link::serial_client(p)?, None),
+            Target::Port(p) => {
+                let (c, w) = link::serial_client(p)?;
+                (c, w, None)
+            }
         };
         let identity = match call::<IdentifyEndpoint>(&client, &(), QUICK).await {
             Ok(i) => i,
@@ -67,6 +71,7 @@ impl Head {
         }
         Ok(Head {
             client,
+            workers,
             identity,
             sim_thread,
         })
@@ -112,12 +117,12 @@ impl Head {
         Ok((accepted, sub))
     }
 
-    /// Closes the link and waits for a simulated head to reach its safe
-    /// state and stop. The join runs off the runtime's thread, so the wire
-    /// workers can still finish (and drop the channel the head waits on).
+    /// Closes the link: the port is released (another client may open it at
+    /// once) and a simulated head has reached its safe state and stopped.
     pub async fn close(mut self) {
         self.client.close();
         drop(self.client);
+        self.workers.join().await;
         if let Some(t) = self.sim_thread.take() {
             let _ = tokio::task::spawn_blocking(move || t.join()).await;
         }

@@ -1,6 +1,6 @@
 //! The host's side of the in-process link to a simulated head.
 
-use super::{config, TokioSpawn, WireClosed};
+use super::{config, WireClosed, Workers};
 use crate::sim::{spawn_in_process, SimConfig};
 use postcard_rpc::host_client::{HostClient, WireRx, WireTx};
 use postcard_rpc::standard_icd::WireError;
@@ -27,8 +27,9 @@ impl WireRx for Rx {
 
 /// Starts a simulated head in this process and connects a client to it.
 /// Must be called within a tokio runtime.
-pub fn in_process_client(cfg: SimConfig) -> (HostClient<WireError>, JoinHandle<()>) {
+pub fn in_process_client(cfg: SimConfig) -> (HostClient<WireError>, Workers, JoinHandle<()>) {
     let link = spawn_in_process(cfg);
-    let client = HostClient::new_with_wire_and_config(Tx(link.to_head), Rx(link.from_head), TokioSpawn, &config());
-    (client, link.thread)
+    let workers = Workers::default();
+    let client = HostClient::new_with_wire_and_config(Tx(link.to_head), Rx(link.from_head), workers.clone(), &config());
+    (client, workers, link.thread)
 }

@@ -12,7 +12,9 @@ pub use stream::serial_client;
 use postcard_rpc::header::VarSeqKind;
 use postcard_rpc::host_client::{HostClientConfig, WireSpawn};
 use postcard_rpc::standard_icd::ERROR_PATH;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
+use tokio::task::JoinHandle;
 
 /// Depth of queues between the wire workers and the client.
 const DEPTH: usize = 64;
@@ -28,12 +30,24 @@ fn config() -> HostClientConfig<'static> {
     }
 }
 
-/// Spawns the wire workers on the current tokio runtime.
-struct TokioSpawn;
+/// The wire tasks of a client, spawned on the current tokio runtime and kept
+/// so that closing a client can wait until they have released the port.
+#[derive(Clone, Default)]
+pub struct Workers(Arc<Mutex<Vec<JoinHandle<()>>>>);
 
-impl WireSpawn for TokioSpawn {
+impl Workers {
+    /// Waits for every wire task to end (call after `HostClient::close`).
+    pub async fn join(self) {
+        let handles = std::mem::take(&mut *self.0.lock().unwrap_or_else(|e| e.into_inner()));
+        for h in handles {
+            let _ = h.await;
+        }
+    }
+}
+
+impl WireSpawn for Workers {
     fn spawn(&mut self, fut: impl std::future::Future<Output = ()> + Send + 'static) {
-        drop(tokio::task::spawn(fut));
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).push(tokio::task::spawn(fut));
     }
 }
 

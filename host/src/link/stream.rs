@@ -1,7 +1,7 @@
 //! COBS frames over a serial port: the real head's USB CDC-ACM port or the
 //! simulated head's pseudo-terminal.
 
-use super::{config, TokioSpawn, WireClosed};
+use super::{config, WireClosed, Workers};
 use anyhow::{Context, Result};
 use gonio_firmware::framing::{self, Decoder};
 use postcard_rpc::host_client::{HostClient, WireRx, WireTx};
@@ -48,7 +48,7 @@ impl WireRx for Rx {
 
 /// Opens a head's serial port (baud rate is irrelevant on USB CDC-ACM and
 /// on a pseudo-terminal). Must be called within a tokio runtime.
-pub fn serial_client(path: &str) -> Result<HostClient<WireError>> {
+pub fn serial_client(path: &str) -> Result<(HostClient<WireError>, Workers)> {
     let port = tokio_serial::new(path, 115_200)
         .open_native_async()
         .with_context(|| format!("cannot open the head's port {path}"))?;
@@ -58,5 +58,7 @@ pub fn serial_client(path: &str) -> Result<HostClient<WireError>> {
         decoder: Decoder::new(),
         frames: VecDeque::new(),
     };
-    Ok(HostClient::new_with_wire_and_config(Tx(tx), rx, TokioSpawn, &config()))
+    let workers = Workers::default();
+    let client = HostClient::new_with_wire_and_config(Tx(tx), rx, workers.clone(), &config());
+    Ok((client, workers))
 }

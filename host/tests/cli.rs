@@ -1,0 +1,108 @@
+//! The `gonio` binary as a user runs it: help everywhere, the demo's files,
+//! and clean failures.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+use std::process::{Command, Output};
+
+fn gonio(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gonio"))
+        .args(args)
+        .output()
+        .expect("running gonio")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+#[test]
+fn every_command_has_help() {
+    for cmd in [
+        &["--help"][..],
+        &["demo", "--help"],
+        &["scan", "--help"],
+        &["devices", "--help"],
+        &["sim", "--help"],
+    ] {
+        let o = gonio(cmd);
+        assert!(o.status.success(), "{cmd:?}: {}", text(&o));
+        assert!(text(&o).contains("Usage"), "{cmd:?}");
+    }
+}
+
+#[test]
+fn an_unreachable_port_fails_cleanly_and_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scan");
+    let o = gonio(&["scan", "--port", "/nonexistent", "--out", out.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1));
+    let msg = text(&o);
+    assert!(msg.contains("error: cannot open the head's port /nonexistent"), "{msg}");
+    assert!(!msg.contains("panicked"), "{msg}");
+    assert!(!out.exists(), "output directory created for a failed scan");
+}
+
+#[test]
+fn user_mistakes_are_errors_not_panics() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x");
+    let out = out.to_str().unwrap();
+    for (args, says) in [
+        (vec!["scan", "--sim", "--out", out, "--theta-o", "0:90"], "START:STOP:STEP"),
+        (
+            vec!["scan", "--sim", "--out", out, "--material", "glitter"],
+            "valid models: lambert, retro-phong",
+        ),
+        (
+            vec!["scan", "--sim", "--out", out, "--material", "lambert", "--params", "rho=1"],
+            "valid: kd",
+        ),
+        (vec!["scan", "--out", out], "required"),
+    ] {
+        let o = gonio(&args);
+        assert!(!o.status.success(), "{args:?}");
+        let msg = text(&o);
+        assert!(msg.contains(says), "{args:?}: {msg}");
+        assert!(!msg.contains("panicked"), "{msg}");
+    }
+}
+
+fn csv_indices(path: &Path) -> Vec<u32> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "index").unwrap();
+    lines.map(|l| l.split(',').nth(col).unwrap().parse().unwrap()).collect()
+}
+
+#[test]
+fn demo_scans_the_belcour_grid_once_per_reachable_point() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("demo");
+    let o = gonio(&["demo", "--out", out.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let (points, measured, skipped) = (
+        summary["points"].as_u64().unwrap(),
+        summary["measured"].as_u64().unwrap(),
+        summary["skipped"].as_u64().unwrap(),
+    );
+    assert_eq!(points, 3 * 31 * 37);
+    assert_eq!(measured + skipped, points);
+    // θo = 90° is behind the sample for every (θi, Δφ): 3 × 37 points at least.
+    assert!(skipped >= 111, "{summary}");
+    let idx = csv_indices(&out.join("samples.csv"));
+    assert_eq!(idx.len() as u64, measured);
+    assert_eq!(idx.iter().collect::<BTreeSet<_>>().len(), idx.len(), "duplicate points");
+    let run: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["complete"], true);
+    assert_eq!(run["counts"]["measured"].as_u64(), Some(measured));
+    assert_eq!(run["grid"]["points"].as_u64(), Some(points));
+    assert_eq!(run["head"]["simulated"], true);
+    assert!(!out.join("samples.csv.part").exists());
+    // A second demo into the same directory is refused rather than mixed in.
+    let again = gonio(&["demo", "--out", out.to_str().unwrap()]);
+    assert!(!again.status.success());
+    assert!(text(&again).contains("already holds a scan"));
+}

@@ -1,0 +1,6 @@
+//! Shared pieces of the test suites: proptest strategies for every message
+//! type, and small hardware doubles for driving the firmware core without
+//! the simulator.
+
+pub mod doubles;
+pub mod strategies;

@@ -1,0 +1,242 @@
+//! Proptest strategies for the messages of `gonio-shared`, covering the whole
+//! range of every field (NaN and infinities included for floats: the codec
+//! must carry whatever a buggy peer sends, validation refuses it later).
+
+use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
+use gonio_shared::sample::ScanPosition;
+use gonio_shared::*;
+use proptest::prelude::*;
+
+pub fn any_f32() -> impl Strategy<Value = f32> {
+    prop_oneof![
+        8 => -1.0e6f32..1.0e6,
+        1 => Just(f32::NAN),
+        1 => Just(f32::INFINITY),
+        1 => Just(f32::NEG_INFINITY),
+        1 => any::<f32>(),
+    ]
+}
+
+pub fn geometry() -> impl Strategy<Value = Geometry> {
+    (any_f32(), any_f32(), any_f32()).prop_map(|(a, b, c)| Geometry::new(a, b, c))
+}
+
+pub fn axis_angles() -> impl Strategy<Value = AxisAngles> {
+    (any_f32(), any_f32(), any_f32()).prop_map(|(omega_deg, tau_deg, psi_deg)| AxisAngles {
+        omega_deg,
+        tau_deg,
+        psi_deg,
+    })
+}
+
+pub fn axis() -> impl Strategy<Value = Axis> {
+    prop_oneof![Just(Axis::Rotation), Just(Axis::Cradle), Just(Axis::Arm)]
+}
+
+pub fn field() -> impl Strategy<Value = Field> {
+    prop_oneof![
+        Just(Field::ThetaI),
+        Just(Field::ThetaO),
+        Just(Field::Dphi),
+        Just(Field::ChopFrequency),
+        Just(Field::SamplesPerPeriod),
+        Just(Field::Periods),
+        Just(Field::SettleTime),
+        Just(Field::ScanRange),
+        Just(Field::ScanStart),
+        Just(Field::ModelParameter),
+        Just(Field::Tolerance),
+    ]
+}
+
+pub fn fault() -> impl Strategy<Value = Fault> {
+    prop_oneof![
+        field().prop_map(Fault::InvalidValue),
+        Just(Fault::Unreachable(Unreachable::BehindSample)),
+        Just(Fault::Unreachable(Unreachable::BlindZone)),
+        axis().prop_map(|a| Fault::Unreachable(Unreachable::AxisTravel(a))),
+        Just(Fault::NotHomed),
+        Just(Fault::Busy),
+        Just(Fault::Aborted),
+        axis().prop_map(Fault::HomeSwitchNotFound),
+        axis().prop_map(Fault::HomeSwitchStuck),
+        axis().prop_map(Fault::StepTimer),
+        Just(Fault::AdcOverrun),
+        Just(Fault::Saturated),
+        Just(Fault::Gpio),
+    ]
+}
+
+pub fn detection_settings() -> impl Strategy<Value = DetectionSettings> {
+    (any_f32(), any::<u16>(), any::<u16>(), any_f32(), any::<bool>(), any::<bool>()).prop_map(|(chop_hz, m, k, settle, sine, auto)| {
+        DetectionSettings {
+            chop_hz,
+            samples_per_period: m,
+            periods: k,
+            settle_s: settle,
+            reference: if sine { Reference::Sine } else { Reference::Square },
+            auto_range: auto,
+        }
+    })
+}
+
+pub fn sample() -> impl Strategy<Value = Sample> {
+    (
+        (
+            any::<u32>(),
+            proptest::option::of((any::<u32>(), any::<u32>())),
+            any::<u64>(),
+            geometry(),
+            geometry(),
+            axis_angles(),
+        ),
+        (any_f32(), any_f32(), any_f32(), any_f32(), any_f32(), any_f32()),
+        (any::<u8>(), any::<u16>(), any::<u16>()),
+    )
+        .prop_map(
+            |((seq, scan, ts, target, reached, axes), (i, q, a, ph, n, g), (gi, periods, flags))| Sample {
+                seq,
+                scan: scan.map(|(index, order)| ScanPosition { index, order }),
+                timestamp_us: ts,
+                target,
+                reached,
+                axes,
+                in_phase_v: i,
+                quadrature_v: q,
+                amplitude_v: a,
+                phase_deg: ph,
+                noise_v: n,
+                gain_v_per_a: g,
+                gain_index: gi,
+                periods,
+                flags: SampleFlags(flags),
+            },
+        )
+}
+
+pub fn scan_spec() -> impl Strategy<Value = ScanSpec> {
+    (
+        proptest::collection::vec(any_f32(), 0..=8),
+        (any_f32(), any_f32(), any_f32()),
+        (any_f32(), any_f32(), any_f32()),
+        any::<u32>(),
+    )
+        .prop_map(|(ti, (a, b, c), (d, e, f), first_order)| ScanSpec {
+            theta_i_deg: heapless::Vec::from_slice(&ti).unwrap_or_default(),
+            theta_o: AngleRange::new(a, b, c),
+            dphi: AngleRange::new(d, e, f),
+            first_order,
+        })
+}
+
+pub fn sanity_config() -> impl Strategy<Value = SanityConfig> {
+    let model = prop_oneof![
+        any_f32().prop_map(|kd| SanityModel::Lambert { kd }),
+        proptest::collection::vec(any_f32(), 6).prop_map(|p| SanityModel::RetroPhong {
+            kd: p[0],
+            n: p[1],
+            k1: p[2],
+            k2: p[3],
+            k3: p[4],
+            k4: p[5]
+        }),
+        (proptest::collection::vec(any_f32(), 8), any::<bool>()).prop_map(|(p, back)| SanityModel::AbcRetro {
+            kd: p[0],
+            r0: p[1],
+            ab: p[2],
+            bb: p[3],
+            cb: p[4],
+            ar: p[5],
+            br: p[6],
+            cr: p[7],
+            back
+        }),
+    ];
+    (model, any_f32(), any_f32(), any_f32(), any_f32(), any::<bool>()).prop_map(|(model, v, r, a, k, remeasure)| SanityConfig {
+        model,
+        volts_per_sr_inv: v,
+        rel_tol: r,
+        abs_tol_v: a,
+        k_noise: k,
+        remeasure,
+    })
+}
+
+pub fn status() -> impl Strategy<Value = Status> {
+    (
+        prop_oneof![
+            Just(HeadState::Idle),
+            (any::<u32>(), any::<u32>()).prop_map(|(n, t)| HeadState::Scanning { next_order: n, total: t })
+        ],
+        (any::<bool>(), any::<bool>(), axis_angles(), detection_settings()),
+        (
+            any::<u32>(),
+            any::<u32>(),
+            any::<u32>(),
+            any::<bool>(),
+            proptest::option::of(fault()),
+            any::<u64>(),
+        ),
+    )
+        .prop_map(
+            |(state, (homed, laser_on, axes, detection), (sent, flagged, remeasured, sanity_loaded, last_fault, up))| Status {
+                state,
+                homed,
+                laser_on,
+                axes,
+                detection,
+                samples_sent: sent,
+                samples_flagged: flagged,
+                samples_remeasured: remeasured,
+                sanity_loaded,
+                last_fault,
+                uptime_us: up,
+            },
+        )
+}
+
+pub fn identity() -> impl Strategy<Value = Identity> {
+    (
+        "[ -~]{0,16}",
+        "[ -~]{0,32}",
+        "[0-9A-F]{0,24}",
+        any::<u16>(),
+        any::<bool>(),
+        proptest::array::uniform4(any_f32()),
+    )
+        .prop_map(|(fw, board, serial, pv, simulated, gains)| Identity {
+            protocol_version: pv,
+            firmware_version: heapless::String::try_from(fw.as_str()).unwrap_or_default(),
+            board: heapless::String::try_from(board.as_str()).unwrap_or_default(),
+            serial: heapless::String::try_from(serial.as_str()).unwrap_or_default(),
+            simulated,
+            capabilities: Capabilities {
+                axes: 3,
+                gain_ranges: 4,
+                adc_bits: 12,
+                max_scan_incidences: 8,
+                gains_v_per_a: gains,
+            },
+        })
+}
+
+pub fn scan_event() -> impl Strategy<Value = ScanEvent> {
+    prop_oneof![
+        sample().prop_map(ScanEvent::Sample),
+        (any::<u32>(), any::<u32>(), fault()).prop_map(|(index, order, reason)| ScanEvent::Skipped { index, order, reason }),
+        (any::<u32>(), any::<u32>()).prop_map(|(measured, skipped)| ScanEvent::Finished { measured, skipped }),
+        (any::<u32>(), fault()).prop_map(|(next_order, reason)| ScanEvent::Stopped { next_order, reason }),
+    ]
+}
+
+pub fn home_request() -> impl Strategy<Value = HomeRequest> {
+    (any::<bool>(), any::<bool>(), any::<bool>()).prop_map(|(rotation, cradle, arm)| HomeRequest { rotation, cradle, arm })
+}
+
+pub fn measure_request() -> impl Strategy<Value = MeasureRequest> {
+    proptest::option::of(geometry()).prop_map(|at| MeasureRequest { at })
+}
+
+pub fn move_report() -> impl Strategy<Value = MoveReport> {
+    (geometry(), axis_angles(), any_f32()).prop_map(|(reached, axes, duration_s)| MoveReport { reached, axes, duration_s })
+}

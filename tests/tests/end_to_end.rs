@@ -1,0 +1,189 @@
+//! Host ↔ simulated head through the whole stack: postcard-rpc client, frames
+//! on a link, the firmware's dispatcher, motion, auto-range and demodulation,
+//! and the virtual photodiode.
+
+use gonio_firmware::board::REFERENCE;
+use gonio_firmware::kinematics;
+use gonio_host::brdf::Directions;
+use gonio_host::client::{Head, Target};
+use gonio_host::samples_csv::{self, SampleWriter};
+use gonio_host::scan;
+use gonio_host::sim::{serve_pty, SimConfig};
+use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
+use std::collections::BTreeSet;
+use std::time::Duration;
+
+fn small_grid() -> ScanSpec {
+    ScanSpec {
+        theta_i_deg: heapless::Vec::from_slice(&[30.0, 60.0]).unwrap(),
+        theta_o: AngleRange::new(0.0, 87.0, 3.0),
+        dphi: AngleRange::new(0.0, 180.0, 90.0),
+        first_order: 0,
+    }
+}
+
+async fn homed(target: &Target) -> Head {
+    let head = Head::connect(target).await.unwrap();
+    head.detection(DetectionSettings::default()).await.unwrap();
+    head.home().await.unwrap();
+    head
+}
+
+#[tokio::test]
+async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
+    let sim = SimConfig::default();
+    let head = homed(&Target::Sim(sim.clone())).await;
+    let dir = tempfile::tempdir().unwrap();
+    let spec = small_grid();
+    let mut out = SampleWriter::create(dir.path()).unwrap();
+    let outcome = scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true)).await.unwrap();
+    let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
+    head.close().await;
+
+    assert_eq!(outcome.points, spec.len());
+    assert_eq!(outcome.measured + outcome.skipped, spec.len());
+    assert_eq!(rows.len() as u32, outcome.measured);
+    let measured: BTreeSet<u32> = rows.iter().map(|r| r.index.unwrap()).collect();
+    assert_eq!(measured.len(), rows.len(), "a point was measured twice");
+    let reachable: BTreeSet<u32> = (0..spec.len())
+        .filter(|&i| kinematics::inverse(&REFERENCE, &spec.point(i).unwrap()).is_ok())
+        .collect();
+    assert_eq!(measured, reachable);
+
+    // Photocurrent / (f_r · cosθo) is one instrument constant over the whole
+    // scan, once the beam splitter's factor is divided out of the retro point.
+    let m = &sim.material;
+    let ratios: Vec<f64> = rows
+        .iter()
+        .map(|r| {
+            assert!((r.theta_o_deg - r.target_theta_o_deg).abs() < 0.01 && (r.theta_i_deg - r.target_theta_i_deg).abs() < 0.01);
+            let d = Directions::from_degrees(r.target_theta_i_deg as f64, r.target_theta_o_deg as f64, r.target_dphi_deg as f64);
+            let splitter = if r.flags & SampleFlags::THROUGH_SPLITTER != 0 {
+                sim.photodiode.splitter_factor
+            } else {
+                1.0
+            };
+            assert_eq!(r.flags & !SampleFlags::THROUGH_SPLITTER, 0, "unexpected flags on {r:?}");
+            r.amplitude_v as f64 / r.gain_v_per_a as f64 / (m.eval(&d) * d.cos_o() * splitter)
+        })
+        .collect();
+    let mut sorted = ratios.clone();
+    sorted.sort_by(f64::total_cmp);
+    let median = sorted[sorted.len() / 2];
+    for (r, k) in rows.iter().zip(&ratios) {
+        // Within 2 % (the amplifier's lag differs slightly between gains)
+        // plus four standard errors of the sample's own noise.
+        let tol = 0.02 + 4.0 * (r.noise_v / r.amplitude_v) as f64;
+        assert!(
+            (k / median - 1.0).abs() < tol,
+            "point {:?} off the instrument constant by {:.3} (tolerance {tol:.3})",
+            r.index,
+            k / median - 1.0
+        );
+    }
+    // Four decades: the retro peak needs a lower gain than the diffuse floor.
+    let gains: BTreeSet<u8> = rows.iter().map(|r| r.gain_index).collect();
+    assert!(gains.len() >= 2, "gains used: {gains:?}");
+}
+
+#[tokio::test]
+async fn a_protocol_version_mismatch_is_named() {
+    let sim = SimConfig {
+        protocol_version: PROTOCOL_VERSION + 1,
+        ..SimConfig::default()
+    };
+    let err = Head::connect(&Target::Sim(sim)).await.err().expect("connecting must fail");
+    let msg = format!("{err:#}");
+    assert!(msg.contains("protocol version mismatch"), "{msg}");
+    assert!(msg.contains(&format!("v{}", PROTOCOL_VERSION + 1)), "{msg}");
+}
+
+#[tokio::test]
+async fn refused_commands_move_nothing() {
+    let head = Head::connect(&Target::Sim(SimConfig::default())).await.unwrap();
+    let err = head.measure(Some(Geometry::new(30.0, 30.0, 0.0))).await.unwrap_err();
+    assert!(format!("{err:#}").contains("not homed"), "{err:#}");
+    head.home().await.unwrap();
+    let before = head.status().await.unwrap();
+    for (g, why) in [
+        (Geometry::new(30.0, 33.0, 0.0), "blind zone"),
+        (Geometry::new(30.0, 95.0, 0.0), "behind the sample"),
+        (Geometry::new(f32::NAN, 10.0, 0.0), "invalid theta_i"),
+        (Geometry::new(87.0, 87.0, 180.0), "travel of the arm"),
+    ] {
+        let err = head.move_to(g).await.unwrap_err();
+        assert!(format!("{err:#}").contains(why), "{g:?}: {err:#}");
+    }
+    let after = head.status().await.unwrap();
+    assert_eq!(before.axes, after.axes);
+    assert!(!after.laser_on);
+    head.close().await;
+}
+
+#[tokio::test]
+async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() {
+    let head = homed(&Target::Sim(SimConfig::default())).await;
+    let spec = ScanSpec::belcour();
+    let (accepted, mut events) = head.start_scan(&spec).await.unwrap();
+    assert_eq!(accepted.points, 3441);
+    for _ in 0..5 {
+        events.recv().await.unwrap();
+    }
+    let st = head.abort().await.unwrap();
+    assert_eq!(st.state, HeadState::Idle);
+    assert!(!st.laser_on);
+    let next = loop {
+        match events.recv().await.unwrap() {
+            ScanEvent::Stopped { next_order, reason } => {
+                assert_eq!(reason, gonio_shared::Fault::Aborted);
+                break next_order;
+            }
+            ScanEvent::Sample(_) | ScanEvent::Skipped { .. } => {}
+            ScanEvent::Finished { .. } => panic!("an aborted scan finished"),
+        }
+    };
+    assert!(next >= 5);
+    drop(events);
+    let resumed = ScanSpec { first_order: next, ..spec };
+    let (accepted, mut events) = head.start_scan(&resumed).await.unwrap();
+    assert_eq!(accepted.first_order, next);
+    let first = match events.recv().await.unwrap() {
+        ScanEvent::Sample(s) => s.scan.unwrap().order,
+        ScanEvent::Skipped { order, .. } => order,
+        other => panic!("{other:?}"),
+    };
+    assert_eq!(first, next);
+    head.abort().await.unwrap();
+    drop(events);
+    head.close().await;
+}
+
+#[tokio::test]
+async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let link = dir.path().join("head");
+    let serve_at = link.clone();
+    std::thread::spawn(move || serve_pty(SimConfig::default(), &serve_at, |_| {}));
+    for _ in 0..200 {
+        if link.exists() {
+            break;
+        }
+        tokio::time::sleep(Duration::from_millis(10)).await;
+    }
+    let target = Target::Port(link.to_string_lossy().into_owned());
+    let head = homed(&target).await;
+    assert!(head.identity().simulated);
+    assert_eq!(head.identity().protocol_version, PROTOCOL_VERSION);
+    let mut out = SampleWriter::create(dir.path()).unwrap();
+    let outcome = scan::run(&head, &small_grid(), &mut out, &scan::progress_bar(0, true))
+        .await
+        .unwrap();
+    let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
+    assert_eq!(rows.len() as u32, outcome.measured);
+    assert_eq!(outcome.measured + outcome.skipped, small_grid().len());
+    head.close().await;
+    // A second session on the same head works too.
+    let again = Head::connect(&target).await.unwrap();
+    assert!(again.status().await.unwrap().homed);
+    again.close().await;
+}
