@@ -120,25 +120,28 @@ impl ScanSpec {
         self.len() == 0
     }
 
-    /// The geometry of canonical index `index`.
-    pub fn point(&self, index: u32) -> Option<Geometry> {
+    /// Splits `i` into the incidence (outermost) and the row and column of a
+    /// `rows × cols` block, for an `i` inside the grid.
+    fn locate(&self, i: u32, cols: impl Fn(&Dims) -> u32) -> Option<(Dims, u32, u32, u32)> {
         let d = self.dims().ok()?;
-        if index >= d.n_ti * d.n_to * d.n_dp {
+        let block = d.n_to * d.n_dp;
+        if i >= d.n_ti * block {
             return None;
         }
-        let (a, rest) = (index / (d.n_to * d.n_dp), index % (d.n_to * d.n_dp));
-        let (b, c) = (rest / d.n_dp, rest % d.n_dp);
+        let (a, rest) = (i / block, i % block);
+        let c = cols(&d);
+        Some((d, a, rest / c, rest % c))
+    }
+
+    /// The geometry of canonical index `index`.
+    pub fn point(&self, index: u32) -> Option<Geometry> {
+        let (_, a, b, c) = self.locate(index, |d| d.n_dp)?;
         Some(Geometry::new(self.theta_i_deg[a as usize], self.theta_o.at(b), self.dphi.at(c)))
     }
 
     /// Canonical index of the point visited at position `order`.
     pub fn index_at_order(&self, order: u32) -> Option<u32> {
-        let d = self.dims().ok()?;
-        if order >= d.n_ti * d.n_to * d.n_dp {
-            return None;
-        }
-        let (a, rest) = (order / (d.n_to * d.n_dp), order % (d.n_to * d.n_dp));
-        let (row, col) = (rest / d.n_to, rest % d.n_to);
+        let (d, a, row, col) = self.locate(order, |d| d.n_to)?;
         let c = if a % 2 == 0 { row } else { d.n_dp - 1 - row };
         let b = if row % 2 == 0 { col } else { d.n_to - 1 - col };
         Some((a * d.n_to + b) * d.n_dp + c)

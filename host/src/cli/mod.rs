@@ -2,6 +2,7 @@
 
 mod devices;
 mod grid;
+mod material;
 mod scan;
 mod sim;
 

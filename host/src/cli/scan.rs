@@ -1,7 +1,7 @@
 //! `gonio demo` and `gonio scan`: connect, home, scan, store, summarise.
 
 use super::grid::GridArgs;
-use crate::brdf::{Material, ModelId};
+use super::material::SimHeadArgs;
 use crate::client::{Head, Target};
 use crate::run_record::RunRecord;
 use crate::samples_csv::SampleWriter;
@@ -19,6 +19,13 @@ pub struct DemoArgs {
     /// Seed of the simulated head's noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    #[command(flatten)]
+    pub output: OutputArgs,
+}
+
+/// How results are written.
+#[derive(Debug, clap::Args)]
+pub struct OutputArgs {
     /// Overwrite a scan already in the output directory.
     #[arg(long)]
     pub force: bool,
@@ -41,21 +48,10 @@ pub struct ScanArgs {
     pub out: PathBuf,
     #[command(flatten)]
     pub grid: GridArgs,
-    /// Virtual material of `--sim`: a model id of models.md.
-    #[arg(long, default_value = "retro-phong")]
-    pub material: String,
-    /// Its parameters, NAME=V,... (default: a retroreflective tape).
-    #[arg(long)]
-    pub params: Option<String>,
-    /// Seed of the simulated head's noise.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Overwrite a scan already in the output directory.
-    #[arg(long)]
-    pub force: bool,
-    /// Print the summary as JSON.
-    #[arg(long)]
-    pub json: bool,
+    #[command(flatten)]
+    pub sim_head: SimHeadArgs,
+    #[command(flatten)]
+    pub output: OutputArgs,
 }
 
 pub async fn demo(a: DemoArgs) -> Result<()> {
@@ -63,28 +59,16 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         seed: a.seed,
         ..SimConfig::default()
     };
-    scan_to_dir(&Target::Sim(sim), &ScanSpec::belcour(), &a.out, a.force, a.json).await
+    scan_to_dir(&Target::Sim(sim), &ScanSpec::belcour(), &a.out, &a.output).await
 }
 
 pub async fn scan(a: ScanArgs) -> Result<()> {
     let spec = a.grid.spec()?;
     let target = match &a.port {
         Some(p) => Target::Port(p.clone()),
-        None => {
-            let model = ModelId::parse(&a.material)?;
-            let material = match &a.params {
-                Some(p) => Material::parse(model, p)?,
-                None if model == ModelId::RetroPhong => Material::tape(),
-                None => bail!("--params is required for --material {}", model.name()),
-            };
-            Target::Sim(SimConfig {
-                material,
-                seed: a.seed,
-                ..SimConfig::default()
-            })
-        }
+        None => Target::Sim(a.sim_head.config()?),
     };
-    scan_to_dir(&target, &spec, &a.out, a.force, a.json).await
+    scan_to_dir(&target, &spec, &a.out, &a.output).await
 }
 
 /// Refuses to mix a new scan into a directory that holds one.
@@ -103,7 +87,8 @@ fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
 }
 
 /// Connects first, so a head that cannot be reached leaves no files behind.
-async fn scan_to_dir(target: &Target, spec: &ScanSpec, dir: &Path, force: bool, json: bool) -> Result<()> {
+async fn scan_to_dir(target: &Target, spec: &ScanSpec, dir: &Path, output: &OutputArgs) -> Result<()> {
+    let json = output.json;
     let head = Head::connect(target).await?;
     let id = head.identity().clone();
     if !json {
@@ -116,7 +101,7 @@ async fn scan_to_dir(target: &Target, spec: &ScanSpec, dir: &Path, force: bool, 
             if id.simulated { ", simulated" } else { "" }
         );
     }
-    prepare_dir(dir, force)?;
+    prepare_dir(dir, output.force)?;
     let detection = head.detection(DetectionSettings::default()).await?;
     head.home().await?;
     let mut writer = SampleWriter::create(dir)?;
