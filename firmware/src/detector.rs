@@ -1,12 +1,13 @@
 //! Acquisition of one sample: auto-range the transimpedance gain, discard the
-//! periods the amplifier spends settling, integrate, flag.
+//! periods the amplifier spends settling, integrate, flag. Also the
+//! calibration that learns the electronics' phase and the matched waveform.
 
 use crate::board::HeadConfig;
-use crate::demod::{demod_period, Accumulator, Reference, MAX_M};
+use crate::demod::{Estimate, Integrator, Learned, Learner, Reference, MAX_M};
 use crate::hw::{AdcStream, Board, ChopTiming, Hardware};
 use crate::units;
 use embedded_hal::digital::OutputPin;
-use gonio_shared::{DetectionReport, DetectionSettings, Fault, SampleFlags};
+use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags};
 
 /// Gain up when the largest code would still sit below this fraction of full
 /// scale at ten times the gain; down when codes reach the rails. The band in
@@ -14,6 +15,13 @@ use gonio_shared::{DetectionReport, DetectionSettings, Fault, SampleFlags};
 const RAISE_BELOW: f32 = 0.7;
 /// Amplitudes under this many standard errors are flagged as below noise.
 const NOISE_FLOOR_K: f64 = 3.0;
+/// A calibrated phase is checked on samples at least this far above noise...
+const PHASE_CHECK_SNR: f64 = 10.0;
+/// ...and flagged when it is further than this from the calibrated phase.
+const PHASE_TOLERANCE_DEG: f64 = 20.0;
+/// Calibration needs at least this signal-to-noise ratio and period count.
+const CALIBRATION_SNR: f64 = 30.0;
+const CALIBRATION_MIN_PERIODS: u16 = 8;
 
 /// A demodulated measurement in SI units, before geometry is attached.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -21,6 +29,7 @@ pub struct Measurement {
     pub in_phase_v: f32,
     pub quadrature_v: f32,
     pub amplitude_v: f32,
+    pub magnitude_v: f32,
     pub phase_deg: f32,
     pub noise_v: f32,
     pub gain_index: u8,
@@ -32,21 +41,35 @@ pub struct Measurement {
 pub struct Detector {
     settings: DetectionSettings,
     timing: ChopTiming,
+    chop_hz: f64,
     reference: Reference,
+    /// The calibration and the chop timing it was taken at.
+    learned: Option<(Learned, ChopTiming)>,
     gain: u8,
-    /// Calibrated phase delay of the electronics (degrees).
-    phase_ref_deg: f32,
     running: bool,
 }
 
+fn wrap_deg(d: f64) -> f64 {
+    let x = libm::fmod(d + 180.0, 360.0);
+    if x < 0.0 {
+        x + 180.0
+    } else {
+        x - 180.0
+    }
+}
+
 impl Detector {
+    /// Starts with `settings`; a matched reference there falls back to the
+    /// square until a calibration has learned the waveform.
     pub fn new<A: AdcStream>(settings: DetectionSettings) -> Self {
+        let timing = units::chop_timing(&settings, A::TIMER_HZ);
         Self {
             settings,
-            timing: units::chop_timing(&settings, A::TIMER_HZ),
-            reference: Reference::new(settings.reference, settings.samples_per_period as usize),
+            timing,
+            chop_hz: units::chop_hz_actual(timing, A::TIMER_HZ) as f64,
+            reference: Reference::new(settings.reference, settings.samples_per_period as usize, None),
+            learned: None,
             gain: 0,
-            phase_ref_deg: 0.0,
             running: false,
         }
     }
@@ -55,18 +78,29 @@ impl Detector {
         &self.settings
     }
 
+    fn learned(&self) -> Option<&Learned> {
+        self.learned.as_ref().filter(|(_, t)| *t == self.timing).map(|(l, _)| l)
+    }
+
     /// Applies validated settings; the ADC restarts on the next measurement.
+    /// A matched reference needs a calibration at the same chop timing.
     pub fn configure<B: Board>(&mut self, hw: &mut Hardware<B>, s: DetectionSettings) -> Result<DetectionReport, Fault> {
         s.validate()?;
+        let timing = units::chop_timing(&s, <B::Adc as AdcStream>::TIMER_HZ);
+        let calibrated = self.learned.as_ref().is_some_and(|(_, t)| *t == timing);
+        if s.reference == Kind::Matched && !calibrated {
+            return Err(Fault::NotCalibrated);
+        }
         self.settings = s;
-        self.timing = units::chop_timing(&s, <B::Adc as AdcStream>::TIMER_HZ);
-        self.reference = Reference::new(s.reference, s.samples_per_period as usize);
+        self.timing = timing;
+        self.chop_hz = units::chop_hz_actual(timing, <B::Adc as AdcStream>::TIMER_HZ) as f64;
+        self.reference = Reference::new(s.reference, s.samples_per_period as usize, self.learned());
         self.stop(hw);
         Ok(self.report::<B::Adc>())
     }
 
     pub fn report<A: AdcStream>(&self) -> DetectionReport {
-        let chop = units::chop_hz_actual(self.timing, A::TIMER_HZ);
+        let chop = self.chop_hz as f32;
         let t = self.settings.periods as f32 / chop;
         DetectionReport {
             settings: self.settings,
@@ -93,10 +127,14 @@ impl Detector {
     }
 
     /// Reads one period into `buf`, noting an overrun in `flags`.
-    async fn period<B: Board>(&mut self, hw: &mut Hardware<B>, buf: &mut [u16], flags: &mut SampleFlags) {
+    async fn period<B: Board>(hw: &mut Hardware<B>, buf: &mut [u16], flags: &mut SampleFlags) {
         if hw.adc.next_period(buf).await.is_err() {
             flags.set(SampleFlags::OVERRUN);
         }
+    }
+
+    fn full_scale<B: Board>() -> u16 {
+        ((1u32 << <B::Adc as AdcStream>::BITS) - 1) as u16
     }
 
     /// Chooses the gain: discard the settling periods after each change, look
@@ -108,21 +146,21 @@ impl Detector {
         buf: &mut [u16],
         flags: &mut SampleFlags,
     ) -> Result<(), Fault> {
-        let full = ((1u32 << <B::Adc as AdcStream>::BITS) - 1) as u16;
+        let full = Self::full_scale::<B>();
         let n_gains = cfg.detector.gains_v_per_a.len() as u8;
         for _ in 0..2 * n_gains {
             for _ in 0..cfg.detector.settle_periods {
-                self.period(hw, buf, flags).await;
+                Self::period(hw, buf, flags).await;
             }
-            self.period(hw, buf, flags).await;
-            let p = demod_period(&self.reference, buf);
-            if p.max >= full || p.min == 0 {
+            Self::period(hw, buf, flags).await;
+            let (min, max) = buf.iter().fold((u16::MAX, 0), |(lo, hi), &c| (lo.min(c), hi.max(c)));
+            if max >= full || min == 0 {
                 if self.gain == 0 {
                     return Ok(());
                 }
                 let g = self.gain - 1;
                 self.set_gain(hw, g)?;
-            } else if (p.max as f32) * 10.0 < RAISE_BELOW * full as f32 && self.gain + 1 < n_gains {
+            } else if (max as f32) * 10.0 < RAISE_BELOW * full as f32 && self.gain + 1 < n_gains {
                 let g = self.gain + 1;
                 self.set_gain(hw, g)?;
             } else {
@@ -132,47 +170,127 @@ impl Detector {
         Ok(())
     }
 
-    /// Takes one sample at the current position.
-    pub async fn measure<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig) -> Result<Measurement, Fault> {
-        let mut flags = SampleFlags::default();
-        let m = (self.settings.samples_per_period as usize).min(MAX_M);
-        let mut buf = [0u16; MAX_M];
-        let buf = &mut buf[..m];
+    /// Starts the chop if needed, ranges the gain and lets the amplifier settle.
+    async fn prepare<B: Board>(
+        &mut self,
+        hw: &mut Hardware<B>,
+        cfg: &HeadConfig,
+        buf: &mut [u16],
+        flags: &mut SampleFlags,
+    ) -> Result<(), Fault> {
         if !self.running {
             self.set_gain(hw, self.gain)?;
             hw.adc.start(self.timing);
             self.running = true;
         }
         if self.settings.auto_range {
-            self.auto_range(hw, cfg, buf, &mut flags).await?;
+            self.auto_range(hw, cfg, buf, flags).await?;
         }
         for _ in 0..cfg.detector.settle_periods {
-            self.period(hw, buf, &mut flags).await;
+            Self::period(hw, buf, flags).await;
         }
-        let mut acc = Accumulator::new();
-        for _ in 0..self.settings.periods {
-            self.period(hw, buf, &mut flags).await;
-            acc.push(demod_period(&self.reference, buf));
+        Ok(())
+    }
+
+    fn samples_per_period(&self) -> usize {
+        (self.settings.samples_per_period as usize).min(MAX_M)
+    }
+
+    /// Takes one sample at the current position.
+    pub async fn measure<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig) -> Result<Measurement, Fault> {
+        let mut flags = SampleFlags::default();
+        let mut buf = [0u16; MAX_M];
+        let buf = &mut buf[..self.samples_per_period()];
+        self.prepare(hw, cfg, buf, &mut flags).await?;
+        let periods = self.settings.periods;
+        let mut it = Integrator::new(&self.reference, periods as u32, self.chop_hz);
+        for _ in 0..periods {
+            Self::period(hw, buf, &mut flags).await;
+            it.push(buf);
         }
-        let full = ((1u32 << <B::Adc as AdcStream>::BITS) - 1) as u16;
-        if acc.max >= full || acc.min == 0 {
+        let e = it.estimate();
+        self.flag(&e, Self::full_scale::<B>(), &mut flags);
+        Ok(self.measurement::<B>(cfg, &e, flags))
+    }
+
+    fn flag(&self, e: &Estimate, full: u16, flags: &mut SampleFlags) {
+        if e.max >= full || e.min == 0 {
             flags.set(SampleFlags::SATURATED);
         }
-        let e = acc.estimate(&self.reference, self.phase_ref_deg as f64);
         if e.amplitude.abs() < NOISE_FLOOR_K * e.std_err {
             flags.set(SampleFlags::BELOW_NOISE);
         }
+        if let Some(l) = self.learned() {
+            let snr = e.magnitude / e.std_err.max(1e-12);
+            let off = wrap_deg(e.phase_deg - l.phase_square.to_degrees());
+            let reference_off = match self.reference.kind() {
+                Kind::Sine => wrap_deg(e.phase_deg - l.phase_sine.to_degrees()),
+                Kind::Square | Kind::Matched => off,
+            };
+            if snr > PHASE_CHECK_SNR && libm::fabs(reference_off) > PHASE_TOLERANCE_DEG {
+                flags.set(SampleFlags::PHASE_OFF);
+            }
+        }
+    }
+
+    fn measurement<B: Board>(&self, cfg: &HeadConfig, e: &Estimate, flags: SampleFlags) -> Measurement {
         let volts = |c: f64| units::codes_to_volts(c as f32, <B::Adc as AdcStream>::BITS, cfg.detector.adc_vref);
-        Ok(Measurement {
+        Measurement {
             in_phase_v: volts(e.i),
             quadrature_v: volts(e.q),
             amplitude_v: volts(e.amplitude),
+            magnitude_v: volts(e.magnitude),
             phase_deg: e.phase_deg as f32,
             noise_v: volts(e.std_err),
             gain_index: self.gain,
             gain_v_per_a: cfg.detector.gains_v_per_a[self.gain as usize],
             periods: e.periods as u16,
             flags,
+        }
+    }
+
+    /// Learns the phase of the electronics and the matched waveform on the
+    /// signal at the current position, which must be strong and steady.
+    pub async fn calibrate<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, periods: u16) -> Result<CalibrationReport, Fault> {
+        let chop_s = 1.0 / self.chop_hz as f32;
+        if periods < CALIBRATION_MIN_PERIODS || periods as f32 * chop_s > DetectionSettings::INTEGRATION_MAX_S * 6.0 {
+            return Err(Fault::InvalidValue(Field::Periods));
+        }
+        let m = self.samples_per_period();
+        let mut flags = SampleFlags::default();
+        let mut buf = [0u16; MAX_M];
+        let buf = &mut buf[..m];
+        self.prepare(hw, cfg, buf, &mut flags).await?;
+        let square = Reference::new(Kind::Square, m, None);
+        let mut it = Integrator::new(&square, periods as u32, self.chop_hz);
+        let mut learner = Learner::new(m, periods as u32, self.chop_hz);
+        for _ in 0..periods {
+            Self::period(hw, buf, &mut flags).await;
+            it.push(buf);
+            learner.push(buf);
+        }
+        let e = it.estimate();
+        if e.max >= Self::full_scale::<B>() || e.min == 0 {
+            return Err(Fault::Saturated);
+        }
+        let snr = e.magnitude / e.std_err.max(1e-12);
+        if flags.contains(SampleFlags::OVERRUN) || snr < CALIBRATION_SNR {
+            return Err(Fault::WeakSignal);
+        }
+        let learned = learner.finish().ok_or(Fault::WeakSignal)?;
+        self.learned = Some((learned, self.timing));
+        self.reference = Reference::new(self.settings.reference, m, self.learned());
+        let phase = self.learned().map_or(0.0, |l| match self.settings.reference {
+            Kind::Sine => l.phase_sine,
+            Kind::Square | Kind::Matched => l.phase_square,
+        });
+        let volts = units::codes_to_volts(e.magnitude as f32, <B::Adc as AdcStream>::BITS, cfg.detector.adc_vref);
+        Ok(CalibrationReport {
+            phase_deg: phase.to_degrees() as f32,
+            amplitude_v: volts,
+            gain_index: self.gain,
+            snr: snr as f32,
+            periods,
         })
     }
 }

@@ -4,10 +4,10 @@
 //! shrinks keys when unambiguous) and replies use the same width.
 
 use gonio_shared::icd::{
-    AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint,
-    SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
+    MoveEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
-use gonio_shared::{DetectionSettings, Geometry, SanityConfig, ScanSpec};
+use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, SanityConfig, ScanSpec};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::standard_icd::WireError;
 use postcard_rpc::{Endpoint, Key};
@@ -25,6 +25,7 @@ pub enum Command {
     Abort,
     Detection(DetectionSettings),
     Sanity(SanityConfig),
+    Calibrate(CalibrateRequest),
 }
 
 /// A frame that is not a valid request.
@@ -69,6 +70,8 @@ pub fn decode(frame: &[u8]) -> Result<(VarHeader, Command), DecodeError> {
         body(hdr, rest).map(Command::Detection)
     } else if is::<SanityEndpoint>(k) {
         body(hdr, rest).map(Command::Sanity)
+    } else if is::<CalibrateEndpoint>(k) {
+        body(hdr, rest).map(Command::Calibrate)
     } else {
         Err(DecodeError::Wire(hdr, WireError::UnknownKey))
     };

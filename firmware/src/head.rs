@@ -15,8 +15,8 @@ use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
-    Axis, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, Reply, Sample, SampleFlags, SanityConfig, ScanAccepted,
-    ScanEvent, ScanSpec, Status,
+    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, Reply, Sample,
+    SampleFlags, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status,
 };
 use postcard_rpc::header::VarKeyKind;
 
@@ -236,6 +236,7 @@ impl<B: Board> Head<B> {
             in_phase_v: m.in_phase_v,
             quadrature_v: m.quadrature_v,
             amplitude_v: m.amplitude_v,
+            magnitude_v: m.magnitude_v,
             phase_deg: m.phase_deg,
             noise_v: m.noise_v,
             gain_v_per_a: m.gain_v_per_a,
@@ -296,6 +297,20 @@ impl<B: Board> Head<B> {
             return Err(Fault::Busy);
         }
         self.detector.configure(&mut self.hw, s)
+    }
+
+    /// Learns the detection chain at the current position (laser on).
+    pub async fn calibrate(&mut self, req: CalibrateRequest) -> Reply<CalibrationReport> {
+        if self.scan.is_some() {
+            return Err(Fault::Busy);
+        }
+        let r = match self.laser(true) {
+            Ok(()) => self.detector.calibrate(&mut self.hw, &self.cfg, req.periods).await,
+            Err(f) => Err(f),
+        };
+        self.detector.stop(&mut self.hw);
+        let _ = self.laser(false);
+        self.note(r)
     }
 
     pub fn load_sanity(&mut self, c: SanityConfig) -> Reply<()> {

@@ -7,8 +7,8 @@ use crate::head::Head;
 use crate::hw::Board;
 use crate::link::{Link, LinkError};
 use gonio_shared::icd::{
-    AbortEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint, SanityEndpoint, ScanEndpoint,
-    ScanEventTopic, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint, SanityEndpoint,
+    ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{Fault, ScanEvent};
@@ -85,6 +85,10 @@ impl<B: Board> Head<B> {
             Command::Detection(s) => {
                 let resp = self.configure_detection(s);
                 self.reply::<DetectionEndpoint, L>(seq, &resp, link).await
+            }
+            Command::Calibrate(c) => {
+                let resp = self.calibrate(c).await;
+                self.reply::<CalibrateEndpoint, L>(seq, &resp, link).await
             }
             Command::Sanity(c) => {
                 let resp = self.load_sanity(c);

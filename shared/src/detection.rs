@@ -14,6 +14,11 @@ pub enum Reference {
     Square,
     /// Sine at the chop frequency.
     Sine,
+    /// The signal's own waveform (the chop through the amplifier's response),
+    /// learned by [`crate::icd::CalibrateEndpoint`]: the least-squares
+    /// amplitude of a known waveform in white noise, which reaches the
+    /// Cramér–Rao bound where square and sine references fall short.
+    Matched,
 }
 
 /// What the host asks of the detector.
@@ -42,6 +47,17 @@ impl DetectionSettings {
     pub const ADC_RATE_MAX_HZ: f32 = 1.0e6;
     pub const INTEGRATION_MAX_S: f32 = 10.0;
     pub const SETTLE_MAX_S: f32 = 60.0;
+
+    /// Periods that make an integration of `seconds` at this chop frequency
+    /// (at least one).
+    pub fn periods_for(&self, seconds: f32) -> u16 {
+        let p = seconds * self.chop_hz;
+        if p.is_finite() && p >= 1.0 {
+            (p + 0.5).min(u16::MAX as f32) as u16
+        } else {
+            1
+        }
+    }
 
     /// Integration time (s) of one sample.
     pub fn integration_s(&self) -> f32 {
@@ -97,4 +113,28 @@ pub struct DetectionReport {
     pub integration_s: f32,
     /// Equivalent noise bandwidth of the integration, `1/(2T)` (Hz).
     pub enbw_hz: f32,
+}
+
+/// Ask the head to learn its detection chain at the current position, on a
+/// strong, steady signal (the reference plate or a retroreflector): the
+/// electronics' phase delay and the waveform for [`Reference::Matched`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CalibrateRequest {
+    /// Chop periods averaged (230 = 1 s at 230 Hz).
+    pub periods: u16,
+}
+
+/// What the calibration learned.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct CalibrationReport {
+    /// Phase of the signal relative to the chop, now the reference phase (degrees).
+    pub phase_deg: f32,
+    /// Chop amplitude seen during calibration (V at the ADC) and the gain used.
+    pub amplitude_v: f32,
+    pub gain_index: u8,
+    /// Signal-to-noise ratio of the learned waveform (amplitude / standard error).
+    pub snr: f32,
+    pub periods: u16,
 }

@@ -110,6 +110,10 @@ pub enum Fault {
     Saturated,
     /// A GPIO write (DIR, enable, gain select, laser) failed.
     Gpio,
+    /// The matched reference was asked for before a calibration learned it.
+    NotCalibrated,
+    /// The calibration signal is too weak or too noisy to learn from.
+    WeakSignal,
 }
 
 impl Fault {
@@ -129,6 +133,8 @@ impl Fault {
             Fault::AdcOverrun => 500,
             Fault::Saturated => 501,
             Fault::Gpio => 600,
+            Fault::NotCalibrated => 502,
+            Fault::WeakSignal => 503,
         }
     }
 }
@@ -150,6 +156,8 @@ impl fmt::Display for Fault {
             Fault::AdcOverrun => f.write_str("ADC block lost (DMA overrun)"),
             Fault::Saturated => f.write_str("detector saturated at the lowest gain"),
             Fault::Gpio => f.write_str("GPIO write failed"),
+            Fault::NotCalibrated => f.write_str("matched reference not calibrated; run calibrate on a strong signal first"),
+            Fault::WeakSignal => f.write_str("calibration signal too weak or too noisy"),
         }
     }
 }

@@ -6,7 +6,7 @@
 //! come back on postcard-rpc's standard error path,
 //! [`postcard_rpc::standard_icd::ERROR_PATH`].
 
-use crate::detection::{DetectionReport, DetectionSettings};
+use crate::detection::{CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings};
 use crate::fault::Fault;
 use crate::geometry::{AxisAngles, Geometry};
 use crate::identity::Identity;
@@ -60,6 +60,7 @@ pub type MeasureReply = Reply<Sample>;
 pub type ScanReply = Reply<ScanAccepted>;
 pub type DetectionReply = Reply<DetectionReport>;
 pub type SanityReply = Reply<()>;
+pub type CalibrateReply = Reply<CalibrationReport>;
 
 endpoints! {
     list = ENDPOINT_LIST;
@@ -74,6 +75,7 @@ endpoints! {
     | AbortEndpoint         | ()                | Status                  | "gonio/abort"        |
     | DetectionEndpoint     | DetectionSettings | DetectionReply          | "gonio/detection"    |
     | SanityEndpoint        | SanityConfig      | SanityReply             | "gonio/sanity"       |
+    | CalibrateEndpoint     | CalibrateRequest  | CalibrateReply          | "gonio/calibrate"    |
 }
 
 topics! {

@@ -19,7 +19,7 @@ pub mod sanity;
 pub mod scan;
 pub mod status;
 
-pub use detection::{DetectionReport, DetectionSettings, Reference};
+pub use detection::{CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Reference};
 pub use fault::{Axis, Fault, Field, Unreachable};
 pub use geometry::{AxisAngles, Geometry};
 pub use identity::{Capabilities, Identity, PROTOCOL_VERSION};

@@ -72,8 +72,11 @@ pub struct Sample {
     /// In-phase and quadrature amplitudes at the ADC input (V).
     pub in_phase_v: f32,
     pub quadrature_v: f32,
-    /// Phase-sensitive amplitude, after the reference-phase correction (V).
+    /// Phase-sensitive amplitude, after the reference-phase correction (V):
+    /// against the matched waveform when that reference is selected.
     pub amplitude_v: f32,
+    /// Magnitude `√(I² + Q²)` (V): phase-insensitive, biased upwards by noise.
+    pub magnitude_v: f32,
     /// Phase of the signal relative to the chop reference (degrees).
     pub phase_deg: f32,
     /// Standard error of the amplitude, from the spread of per-period results (V).

@@ -64,17 +64,20 @@ pub fn fault() -> impl Strategy<Value = Fault> {
         Just(Fault::AdcOverrun),
         Just(Fault::Saturated),
         Just(Fault::Gpio),
+        Just(Fault::NotCalibrated),
+        Just(Fault::WeakSignal),
     ]
 }
 
 pub fn detection_settings() -> impl Strategy<Value = DetectionSettings> {
-    (any_f32(), any::<u16>(), any::<u16>(), any_f32(), any::<bool>(), any::<bool>()).prop_map(|(chop_hz, m, k, settle, sine, auto)| {
+    let reference = prop_oneof![Just(Reference::Square), Just(Reference::Sine), Just(Reference::Matched)];
+    (any_f32(), any::<u16>(), any::<u16>(), any_f32(), reference, any::<bool>()).prop_map(|(chop_hz, m, k, settle, reference, auto)| {
         DetectionSettings {
             chop_hz,
             samples_per_period: m,
             periods: k,
             settle_s: settle,
-            reference: if sine { Reference::Sine } else { Reference::Square },
+            reference,
             auto_range: auto,
         }
     })
@@ -91,10 +94,10 @@ pub fn sample() -> impl Strategy<Value = Sample> {
             axis_angles(),
         ),
         (any_f32(), any_f32(), any_f32(), any_f32(), any_f32(), any_f32()),
-        (any::<u8>(), any::<u16>(), any::<u16>()),
+        (any::<u8>(), any::<u16>(), any::<u16>(), any_f32()),
     )
         .prop_map(
-            |((seq, scan, ts, target, reached, axes), (i, q, a, ph, n, g), (gi, periods, flags))| Sample {
+            |((seq, scan, ts, target, reached, axes), (i, q, a, ph, n, g), (gi, periods, flags, mag))| Sample {
                 seq,
                 scan: scan.map(|(index, order)| ScanPosition { index, order }),
                 timestamp_us: ts,
@@ -104,6 +107,7 @@ pub fn sample() -> impl Strategy<Value = Sample> {
                 in_phase_v: i,
                 quadrature_v: q,
                 amplitude_v: a,
+                magnitude_v: mag,
                 phase_deg: ph,
                 noise_v: n,
                 gain_v_per_a: g,

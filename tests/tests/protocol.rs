@@ -155,6 +155,7 @@ fn largest_messages_fit_the_frame_buffer() {
         in_phase_v: 1.0,
         quadrature_v: 1.0,
         amplitude_v: 1.0,
+        magnitude_v: 1.0,
         phase_deg: 1.0,
         noise_v: 1.0,
         gain_v_per_a: 1.0,

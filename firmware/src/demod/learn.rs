@@ -1,0 +1,82 @@
+//! Calibration of the detection chain on a strong, steady signal: the mean
+//! chop-period waveform (with the offset drift removed), its phase against
+//! the square and sine references, and the matched reference built from it.
+
+use super::nuisance::Nuisance;
+use super::reference::{Reference, MAX_M};
+use gonio_shared::Reference as Kind;
+
+/// What a calibration learned, valid for one number of samples per period.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Learned {
+    m: usize,
+    /// Mean period waveform, zero-mean, in codes.
+    waveform: [f64; MAX_M],
+    /// Phase of the waveform against the square and the sine (radians).
+    pub phase_square: f64,
+    pub phase_sine: f64,
+}
+
+impl Learned {
+    pub fn samples_per_period(&self) -> usize {
+        self.m
+    }
+
+    pub fn waveform(&self) -> &[f64] {
+        &self.waveform[..self.m]
+    }
+}
+
+/// Accumulates periods for a calibration.
+pub struct Learner {
+    m: usize,
+    sums: [i64; MAX_M],
+    periods: u32,
+    nuisance: Nuisance,
+}
+
+impl Learner {
+    pub fn new(m: usize, planned: u32, chop_hz: f64) -> Self {
+        Learner {
+            m: m.clamp(4, MAX_M),
+            sums: [0; MAX_M],
+            periods: 0,
+            nuisance: Nuisance::new(planned, chop_hz),
+        }
+    }
+
+    pub fn push(&mut self, codes: &[u16]) {
+        let mut total = 0i64;
+        for (s, &c) in self.sums[..self.m].iter_mut().zip(codes) {
+            *s += c as i64;
+            total += c as i64;
+        }
+        self.nuisance.push(total as f64, 0.0);
+        self.periods += 1;
+    }
+
+    /// The learned waveform and phases; `None` before any period.
+    pub fn finish(&self) -> Option<Learned> {
+        if self.periods == 0 {
+            return None;
+        }
+        let (m, n) = (self.m, self.periods as f64);
+        let drift = self.nuisance.sum_slope_per_period() / (m * m) as f64;
+        let mut w = [0.0f64; MAX_M];
+        for k in 0..m {
+            w[k] = self.sums[k] as f64 / n - drift * k as f64;
+        }
+        let mean = w[..m].iter().sum::<f64>() / m as f64;
+        w[..m].iter_mut().for_each(|x| *x -= mean);
+        let phase = |kind| {
+            let (i, q) = Reference::new(kind, m, None).correlate(&w[..m]);
+            libm::atan2(q, i)
+        };
+        Some(Learned {
+            m,
+            waveform: w,
+            phase_square: phase(Kind::Square),
+            phase_sine: phase(Kind::Sine),
+        })
+    }
+}

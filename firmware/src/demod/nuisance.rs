@@ -1,0 +1,223 @@
+//! The slow part of the signal, seen one value per chop period: a constant, a
+//! linear drift, and mains pickup (50 and 60 Hz with their second and third
+//! harmonics) as it aliases at the chop rate. Per-period values are regressed
+//! on these by least squares, accumulated period by period in a Gram matrix.
+//!
+//! The normal equations are solved by a Cholesky factorisation written here:
+//! at most 14 unknowns, fixed size, no heap, no_std; a linear-algebra crate
+//! would bring generic machinery and code size to the chip for 30 lines.
+
+/// Mains frequencies fitted (Hz): 50 and 60 Hz and their 2nd and 3rd harmonics.
+const MAINS_HZ: [f64; 6] = [50.0, 100.0, 150.0, 60.0, 120.0, 180.0];
+const MAX_TONES: usize = MAINS_HZ.len();
+/// Constant, ramp, and a sine and cosine per tone.
+pub const MAX_REG: usize = 2 + 2 * MAX_TONES;
+/// Column of the ramp regressor.
+const RAMP: usize = 1;
+
+type Mat = [[f64; MAX_REG]; MAX_REG];
+
+/// Per-period regression of a code sum and of the amplitude on the slow terms.
+pub struct Nuisance {
+    n: usize,
+    tones: usize,
+    periods: u32,
+    planned: u32,
+    /// Per-period rotation (cos, sin) of each tone and its current phasor.
+    step: [(f64, f64); MAX_TONES],
+    phasor: [(f64, f64); MAX_TONES],
+    gram: Mat,
+    /// Right-hand sides: the code sum, and the amplitude minus its first value.
+    b_sum: [f64; MAX_REG],
+    b_amp: [f64; MAX_REG],
+    amp0: Option<f64>,
+    amp_sq: f64,
+}
+
+impl Nuisance {
+    /// For `planned` periods at `chop_hz`. Tones that alias to (nearly) DC or
+    /// Nyquist, or onto another tone, are skipped, as are all tones when the
+    /// integration is too short to fit them.
+    pub fn new(planned: u32, chop_hz: f64) -> Self {
+        let k = planned.max(1) as f64;
+        let half_bin = chop_hz / (2.0 * k);
+        let mut freqs = [0.0f64; MAX_TONES];
+        let mut tones = 0;
+        for f in MAINS_HZ {
+            let folded = libm::fabs(f - chop_hz * libm::round(f / chop_hz));
+            let clear = folded > 2.0 * half_bin && folded < chop_hz / 2.0 - half_bin;
+            let new = freqs[..tones].iter().all(|g| libm::fabs(g - folded) > half_bin);
+            // Keep at least three spare degrees of freedom for the residual.
+            if clear && new && (2 + 2 * (tones + 1) + 3) as f64 <= k {
+                freqs[tones] = folded;
+                tones += 1;
+            }
+        }
+        let mut step = [(1.0, 0.0); MAX_TONES];
+        for (s, f) in step.iter_mut().zip(&freqs[..tones]) {
+            let w = 2.0 * core::f64::consts::PI * f / chop_hz;
+            *s = (libm::cos(w), libm::sin(w));
+        }
+        Nuisance {
+            n: 2 + 2 * tones,
+            tones,
+            periods: 0,
+            planned: planned.max(1),
+            step,
+            phasor: [(1.0, 0.0); MAX_TONES],
+            gram: [[0.0; MAX_REG]; MAX_REG],
+            b_sum: [0.0; MAX_REG],
+            b_amp: [0.0; MAX_REG],
+            amp0: None,
+            amp_sq: 0.0,
+        }
+    }
+
+    fn regressors(&self) -> [f64; MAX_REG] {
+        let mut g = [0.0; MAX_REG];
+        g[0] = 1.0;
+        // Centred and scaled ramp keeps the Gram matrix well conditioned.
+        g[RAMP] = (self.periods as f64 - (self.planned as f64 - 1.0) / 2.0) / self.planned as f64;
+        for t in 0..self.tones {
+            g[2 + 2 * t] = self.phasor[t].1;
+            g[3 + 2 * t] = self.phasor[t].0;
+        }
+        g
+    }
+
+    /// Adds one period: its code sum and its amplitude.
+    pub fn push(&mut self, sum: f64, amplitude: f64) {
+        let g = self.regressors();
+        let a = amplitude - *self.amp0.get_or_insert(amplitude);
+        for r in 0..self.n {
+            for c in 0..self.n {
+                self.gram[r][c] += g[r] * g[c];
+            }
+            self.b_sum[r] += g[r] * sum;
+            self.b_amp[r] += g[r] * a;
+        }
+        self.amp_sq += a * a;
+        for t in 0..self.tones {
+            let ((c, s), (dc, ds)) = (self.phasor[t], self.step[t]);
+            self.phasor[t] = (c * dc - s * ds, s * dc + c * ds);
+        }
+        self.periods += 1;
+    }
+
+    /// Drift of the code sum per period, or zero when the fit is not
+    /// determined (too few periods).
+    pub fn sum_slope_per_period(&self) -> f64 {
+        let idx: [usize; MAX_REG] = core::array::from_fn(|i| i);
+        if (self.periods as usize) < self.n + 2 {
+            return 0.0;
+        }
+        match solve(&self.gram, &idx[..self.n], &self.b_sum) {
+            Some((x, _)) => x[RAMP] / self.planned as f64,
+            None => 0.0,
+        }
+    }
+
+    /// Mean amplitude with the mains terms fitted out, and its standard error
+    /// from the residual spread; the plain mean and spread when there are too
+    /// few periods for the fit.
+    pub fn amplitude(&self) -> (f64, f64) {
+        let n = self.periods as f64;
+        let a0 = self.amp0.unwrap_or(0.0);
+        let plain = || {
+            let mean = self.b_amp[0] / n.max(1.0);
+            let var = if n > 1.0 {
+                ((self.amp_sq - n * mean * mean) / (n - 1.0)).max(0.0)
+            } else {
+                0.0
+            };
+            (a0 + mean, libm::sqrt(var / n.max(1.0)))
+        };
+        // Every regressor but the ramp: a drift biases all periods alike.
+        let mut idx = [0usize; MAX_REG];
+        idx[0] = 0;
+        for (j, slot) in idx[1..self.n - 1].iter_mut().enumerate() {
+            *slot = j + 2;
+        }
+        let m = self.n - 1;
+        if m == 1 || (self.periods as usize) < m + 3 {
+            return plain();
+        }
+        let b: [f64; MAX_REG] = core::array::from_fn(|j| if j < m { self.b_amp[idx[j]] } else { 0.0 });
+        match solve(&self.gram, &idx[..m], &b) {
+            Some((x, inv00)) => {
+                let fitted: f64 = (0..m).map(|j| x[j] * b[j]).sum();
+                let var = ((self.amp_sq - fitted) / (n - m as f64)).max(0.0);
+                (a0 + x[0], libm::sqrt(var * inv00))
+            }
+            None => plain(),
+        }
+    }
+}
+
+/// Solves `G[idx,idx]·x = b[..idx.len()]` by Cholesky; returns `x` and
+/// `(G[idx,idx]⁻¹)₀₀`, or `None` when the matrix is not positive definite.
+fn solve(g: &Mat, idx: &[usize], b: &[f64]) -> Option<([f64; MAX_REG], f64)> {
+    let n = idx.len();
+    let mut l = [[0.0f64; MAX_REG]; MAX_REG];
+    for r in 0..n {
+        for c in 0..=r {
+            let s: f64 = g[idx[r]][idx[c]] - (0..c).map(|k| l[r][k] * l[c][k]).sum::<f64>();
+            if r == c {
+                if s <= 1e-12 * g[idx[r]][idx[r]].max(1e-300) {
+                    return None;
+                }
+                l[r][r] = libm::sqrt(s);
+            } else {
+                l[r][c] = s / l[c][c];
+            }
+        }
+    }
+    let back = |rhs: &[f64]| -> [f64; MAX_REG] {
+        let mut y = [0.0; MAX_REG];
+        for r in 0..n {
+            y[r] = (rhs[r] - (0..r).map(|k| l[r][k] * y[k]).sum::<f64>()) / l[r][r];
+        }
+        let mut x = [0.0; MAX_REG];
+        for r in (0..n).rev() {
+            x[r] = (y[r] - (r + 1..n).map(|k| l[k][r] * x[k]).sum::<f64>()) / l[r][r];
+        }
+        x
+    };
+    let x = back(b);
+    let mut e0 = [0.0; MAX_REG];
+    e0[0] = 1.0;
+    Some((x, back(&e0)[0]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn recovers_a_drift_slope_under_mains() {
+        // Per-period sums: offset, slope 3 per period, 50 Hz alias (5 cycles
+        // in 23 periods at 230 Hz) and a 150 Hz alias, no noise.
+        let (k, fc) = (23u32, 230.0);
+        let mut n = Nuisance::new(k, fc);
+        for p in 0..k {
+            let t = p as f64 / fc;
+            let mains =
+                900.0 * libm::sin(2.0 * core::f64::consts::PI * 50.0 * t + 0.3) + 90.0 * libm::cos(2.0 * core::f64::consts::PI * 150.0 * t);
+            n.push(1000.0 + 3.0 * p as f64 + mains, 7.0 + 0.5 * mains);
+        }
+        assert!((n.sum_slope_per_period() - 3.0).abs() < 1e-9, "{}", n.sum_slope_per_period());
+        let (a, se) = n.amplitude();
+        assert!((a - 7.0).abs() < 1e-9 && se < 1e-6, "{a} {se}");
+    }
+
+    #[test]
+    fn short_integrations_fall_back_to_the_plain_mean() {
+        let mut n = Nuisance::new(2, 230.0);
+        n.push(0.0, 1.0);
+        n.push(0.0, 3.0);
+        assert_eq!(n.sum_slope_per_period(), 0.0);
+        let (a, se) = n.amplitude();
+        assert_eq!(a, 2.0);
+        assert!((se - 1.0).abs() < 1e-12);
+    }
+}
