@@ -5,11 +5,12 @@ use crate::link::{self, Workers};
 use crate::sim::SimConfig;
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_shared::icd::{
-    AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint,
-    MoveReport, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
+    MoveEndpoint, MoveReport, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::{
-    AxisAngles, DetectionReport, DetectionSettings, Geometry, Identity, Sample, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
+    AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, Sample, ScanAccepted,
+    ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
 };
 use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
 use postcard_rpc::standard_icd::WireError;
@@ -99,6 +100,11 @@ impl Head {
 
     pub async fn detection(&self, s: DetectionSettings) -> Result<DetectionReport> {
         fault(call::<DetectionEndpoint>(&self.client, &s, QUICK).await?).context("detection settings refused")
+    }
+
+    /// Learns the detection chain on the signal at the current position.
+    pub async fn calibrate(&self, periods: u16) -> Result<CalibrationReport> {
+        fault(call::<CalibrateEndpoint>(&self.client, &CalibrateRequest { periods }, MOTION).await?).context("detector calibration failed")
     }
 
     pub async fn abort(&self) -> Result<Status> {

@@ -4,7 +4,7 @@
 use crate::brdf::Material;
 use crate::scan::ScanOutcome;
 use anyhow::{Context, Result};
-use gonio_shared::{DetectionReport, Identity, ScanSpec};
+use gonio_shared::{CalibrationReport, DetectionReport, Identity, ScanSpec};
 use serde::Serialize;
 use std::path::Path;
 
@@ -43,6 +43,7 @@ impl From<&ScanSpec> for Grid {
 
 #[derive(Debug, Serialize)]
 pub struct Detection {
+    pub reference: String,
     pub chop_hz: f32,
     pub samples_per_period: u16,
     pub periods: u16,
@@ -54,6 +55,7 @@ pub struct Detection {
 impl From<&DetectionReport> for Detection {
     fn from(r: &DetectionReport) -> Self {
         Detection {
+            reference: format!("{:?}", r.settings.reference).to_lowercase(),
             chop_hz: r.chop_hz_actual,
             samples_per_period: r.settings.samples_per_period,
             periods: r.settings.periods,
@@ -72,12 +74,21 @@ pub struct RunRecord {
     pub material: Option<Material>,
     pub grid: Grid,
     pub detection: Detection,
+    /// The detector calibration taken before the scan, if any.
+    pub calibration: Option<CalibrationReport>,
     pub counts: ScanOutcome,
     pub complete: bool,
 }
 
 impl RunRecord {
-    pub fn new(id: &Identity, material: Option<Material>, spec: &ScanSpec, det: &DetectionReport, counts: ScanOutcome) -> Self {
+    pub fn new(
+        id: &Identity,
+        material: Option<Material>,
+        spec: &ScanSpec,
+        det: &DetectionReport,
+        calibration: Option<CalibrationReport>,
+        counts: ScanOutcome,
+    ) -> Self {
         RunRecord {
             versions: Versions {
                 gonio: env!("CARGO_PKG_VERSION"),
@@ -92,6 +103,7 @@ impl RunRecord {
             material,
             grid: Grid::from(spec),
             detection: Detection::from(det),
+            calibration,
             counts,
             complete: true,
         }

@@ -83,7 +83,9 @@ pub fn detection_settings() -> impl Strategy<Value = DetectionSettings> {
     })
 }
 
-pub fn sample() -> impl Strategy<Value = Sample> {
+/// Boxed: the nested tuple strategies are deep enough to overflow a debug
+/// test thread's stack otherwise.
+pub fn sample() -> BoxedStrategy<Sample> {
     (
         (
             any::<u32>(),
@@ -92,9 +94,10 @@ pub fn sample() -> impl Strategy<Value = Sample> {
             geometry(),
             geometry(),
             axis_angles(),
-        ),
-        (any_f32(), any_f32(), any_f32(), any_f32(), any_f32(), any_f32()),
-        (any::<u8>(), any::<u16>(), any::<u16>(), any_f32()),
+        )
+            .boxed(),
+        (any_f32(), any_f32(), any_f32(), any_f32(), any_f32(), any_f32()).boxed(),
+        (any::<u8>(), any::<u16>(), any::<u16>(), any_f32()).boxed(),
     )
         .prop_map(
             |((seq, scan, ts, target, reached, axes), (i, q, a, ph, n, g), (gi, periods, flags, mag))| Sample {
@@ -116,6 +119,7 @@ pub fn sample() -> impl Strategy<Value = Sample> {
                 flags: SampleFlags(flags),
             },
         )
+        .boxed()
 }
 
 pub fn scan_spec() -> impl Strategy<Value = ScanSpec> {

@@ -10,7 +10,7 @@ use gonio_firmware::detector::Detector;
 use gonio_firmware::homing::home_axis;
 use gonio_firmware::motion::Position;
 use gonio_firmware::units;
-use gonio_shared::{Axis, DetectionSettings, Fault, SampleFlags};
+use gonio_shared::{Axis, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags};
 use gonio_tests::doubles::{chop_period, done, expect, Pins, ScriptedAdc};
 
 /// DIR setup time of the reference drivers, as the core asks the delay for it.
@@ -165,5 +165,83 @@ fn saturation_at_the_lowest_gain_is_flagged_and_an_empty_stream_is_an_overrun() 
     assert!(meas.flags.contains(SampleFlags::SATURATED));
     // The script ran dry during integration: the lost block is flagged.
     assert!(meas.flags.contains(SampleFlags::OVERRUN));
+    done(&mut hw);
+}
+
+/// `periods` chop periods of `m` codes delayed by `delay` samples.
+fn delayed(m: usize, low: u16, high: u16, delay: usize, periods: usize) -> Vec<Vec<u16>> {
+    let p: Vec<u16> = (0..m).map(|k| if (k + m - delay) % m < m / 2 { high } else { low }).collect();
+    vec![p; periods]
+}
+
+#[test]
+fn calibration_learns_the_phase_and_the_matched_reference_round_trips() {
+    let m = 64;
+    let s = DetectionSettings {
+        periods: 23,
+        auto_range: false,
+        ..DetectionSettings::default()
+    };
+    let mut pins = Pins::idle();
+    // The gain (0) is written each time the chop starts: calibration, then
+    // the first measurement after the reconfiguration.
+    let [a, b] = gain_bits(0);
+    let [c, d] = gain_bits(0);
+    expect(&mut pins.gain[0], &[a, c]);
+    expect(&mut pins.gain[1], &[b, d]);
+    let mut hw = pins.into_hardware(CheckedDelay::new(&[]));
+    let mut det = Detector::new::<ScriptedAdc>(s);
+    let matched = DetectionSettings {
+        reference: Kind::Matched,
+        ..s
+    };
+    assert_eq!(det.configure(&mut hw, matched), Err(Fault::NotCalibrated));
+
+    // Calibrate on a strong chop delayed by d = 4 of 64 samples. Against the
+    // square references that is I ∝ 32 − 2d and Q ∝ 2d.
+    hw.adc.periods.extend(delayed(m, 1000, 2500, 4, 1 + 230));
+    let report = block_on(det.calibrate(&mut hw, &REFERENCE, 230)).unwrap();
+    let want = 8f32.atan2(24.0).to_degrees();
+    assert!((report.phase_deg - want).abs() < 1e-3, "{report:?}");
+    assert!(report.snr > 1e3);
+    det.configure(&mut hw, matched).unwrap();
+
+    // A third of the amplitude, same delay: a third of the amplitude, in phase.
+    hw.adc.periods.extend(delayed(m, 1000, 1500, 4, 1 + 23));
+    let weak = block_on(det.measure(&mut hw, &REFERENCE)).unwrap();
+    hw.adc.periods.extend(delayed(m, 1000, 2500, 4, 1 + 23));
+    let strong = block_on(det.measure(&mut hw, &REFERENCE)).unwrap();
+    assert!(
+        (weak.amplitude_v / strong.amplitude_v - 1.0 / 3.0).abs() < 1e-3,
+        "{weak:?} {strong:?}"
+    );
+    assert!(!weak.flags.contains(SampleFlags::PHASE_OFF));
+
+    // A quarter period later than calibrated: flagged as off phase.
+    hw.adc.periods.extend(delayed(m, 1000, 2500, 20, 1 + 23));
+    let late = block_on(det.measure(&mut hw, &REFERENCE)).unwrap();
+    assert!(late.flags.contains(SampleFlags::PHASE_OFF), "{late:?}");
+    done(&mut hw);
+}
+
+#[test]
+fn calibration_refuses_a_weak_or_short_signal() {
+    let s = DetectionSettings {
+        auto_range: false,
+        ..DetectionSettings::default()
+    };
+    let mut pins = Pins::idle();
+    let [a, b] = gain_bits(0);
+    expect(&mut pins.gain[0], &[a]);
+    expect(&mut pins.gain[1], &[b]);
+    let mut hw = pins.into_hardware(CheckedDelay::new(&[]));
+    let mut det = Detector::new::<ScriptedAdc>(s);
+    assert_eq!(
+        block_on(det.calibrate(&mut hw, &REFERENCE, 3)),
+        Err(Fault::InvalidValue(Field::Periods))
+    );
+    // No chop at all: nothing to learn from.
+    hw.adc.periods.extend(delayed(64, 1000, 1000, 0, 1 + 50));
+    assert_eq!(block_on(det.calibrate(&mut hw, &REFERENCE, 50)), Err(Fault::WeakSignal));
     done(&mut hw);
 }

@@ -9,7 +9,7 @@ use gonio_host::client::{Head, Target};
 use gonio_host::samples_csv::{self, SampleWriter};
 use gonio_host::scan;
 use gonio_host::sim::{serve_pty, SimConfig};
-use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
+use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, Reference, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
 use std::collections::BTreeSet;
 use std::time::Duration;
 
@@ -103,6 +103,12 @@ async fn refused_commands_move_nothing() {
     let head = Head::connect(&Target::Sim(SimConfig::default())).await.unwrap();
     let err = head.measure(Some(Geometry::new(30.0, 30.0, 0.0))).await.unwrap_err();
     assert!(format!("{err:#}").contains("not homed"), "{err:#}");
+    let matched = DetectionSettings {
+        reference: Reference::Matched,
+        ..DetectionSettings::default()
+    };
+    let err = head.detection(matched).await.unwrap_err();
+    assert!(format!("{err:#}").contains("not calibrated"), "{err:#}");
     head.home().await.unwrap();
     let before = head.status().await.unwrap();
     for (g, why) in [

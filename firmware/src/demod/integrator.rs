@@ -129,9 +129,9 @@ mod tests {
         // 1000-code chop on an offset rising 2000 codes across the window.
         let slope = 2000.0 / (23.0 * 64.0);
         for p in 0..23 {
-            for k in 0..64 {
+            for (k, b) in buf[..64].iter_mut().enumerate() {
                 let t = (p * 64 + k) as f64;
-                buf[k] = libm::round(500.0 + slope * t + if k < 32 { 1000.0 } else { 0.0 }) as u16;
+                *b = libm::round(500.0 + slope * t + if k < 32 { 1000.0 } else { 0.0 }) as u16;
             }
             it.push(&buf[..64]);
         }

@@ -63,8 +63,8 @@ impl Learner {
         let (m, n) = (self.m, self.periods as f64);
         let drift = self.nuisance.sum_slope_per_period() / (m * m) as f64;
         let mut w = [0.0f64; MAX_M];
-        for k in 0..m {
-            w[k] = self.sums[k] as f64 / n - drift * k as f64;
+        for (k, (x, &s)) in w.iter_mut().zip(&self.sums[..m]).enumerate() {
+            *x = s as f64 / n - drift * k as f64;
         }
         let mean = w[..m].iter().sum::<f64>() / m as f64;
         w[..m].iter_mut().for_each(|x| *x -= mean);

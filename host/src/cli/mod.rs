@@ -1,5 +1,6 @@
 //! Command-line interface. Angles on the command line are in degrees.
 
+mod detector;
 mod devices;
 mod grid;
 mod material;

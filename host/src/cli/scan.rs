@@ -1,5 +1,6 @@
 //! `gonio demo` and `gonio scan`: connect, home, scan, store, summarise.
 
+use super::detector::DetectorArgs;
 use super::grid::GridArgs;
 use super::material::SimHeadArgs;
 use crate::client::{Head, Target};
@@ -8,7 +9,10 @@ use crate::samples_csv::SampleWriter;
 use crate::scan::{self, ScanOutcome};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
-use gonio_shared::{DetectionSettings, ScanSpec};
+use gonio_shared::{DetectionSettings, Reference, ScanSpec};
+
+/// Length of the detector calibration (s).
+const CALIBRATION_S: f32 = 1.0;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, clap::Args)]
@@ -49,6 +53,8 @@ pub struct ScanArgs {
     #[command(flatten)]
     pub grid: GridArgs,
     #[command(flatten)]
+    pub detector: DetectorArgs,
+    #[command(flatten)]
     pub sim_head: SimHeadArgs,
     #[command(flatten)]
     pub output: OutputArgs,
@@ -59,7 +65,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         seed: a.seed,
         ..SimConfig::default()
     };
-    scan_to_dir(&Target::Sim(sim), &ScanSpec::belcour(), &a.out, &a.output).await
+    scan_to_dir(&Target::Sim(sim), &ScanSpec::belcour(), &DetectorArgs::demo(), &a.out, &a.output).await
 }
 
 pub async fn scan(a: ScanArgs) -> Result<()> {
@@ -68,7 +74,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         Some(p) => Target::Port(p.clone()),
         None => Target::Sim(a.sim_head.config()?),
     };
-    scan_to_dir(&target, &spec, &a.out, &a.output).await
+    scan_to_dir(&target, &spec, &a.detector, &a.out, &a.output).await
 }
 
 /// Refuses to mix a new scan into a directory that holds one.
@@ -87,8 +93,9 @@ fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
 }
 
 /// Connects first, so a head that cannot be reached leaves no files behind.
-async fn scan_to_dir(target: &Target, spec: &ScanSpec, dir: &Path, output: &OutputArgs) -> Result<()> {
+async fn scan_to_dir(target: &Target, spec: &ScanSpec, det: &DetectorArgs, dir: &Path, output: &OutputArgs) -> Result<()> {
     let json = output.json;
+    let (settings, calibrate_at) = det.plan()?;
     let head = Head::connect(target).await?;
     let id = head.identity().clone();
     if !json {
@@ -102,8 +109,28 @@ async fn scan_to_dir(target: &Target, spec: &ScanSpec, dir: &Path, output: &Outp
         );
     }
     prepare_dir(dir, output.force)?;
-    let detection = head.detection(DetectionSettings::default()).await?;
+    // The chop timing is set first: a calibration holds for that timing.
+    head.detection(DetectionSettings {
+        reference: Reference::Square,
+        ..settings
+    })
+    .await?;
     head.home().await?;
+    let calibration = match calibrate_at {
+        Some(g) => {
+            head.move_to(g).await.context("moving to the calibration geometry")?;
+            let c = head.calibrate(settings.periods_for(CALIBRATION_S)).await?;
+            if !json {
+                eprintln!(
+                    "detector calibrated: phase {:.1}°, {:.3} V at gain {}, SNR {:.0}",
+                    c.phase_deg, c.amplitude_v, c.gain_index, c.snr
+                );
+            }
+            Some(c)
+        }
+        None => None,
+    };
+    let detection = head.detection(settings).await?;
     let mut writer = SampleWriter::create(dir)?;
     let pb = scan::progress_bar(spec.len() as u64, json);
     let outcome = scan::run(&head, spec, &mut writer, &pb).await?;
@@ -112,7 +139,7 @@ async fn scan_to_dir(target: &Target, spec: &ScanSpec, dir: &Path, output: &Outp
         Target::Sim(c) => Some(c.material.clone()),
         Target::Port(_) => None,
     };
-    RunRecord::new(&id, material, spec, &detection, outcome.clone()).write(dir)?;
+    RunRecord::new(&id, material, spec, &detection, calibration, outcome.clone()).write(dir)?;
     head.close().await;
     summarise(&outcome, &samples, json)
 }

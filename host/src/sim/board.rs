@@ -123,7 +123,7 @@ impl AdcStream for SimAdc {
             let target = gain * (sig_a * on + photodiode.ambient_a);
             self.amp_v += (target - self.amp_v) * alpha;
             let t = *t_s + k as f64 * dt;
-            let v = photodiode.offset_v + self.amp_v + photodiode.interference_v(t, rng);
+            let v = self.amp_v + photodiode.interference_v(t, rng);
             *o = (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16;
         }
         *t_s += m as f64 * dt;

@@ -30,6 +30,9 @@ pub struct Photodiode {
     pub noise_v: f64,
     /// Amplifier output offset (V), keeps the noise off the lower rail.
     pub offset_v: f64,
+    /// Slow wander of that offset (thermal drift): amplitude (V) and period (s).
+    pub offset_wander_v: f64,
+    pub offset_wander_s: f64,
     /// First-order time constant of the amplifier (s).
     pub tau_s: f64,
 }
@@ -47,6 +50,8 @@ impl Default for Photodiode {
             mains_h3: 0.3,
             noise_v: 0.001,
             offset_v: 0.05,
+            offset_wander_v: 0.005,
+            offset_wander_s: 600.0,
             tau_s: 80.0e-6,
         }
     }
@@ -97,10 +102,12 @@ impl Photodiode {
         self.laser_w * self.responsivity_a_per_w * material.eval(&d) * d.cos_o() * self.solid_angle_sr * splitter
     }
 
-    /// Pickup and noise (V) at time `t`.
+    /// Offset, its slow drift, pickup and noise (V) at time `t`.
     pub fn interference_v(&self, t: f64, rng: &mut impl Rng) -> f64 {
-        let w = 2.0 * std::f64::consts::PI * self.mains_hz * t;
+        let tau = 2.0 * std::f64::consts::PI;
+        let w = tau * self.mains_hz * t;
         let noise: f64 = rng.sample(StandardNormal);
-        self.mains_v * (w.sin() + self.mains_h3 * (3.0 * w + 0.4).sin()) + self.noise_v * noise
+        let offset = self.offset_v + self.offset_wander_v * (tau * t / self.offset_wander_s).sin();
+        offset + self.mains_v * (w.sin() + self.mains_h3 * (3.0 * w + 0.4).sin()) + self.noise_v * noise
     }
 }
