@@ -26,6 +26,7 @@ pub mod hw;
 pub mod kinematics;
 pub mod link;
 pub mod motion;
+pub mod sanity;
 mod serve;
 pub mod units;
 

@@ -6,11 +6,11 @@ use crate::sim::SimConfig;
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
-    MoveEndpoint, MoveReport, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    MoveEndpoint, MoveReport, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::{
-    AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, Sample, ScanAccepted,
-    ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
+    AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, Sample, SanityConfig,
+    ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
 };
 use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
 use postcard_rpc::standard_icd::WireError;
@@ -105,6 +105,11 @@ impl Head {
     /// Learns the detection chain on the signal at the current position.
     pub async fn calibrate(&self, periods: u16) -> Result<CalibrationReport> {
         fault(call::<CalibrateEndpoint>(&self.client, &CalibrateRequest { periods }, MOTION).await?).context("detector calibration failed")
+    }
+
+    /// Loads the model, scale and tolerance band the head checks samples against.
+    pub async fn sanity(&self, cfg: SanityConfig) -> Result<()> {
+        fault(call::<SanityEndpoint>(&self.client, &cfg, QUICK).await?).context("sanity model refused")
     }
 
     pub async fn abort(&self) -> Result<Status> {

@@ -71,8 +71,12 @@ impl SanityModel {
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SanityConfig {
     pub model: SanityModel,
-    /// Volts at the ADC per unit of `f_r·cosθo` at unit gain (from the reference plate).
-    pub volts_per_sr_inv: f32,
+    /// Instrument constant: chop photocurrent (A) per unit of `f_r·cosθo`
+    /// (sr⁻¹), as the reference-plate measurement gives it; the expected
+    /// amplitude is this times `f_r·cosθo` times the gain (V/A).
+    pub current_a_per_sr_inv: f32,
+    /// Factor of the beam splitter on samples seen through it (retro zone).
+    pub splitter_factor: f32,
     /// Tolerance: relative, absolute (V) and in units of the sample's noise.
     pub rel_tol: f32,
     pub abs_tol_v: f32,
@@ -85,7 +89,8 @@ impl SanityConfig {
     pub fn validate(&self) -> Result<(), Fault> {
         self.model.validate()?;
         let ok = |x: f32| x.is_finite() && x >= 0.0;
-        if !(ok(self.volts_per_sr_inv) && ok(self.rel_tol) && ok(self.abs_tol_v) && ok(self.k_noise)) {
+        let factor_ok = self.splitter_factor.is_finite() && self.splitter_factor > 0.0 && self.splitter_factor <= 1.0;
+        if !(ok(self.current_a_per_sr_inv) && factor_ok && ok(self.rel_tol) && ok(self.abs_tol_v) && ok(self.k_noise)) {
             return Err(Fault::InvalidValue(Field::Tolerance));
         }
         Ok(())

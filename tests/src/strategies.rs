@@ -160,13 +160,16 @@ pub fn sanity_config() -> impl Strategy<Value = SanityConfig> {
             back
         }),
     ];
-    (model, any_f32(), any_f32(), any_f32(), any_f32(), any::<bool>()).prop_map(|(model, v, r, a, k, remeasure)| SanityConfig {
-        model,
-        volts_per_sr_inv: v,
-        rel_tol: r,
-        abs_tol_v: a,
-        k_noise: k,
-        remeasure,
+    (model, (any_f32(), any_f32()), any_f32(), any_f32(), any_f32(), any::<bool>()).prop_map(|(model, (c, s), r, a, k, remeasure)| {
+        SanityConfig {
+            model,
+            current_a_per_sr_inv: c,
+            splitter_factor: s,
+            rel_tol: r,
+            abs_tol_v: a,
+            k_noise: k,
+            remeasure,
+        }
     })
 }
 

@@ -1,5 +1,6 @@
 //! The sample frame of `models.md` §1: normal `(0,0,1)`, light and view as
-//! unit vectors from polar and azimuth angles.
+//! unit vectors from polar and azimuth angles, and the derived vectors and
+//! cosines every model uses.
 
 /// Light and view directions for one evaluation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -10,6 +11,27 @@ pub struct Directions {
 
 pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+/// `(a + b)/‖a + b‖`, or the normal when the sum vanishes.
+fn unit_sum(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    let s = [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
+    let n = dot(s, s).sqrt();
+    if n < 1e-300 {
+        [0.0, 0.0, 1.0]
+    } else {
+        [s[0] / n, s[1] / n, s[2] / n]
+    }
+}
+
+/// Which cosine a retro lobe takes (`models.md` §1).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Param {
+    /// `cos_B = n·b`, the back vector (Belcour eq. 3–4).
+    Back,
+    /// `cos_R = max(0, l·v)`.
+    View,
 }
 
 impl Directions {
@@ -39,4 +61,32 @@ impl Directions {
     pub fn mirror_l(&self) -> [f64; 3] {
         [-self.l[0], -self.l[1], self.l[2]]
     }
+
+    /// Reflected view `v' = 2(n·v)n − v`.
+    pub fn reflected_v(&self) -> [f64; 3] {
+        [-self.v[0], -self.v[1], self.v[2]]
+    }
+
+    /// Half vector `h = (l + v)/‖l + v‖`.
+    pub fn half(&self) -> [f64; 3] {
+        unit_sum(self.l, self.v)
+    }
+
+    /// Back vector `b = (v' + l)/‖v' + l‖`.
+    pub fn back(&self) -> [f64; 3] {
+        unit_sum(self.reflected_v(), self.l)
+    }
+
+    /// The retro lobe's cosine in a parametrization.
+    pub fn retro_cos(&self, p: Param) -> f64 {
+        match p {
+            Param::Back => self.back()[2],
+            Param::View => dot(self.l, self.v).max(0.0),
+        }
+    }
+}
+
+/// Schlick's Fresnel `r0 + (1 − r0)(1 − u)^5`, `u` clamped to [0, 1].
+pub fn schlick(u: f64, r0: f64) -> f64 {
+    r0 + (1.0 - r0) * (1.0 - u.clamp(0.0, 1.0)).powi(5)
 }

@@ -2,11 +2,12 @@
 //! names of the contract. The simulated head's virtual material is one of
 //! these; the fitting engine builds on the same evaluations.
 
+mod abc_retro;
 pub mod frame;
 mod lambert;
 mod retro_phong;
 
-pub use frame::Directions;
+pub use frame::{Directions, Param};
 
 use anyhow::{bail, Context, Result};
 use serde::Serialize;
@@ -16,6 +17,8 @@ use serde::Serialize;
 pub struct Material {
     pub model: ModelId,
     pub params: Vec<f64>,
+    /// Cosine of the retro lobe (`retro-phong`'s published form is `view`).
+    pub param: Param,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -23,15 +26,17 @@ pub struct Material {
 pub enum ModelId {
     Lambert,
     RetroPhong,
+    AbcRetro,
 }
 
 impl ModelId {
-    pub const ALL: [ModelId; 2] = [ModelId::Lambert, ModelId::RetroPhong];
+    pub const ALL: [ModelId; 3] = [ModelId::Lambert, ModelId::RetroPhong, ModelId::AbcRetro];
 
     pub fn name(self) -> &'static str {
         match self {
             ModelId::Lambert => "lambert",
             ModelId::RetroPhong => "retro-phong",
+            ModelId::AbcRetro => "abc-retro",
         }
     }
 
@@ -39,6 +44,7 @@ impl ModelId {
         match self {
             ModelId::Lambert => &["kd"],
             ModelId::RetroPhong => &["kd", "n", "k1", "k2", "k3", "k4"],
+            ModelId::AbcRetro => &["kd", "r0", "ab", "bb", "cb", "ar", "br", "cr"],
         }
     }
 
@@ -58,6 +64,7 @@ impl Material {
         Material {
             model: ModelId::RetroPhong,
             params: vec![0.05, 500.0, 0.8, 0.1, 0.02, 3.0],
+            param: Param::View,
         }
     }
 
@@ -79,7 +86,11 @@ impl Material {
         if let Some(i) = params.iter().position(|p| p.is_nan()) {
             bail!("parameter `{}` of {} missing", names[i], model.name());
         }
-        Ok(Material { model, params })
+        Ok(Material {
+            model,
+            params,
+            param: Param::View,
+        })
     }
 
     /// `f_r` (sr⁻¹) for a pair of directions.
@@ -87,7 +98,31 @@ impl Material {
         let p = &self.params;
         match self.model {
             ModelId::Lambert => lambert::eval(p[0]),
-            ModelId::RetroPhong => retro_phong::eval(d, p[0], p[1], p[2], p[3], p[4], p[5]),
+            ModelId::RetroPhong => retro_phong::eval(d, p, self.param),
+            ModelId::AbcRetro => abc_retro::eval(d, p, self.param),
+        }
+    }
+
+    /// The model as the head's sanity check evaluates it, if the head has it
+    /// (`lambert`, `retro-phong` with the view cosine, `abc-retro`).
+    pub fn sanity_model(&self) -> Option<gonio_shared::SanityModel> {
+        use gonio_shared::SanityModel as S;
+        let p: Vec<f32> = self.params.iter().map(|x| *x as f32).collect();
+        match (self.model, self.param, &p[..]) {
+            (ModelId::Lambert, _, &[kd]) => Some(S::Lambert { kd }),
+            (ModelId::RetroPhong, Param::View, &[kd, n, k1, k2, k3, k4]) => Some(S::RetroPhong { kd, n, k1, k2, k3, k4 }),
+            (ModelId::AbcRetro, param, &[kd, r0, ab, bb, cb, ar, br, cr]) => Some(S::AbcRetro {
+                kd,
+                r0,
+                ab,
+                bb,
+                cb,
+                ar,
+                br,
+                cr,
+                back: param == Param::Back,
+            }),
+            _ => None,
         }
     }
 

@@ -111,7 +111,7 @@ impl AdcStream for SimAdc {
         let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64;
         let vref = w.cfg.detector.adc_vref as f64;
         let sig_a = if w.laser {
-            w.photodiode.signal_a(&w.material, &w.cfg, w.angles())
+            w.photodiode.signal_a(&w.material, &w.cfg, w.angles(), |d| w.defect(d))
         } else {
             0.0
         };

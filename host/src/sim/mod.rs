@@ -31,6 +31,8 @@ pub struct SimConfig {
     pub seed: u64,
     /// Protocol version the head claims (tests of the mismatch report).
     pub protocol_version: u16,
+    /// Dust specks on the sample (see [`World::defect`]).
+    pub dust: Vec<gonio_shared::Geometry>,
 }
 
 impl Default for SimConfig {
@@ -40,6 +42,7 @@ impl Default for SimConfig {
             photodiode: Photodiode::default(),
             seed: 1,
             protocol_version: PROTOCOL_VERSION,
+            dust: Vec::new(),
         }
     }
 }

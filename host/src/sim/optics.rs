@@ -69,8 +69,9 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 impl Photodiode {
     /// Signal photocurrent (A) with the laser on, at stage angles `(ω, τ, ψ)` in degrees:
     /// `P·R·f_r·cosθo·Ω`, times the splitter factor in the retro zone, zero in
-    /// the blind zone or behind the sample.
-    pub fn signal_a(&self, material: &Material, cfg: &HeadConfig, angles: [f64; 3]) -> f64 {
+    /// the blind zone or behind the sample; `defect` scales the material's
+    /// reflection at a direction pair (a dust speck).
+    pub fn signal_a(&self, material: &Material, cfg: &HeadConfig, angles: [f64; 3], defect: impl Fn(&Directions) -> f64) -> f64 {
         let [om, ta, ps] = angles.map(f64::to_radians);
         let n = [ta.cos() * om.cos(), ta.cos() * om.sin(), ta.sin()];
         let l_lab = [1.0, 0.0, 0.0];
@@ -99,7 +100,7 @@ impl Photodiode {
         } else {
             1.0
         };
-        self.laser_w * self.responsivity_a_per_w * material.eval(&d) * d.cos_o() * self.solid_angle_sr * splitter
+        self.laser_w * self.responsivity_a_per_w * material.eval(&d) * defect(&d) * d.cos_o() * self.solid_angle_sr * splitter
     }
 
     /// Offset, its slow drift, pickup and noise (V) at time `t`.

@@ -3,12 +3,18 @@
 
 use super::optics::Photodiode;
 use super::SimConfig;
-use crate::brdf::Material;
+use crate::brdf::{Directions, Material};
 use gonio_firmware::board::HeadConfig;
 use gonio_firmware::hw::ChopTiming;
 use gonio_firmware::units;
+use gonio_shared::Geometry;
 use rand::rngs::StdRng;
 use rand::SeedableRng;
+
+/// A dust speck reflects this many times the material's value...
+pub const DUST_FACTOR: f64 = 5.0;
+/// ...within this angle of its direction pair.
+const DUST_TOLERANCE_DEG: f64 = 0.05;
 
 /// Mechanical end stops lie this far beyond the home switch and the soft limit.
 const HARD_STOP_MARGIN_DEG: f32 = 3.0;
@@ -27,6 +33,9 @@ pub struct World {
     pub chop: Option<ChopTiming>,
     pub material: Material,
     pub photodiode: Photodiode,
+    /// Dust specks: direction pairs (θi, θo, |Δφ| in degrees) that reflect
+    /// [`DUST_FACTOR`] times the material's value.
+    pub dust: Vec<Geometry>,
     pub rng: StdRng,
 }
 
@@ -46,6 +55,7 @@ impl World {
             chop: None,
             material: sim.material.clone(),
             photodiode: sim.photodiode.clone(),
+            dust: sim.dust.clone(),
             rng: StdRng::seed_from_u64(sim.seed),
         }
     }
@@ -67,6 +77,23 @@ impl World {
     /// True stage angles (degrees).
     pub fn angles(&self) -> [f64; 3] {
         [0, 1, 2].map(|i| units::steps_to_deg(&self.cfg.axes[i], self.steps[i]) as f64)
+    }
+
+    /// Reflection factor at a direction pair: a speck of dust or one.
+    pub fn defect(&self, d: &Directions) -> f64 {
+        let ti = d.l[2].clamp(-1.0, 1.0).acos().to_degrees();
+        let to = d.v[2].clamp(-1.0, 1.0).acos().to_degrees();
+        let dp = d.v[1].atan2(d.v[0]).to_degrees().abs();
+        let near = |a: f64, b: f32| (a - b as f64).abs() < DUST_TOLERANCE_DEG;
+        let hit = self
+            .dust
+            .iter()
+            .any(|g| near(ti, g.theta_i_deg) && near(to, g.theta_o_deg) && near(dp, g.dphi_deg.abs()));
+        if hit {
+            DUST_FACTOR
+        } else {
+            1.0
+        }
     }
 
     pub fn gain_index(&self) -> usize {
