@@ -16,6 +16,8 @@ pub struct AxisConfig {
     pub home_deg: f32,
     /// Cruise speed (deg/s) of moves and of the fast homing approach.
     pub max_speed_dps: f32,
+    /// Acceleration and deceleration (deg/s²).
+    pub max_accel_dps2: f32,
     /// Slow homing re-approach speed (deg/s).
     pub home_slow_dps: f32,
     /// Back-off distance after the switch is found (degrees).
@@ -83,6 +85,7 @@ pub const REFERENCE: HeadConfig = HeadConfig {
             max_deg: 100.0,
             home_deg: -101.0,
             max_speed_dps: 20.0,
+            max_accel_dps2: 40.0,
             home_slow_dps: 1.0,
             home_backoff_deg: 2.0,
         },
@@ -92,6 +95,7 @@ pub const REFERENCE: HeadConfig = HeadConfig {
             max_deg: 90.0,
             home_deg: -91.0,
             max_speed_dps: 10.0,
+            max_accel_dps2: 20.0,
             home_slow_dps: 0.5,
             home_backoff_deg: 2.0,
         },
@@ -101,6 +105,7 @@ pub const REFERENCE: HeadConfig = HeadConfig {
             max_deg: 170.0,
             home_deg: -171.0,
             max_speed_dps: 30.0,
+            max_accel_dps2: 60.0,
             home_slow_dps: 1.0,
             home_backoff_deg: 2.0,
         },

@@ -38,13 +38,16 @@ pub trait AdcStream {
     async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun>;
 }
 
-/// A Klipper-style step command: `count` steps, the first `interval` ticks
-/// after the previous one, each next interval changed by `add` ticks.
+/// A Klipper-style step command: `count` steps, the first `interval` after
+/// the previous one, each next interval changed by `add`. Interval and add
+/// are in Q32 timer ticks (32 fractional bits), so a long block follows a
+/// non-integer step period without drifting; steps are emitted at the tick
+/// nearest to the accumulated time.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct StepBlock {
-    pub interval: u32,
+    pub interval: u64,
     pub count: u32,
-    pub add: i32,
+    pub add: i64,
 }
 
 /// The step queue of one axis is full.

@@ -16,17 +16,6 @@ pub fn steps_to_deg(axis: &AxisConfig, steps: i32) -> f32 {
     (steps as f64 * 360.0 / axis.microsteps_per_rev as f64) as f32
 }
 
-/// Speed (deg/s) → step interval in ticks of a `tick_hz` timer (at least 1).
-pub fn speed_to_interval(axis: &AxisConfig, dps: f32, tick_hz: u32) -> u32 {
-    let steps_per_s = dps as f64 * axis.microsteps_per_rev as f64 / 360.0;
-    let ticks = libm::round(tick_hz as f64 / steps_per_s);
-    if ticks.is_finite() && ticks >= 1.0 {
-        ticks.min(u32::MAX as f64) as u32
-    } else {
-        1
-    }
-}
-
 /// Seconds → ticks of a `tick_hz` timer (rounded up, saturating).
 pub fn seconds_to_ticks(s: f32, tick_hz: u32) -> u32 {
     let t = libm::ceil(s as f64 * tick_hz as f64);

@@ -2,8 +2,10 @@
 //! shared [`World`]. Every future completes at once: time is simulated.
 
 use super::world::World;
+use gonio_firmware::board::REFERENCE;
 use gonio_firmware::hw::{AdcStream, Board, ChopTiming, Clock, Hardware, Overrun, QueueFull, StepBlock, StepTimer};
-use gonio_firmware::motion::block_ticks;
+use gonio_firmware::motion::executor::Executor;
+use gonio_firmware::units;
 use gonio_shared::Axis;
 use std::cell::RefCell;
 use std::convert::Infallible;
@@ -25,6 +27,7 @@ impl Board for SimBoard {
 /// What an output pin is wired to.
 #[derive(Clone, Copy)]
 enum Role {
+    Step(usize),
     Dir(usize),
     EnableN(usize),
     Gain(usize),
@@ -55,6 +58,11 @@ impl SimPin {
     fn set(&mut self, high: bool) {
         let mut w = self.world.borrow_mut();
         match self.role {
+            Role::Step(i) => {
+                if high {
+                    w.step_edge(i);
+                }
+            }
             Role::Dir(i) => w.dir_positive[i] = high,
             Role::EnableN(i) => w.enable_n[i] = high,
             Role::Gain(b) => w.gain_bits[b] = high,
@@ -131,52 +139,29 @@ impl AdcStream for SimAdc {
     }
 }
 
-/// The step timer: queues per axis; a run moves the true positions (unless a
-/// driver is disabled or an end stop blocks) and advances time by the longest
-/// queue.
+/// The step timer: the firmware's executor on virtual STEP pins, run against
+/// a clock that jumps from event to event; every rising edge moves the motor
+/// (unless its driver is disabled or an end stop blocks it).
 pub struct SimSteps {
     world: Shared,
-    queues: [Vec<StepBlock>; 3],
-}
-
-impl SimSteps {
-    const QUEUE_DEPTH: usize = 8;
+    exec: Executor<SimPin>,
 }
 
 impl StepTimer for SimSteps {
     const TICK_HZ: u32 = 1_000_000;
 
     fn push(&mut self, axis: Axis, block: StepBlock) -> Result<(), QueueFull> {
-        let q = &mut self.queues[axis.index()];
-        if q.len() >= Self::QUEUE_DEPTH {
-            return Err(QueueFull);
-        }
-        q.push(block);
-        Ok(())
+        self.exec.push(axis, block)
     }
 
     async fn run(&mut self) -> [u32; 3] {
-        let mut w = self.world.borrow_mut();
-        let mut emitted = [0u32; 3];
-        let mut longest = 0u64;
-        for (i, q) in self.queues.iter_mut().enumerate() {
-            let n: u32 = q.iter().map(|b| b.count).sum();
-            longest = longest.max(q.iter().map(block_ticks).sum());
-            q.clear();
-            emitted[i] = n;
-            if w.enable_n[i] {
-                continue; // driver disabled: pulses go nowhere
-            }
-            let (lo, hi) = w.hard_stops(i);
-            let delta = if w.dir_positive[i] { n as i64 } else { -(n as i64) };
-            w.steps[i] = (w.steps[i] as i64 + delta).clamp(lo as i64, hi as i64) as i32;
-        }
-        w.t_s += longest as f64 / Self::TICK_HZ as f64;
-        emitted
+        let end = self.exec.run_to_end();
+        self.world.borrow_mut().t_s += end as f64 / Self::TICK_HZ as f64;
+        self.exec.emitted()
     }
 
     fn clear(&mut self) {
-        self.queues.iter_mut().for_each(Vec::clear);
+        self.exec.clear();
     }
 }
 
@@ -221,7 +206,10 @@ pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
         },
         steps: SimSteps {
             world: world.clone(),
-            queues: Default::default(),
+            exec: Executor::new(
+                [0, 1, 2].map(|i| pin(Role::Step(i))),
+                units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, SimSteps::TICK_HZ) as u64,
+            ),
         },
         delay: SimDelay { world: world.clone() },
         clock: SimClock { world: world.clone() },

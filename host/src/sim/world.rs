@@ -25,6 +25,8 @@ pub struct World {
     pub t_s: f64,
     /// True motor positions (microsteps); unknown to the firmware until homed.
     pub steps: [i32; 3],
+    /// Microstep range the mechanics allow per axis (end stops).
+    stops: [(i32, i32); 3],
     pub dir_positive: [bool; 3],
     pub enable_n: [bool; 3],
     pub gain_bits: [bool; 2],
@@ -44,10 +46,18 @@ impl World {
         // Power-up: the stages are wherever they were left.
         let start = [12.3f32, -4.0, 33.0];
         let steps = [0, 1, 2].map(|i| units::deg_to_steps(&cfg.axes[i], start[i]));
+        let stops = [0, 1, 2].map(|i| {
+            let a = &cfg.axes[i];
+            (
+                units::deg_to_steps(a, a.home_deg - HARD_STOP_MARGIN_DEG),
+                units::deg_to_steps(a, a.max_deg + HARD_STOP_MARGIN_DEG),
+            )
+        });
         World {
             cfg,
             t_s: 0.0,
             steps,
+            stops,
             dir_positive: [true; 3],
             enable_n: [true; 3],
             gain_bits: [false; 2],
@@ -60,13 +70,15 @@ impl World {
         }
     }
 
-    /// Microstep range the mechanics allow for an axis (end stops).
-    pub fn hard_stops(&self, axis: usize) -> (i32, i32) {
-        let a = &self.cfg.axes[axis];
-        (
-            units::deg_to_steps(a, a.home_deg - HARD_STOP_MARGIN_DEG),
-            units::deg_to_steps(a, a.max_deg + HARD_STOP_MARGIN_DEG),
-        )
+    /// A rising STEP edge: one microstep in the DIR direction, if the driver
+    /// is enabled and the end stop allows.
+    pub fn step_edge(&mut self, axis: usize) {
+        if self.enable_n[axis] {
+            return;
+        }
+        let (lo, hi) = self.stops[axis];
+        let d = if self.dir_positive[axis] { 1 } else { -1 };
+        self.steps[axis] = (self.steps[axis] + d).clamp(lo, hi);
     }
 
     /// True when the home switch of an axis is pressed.

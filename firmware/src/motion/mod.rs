@@ -1,0 +1,119 @@
+//! Moves: position bookkeeping in microsteps, trapezoidal profiles under the
+//! axes' speed and acceleration limits, and execution on the hardware step
+//! timer. A move's steps are scheduled analytically ([`trapezoid`]) and
+//! compressed into `(interval, count, add)` blocks ([`blocks`]) that the
+//! timer emits without the core touching single steps; all three axes start
+//! at the same instant.
+
+pub mod blocks;
+pub mod executor;
+pub mod trapezoid;
+
+use crate::board::{AxisConfig, HeadConfig};
+use crate::hw::{Board, Hardware, StepTimer};
+use crate::units;
+use embedded_hal::digital::OutputPin;
+use embedded_hal_async::delay::DelayNs;
+use gonio_shared::{Axis, AxisAngles, Fault};
+use trapezoid::Trapezoid;
+
+/// Where the axes are, in microsteps from their zero.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct Position {
+    pub steps: [i32; 3],
+    pub homed: [bool; 3],
+}
+
+impl Position {
+    pub fn all_homed(&self) -> bool {
+        self.homed.iter().all(|h| *h)
+    }
+
+    pub fn angles(&self, cfg: &HeadConfig) -> AxisAngles {
+        AxisAngles {
+            omega_deg: units::steps_to_deg(&cfg.axes[0], self.steps[0]),
+            tau_deg: units::steps_to_deg(&cfg.axes[1], self.steps[1]),
+            psi_deg: units::steps_to_deg(&cfg.axes[2], self.steps[2]),
+        }
+    }
+}
+
+/// Target microsteps of stage angles.
+pub fn target_steps(cfg: &HeadConfig, a: &AxisAngles) -> [i32; 3] {
+    [
+        units::deg_to_steps(&cfg.axes[0], a.omega_deg),
+        units::deg_to_steps(&cfg.axes[1], a.tau_deg),
+        units::deg_to_steps(&cfg.axes[2], a.psi_deg),
+    ]
+}
+
+/// The analytical profile of an `n`-step move of an axis at up to `dps`.
+pub fn trapezoid(axis: &AxisConfig, n: u32, dps: f32) -> Trapezoid {
+    let per_deg = axis.microsteps_per_rev as f64 / 360.0;
+    Trapezoid::new(n, dps as f64 * per_deg, axis.max_accel_dps2 as f64 * per_deg)
+}
+
+/// Duration (s) of a move of every axis by `delta` microsteps at cruise speed.
+pub fn move_time(cfg: &HeadConfig, delta: [i32; 3]) -> f64 {
+    (0..3)
+        .map(|i| trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), cfg.axes[i].max_speed_dps).duration())
+        .fold(0.0, f64::max)
+}
+
+/// Sets DIR and enables the drivers of the axes about to move, then waits the
+/// driver's DIR setup time once for all of them.
+async fn prepare<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, dirs: [Option<bool>; 3]) -> Result<(), Fault> {
+    let mut any = false;
+    for axis in Axis::ALL {
+        if let Some(positive) = dirs[axis.index()] {
+            let i = axis.index();
+            let r = if positive { hw.dir[i].set_high() } else { hw.dir[i].set_low() };
+            r.and_then(|_| hw.enable_n[i].set_low()).map_err(|_| Fault::Gpio)?;
+            any = true;
+        }
+    }
+    if any {
+        hw.delay.delay_ns(units::seconds_to_ns(cfg.driver.dir_setup_s)).await;
+    }
+    Ok(())
+}
+
+/// Moves the axes by signed microstep counts at the given speeds (deg/s),
+/// concurrently; updates `pos` by the steps actually emitted.
+pub async fn move_by<B: Board>(
+    hw: &mut Hardware<B>,
+    cfg: &HeadConfig,
+    pos: &mut Position,
+    delta: [i32; 3],
+    speed_dps: [f32; 3],
+) -> Result<(), Fault> {
+    let tick_hz = <B::Steps as StepTimer>::TICK_HZ;
+    let dirs = delta.map(|d| if d == 0 { None } else { Some(d > 0) });
+    prepare(hw, cfg, dirs).await?;
+    hw.steps.clear();
+    for axis in Axis::ALL {
+        let i = axis.index();
+        let t = trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), speed_dps[i]);
+        if !blocks::trapezoid_blocks(&t, tick_hz, |b| hw.steps.push(axis, b).is_ok()) {
+            hw.steps.clear();
+            return Err(Fault::StepTimer(axis));
+        }
+    }
+    let emitted = hw.steps.run().await;
+    for axis in Axis::ALL {
+        let i = axis.index();
+        let e = emitted[i].min(delta[i].unsigned_abs()) as i32;
+        pos.steps[i] += if delta[i] < 0 { -e } else { e };
+        if e != delta[i].abs() {
+            return Err(Fault::StepTimer(axis));
+        }
+    }
+    Ok(())
+}
+
+/// Moves every axis to absolute microstep targets at cruise speed.
+pub async fn move_to<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, pos: &mut Position, target: [i32; 3]) -> Result<(), Fault> {
+    let delta = [0, 1, 2].map(|i| target[i] - pos.steps[i]);
+    let speed = [0, 1, 2].map(|i| cfg.axes[i].max_speed_dps);
+    move_by(hw, cfg, pos, delta, speed).await
+}
