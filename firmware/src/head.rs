@@ -8,6 +8,7 @@ use crate::board::HeadConfig;
 use crate::detector::{Detector, Measurement};
 use crate::hw::{Board, Clock, Hardware, StepTimer};
 use crate::kinematics;
+use crate::motion::plan::Planner;
 use crate::motion::{self, Position};
 use crate::sanity::Sanity;
 use crate::{homing, units};
@@ -33,6 +34,7 @@ pub struct HeadInfo {
 
 pub(crate) struct ScanRun {
     pub(crate) spec: ScanSpec,
+    pub(crate) planner: Planner,
     pub(crate) total: u32,
     pub(crate) next_order: u32,
     pub(crate) measured: u32,
@@ -40,7 +42,7 @@ pub(crate) struct ScanRun {
 }
 
 pub struct Head<B: Board> {
-    cfg: HeadConfig,
+    pub(crate) cfg: HeadConfig,
     hw: Hardware<B>,
     info: HeadInfo,
     pos: Position,
@@ -290,8 +292,12 @@ impl<B: Board> Head<B> {
             return Err(Fault::NotHomed);
         }
         let first_order = spec.first_order;
+        // Replay the plan up to the first position (a resumed scan).
+        let mut planner = Planner::new(&spec, self.pos.steps);
+        while planner.order() < first_order && planner.next(&self.cfg, &spec).is_some() {}
         self.scan = Some(ScanRun {
             spec,
+            planner,
             total,
             next_order: first_order,
             measured: 0,

@@ -99,11 +99,14 @@ impl<B: Board> Head<B> {
 
     /// Visits the next point of the running scan and publishes what happened.
     async fn scan_step<L: Link>(&mut self, link: &mut L) -> Result<(), LinkError> {
-        let Some(run) = self.scan.as_ref() else {
+        let Some(run) = self.scan.as_mut() else {
             return Ok(());
         };
         let order = run.next_order;
-        let point = run.spec.index_at_order(order).and_then(|i| run.spec.point(i).map(|g| (i, g)));
+        let point = run
+            .planner
+            .next(&self.cfg, &run.spec)
+            .and_then(|i| run.spec.point(i).map(|g| (i, g)));
         let ev = match point {
             None => {
                 let ev = ScanEvent::Finished {

@@ -7,6 +7,7 @@
 
 pub mod blocks;
 pub mod executor;
+pub mod plan;
 pub mod trapezoid;
 
 use crate::board::{AxisConfig, HeadConfig};

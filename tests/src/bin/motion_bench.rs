@@ -1,0 +1,254 @@
+//! `cargo run --release -p tests --bin motion-bench`: figures of the stage
+//! control, as one JSON object on stdout (a table on stderr).
+//!
+//! - `ik_max_error_deg`: largest |FK(IK(g)) − g| over the reachable Belcour
+//!   grid and 200 000 random reachable geometries (`ik_quantised_max_error_deg`:
+//!   the same with the stage angles rounded to whole microsteps).
+//! - `max_step_error_ticks`: largest distance, in 1 MHz timer ticks, between a
+//!   STEP edge as the executor emits it and the analytical trapezoid, over
+//!   moves of 1 to 160 000 microsteps on every axis at cruise and homing speeds.
+//! - `max_step_rate_hz`: highest per-axis step rate, three axes stepping at
+//!   once (at R, 0.91 R, 0.83 R), that the executor sustains on the host model
+//!   of the interrupt with a budget of `isr_budget_cycles` per interrupt on the
+//!   168 MHz MCU: every edge within one tick of its schedule, no step lost.
+//! - `plan_time_s`, `raster_time_s`: the Belcour grid in the head's serpentine
+//!   order and in raster order (θi, θo, Δφ loops, Δφ innermost), moves under
+//!   the reference axis limits plus 50 ms settle and 100 ms integration per point.
+
+use embedded_hal::digital::{ErrorType, OutputPin};
+use gonio_firmware::board::{HeadConfig, REFERENCE};
+use gonio_firmware::hw::StepBlock;
+use gonio_firmware::kinematics;
+use gonio_firmware::motion::blocks::trapezoid_blocks;
+use gonio_firmware::motion::executor::Executor;
+use gonio_firmware::motion::plan::{scan_time, visit_order};
+use gonio_firmware::motion::{target_steps, trapezoid, Position};
+use gonio_firmware::units;
+use gonio_shared::{Axis, Geometry, ScanSpec};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use std::cell::{Cell, RefCell};
+use std::convert::Infallible;
+use std::rc::Rc;
+use std::time::Instant;
+
+const TICK_HZ: u32 = 1_000_000;
+/// Cycles of the 168 MHz MCU allowed per step-timer interrupt: one tick.
+const ISR_BUDGET_CYCLES: u64 = 168;
+
+/// A STEP pin that logs the tick of every rising edge.
+struct LogPin {
+    axis: usize,
+    clock: Rc<Cell<u64>>,
+    edges: Rc<RefCell<Vec<(usize, u64)>>>,
+}
+
+impl ErrorType for LogPin {
+    type Error = Infallible;
+}
+
+impl OutputPin for LogPin {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.edges.borrow_mut().push((self.axis, self.clock.get()));
+        Ok(())
+    }
+}
+
+type Edges = Rc<RefCell<Vec<(usize, u64)>>>;
+
+fn executor(pulse: u64) -> (Executor<LogPin>, Rc<Cell<u64>>, Edges) {
+    let clock = Rc::new(Cell::new(0));
+    let edges = Rc::new(RefCell::new(Vec::new()));
+    let pins = [0, 1, 2].map(|axis| LogPin {
+        axis,
+        clock: clock.clone(),
+        edges: edges.clone(),
+    });
+    (Executor::new(pins, pulse), clock, edges)
+}
+
+/// Runs the executor with an interrupt that takes `isr_ticks` to service:
+/// an event due while the previous one is being handled waits for it.
+fn run(exec: &mut Executor<LogPin>, clock: &Cell<u64>, isr_ticks: u64) -> u64 {
+    let (mut next, mut busy_until, mut fires) = (exec.start(), 0u64, 0u64);
+    while let Some(t) = next {
+        let now = t.max(busy_until);
+        clock.set(now);
+        next = exec.fire(now);
+        busy_until = now + isr_ticks;
+        fires += 1;
+    }
+    fires
+}
+
+/// Distance (degrees) between two geometries in their frame-invariant terms:
+/// θi, θo and the angle ψ between light and view (Δφ alone is meaningless
+/// where θi or θo vanishes: every Δφ is then the same configuration).
+fn geometry_error(a: &Geometry, b: &Geometry) -> f64 {
+    let psi = |g: &Geometry| {
+        let (ti, to, dp) = (
+            (g.theta_i_deg as f64).to_radians(),
+            (g.theta_o_deg as f64).to_radians(),
+            (g.dphi_deg as f64).to_radians(),
+        );
+        let l = [ti.sin(), 0.0, ti.cos()];
+        let v = [to.sin() * dp.cos(), to.sin() * dp.sin(), to.cos()];
+        let cross = [l[1] * v[2] - l[2] * v[1], l[2] * v[0] - l[0] * v[2], l[0] * v[1] - l[1] * v[0]];
+        let sin = (cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]).sqrt();
+        sin.atan2(l[0] * v[0] + l[1] * v[1] + l[2] * v[2]).to_degrees()
+    };
+    let d = |x: f32, y: f32| (x as f64 - y as f64).abs();
+    d(a.theta_i_deg, b.theta_i_deg)
+        .max(d(a.theta_o_deg, b.theta_o_deg))
+        .max((psi(a) - psi(b)).abs())
+}
+
+fn ik_errors(cfg: &HeadConfig) -> (f64, f64, usize) {
+    let mut rng = StdRng::seed_from_u64(4);
+    let belcour = ScanSpec::belcour();
+    let mut geos: Vec<Geometry> = (0..belcour.len()).filter_map(|i| belcour.point(i)).collect();
+    geos.extend((0..200_000).map(|_| {
+        Geometry::new(
+            rng.random_range(0.0..89.0),
+            rng.random_range(0.0..89.0),
+            rng.random_range(-180.0..180.0),
+        )
+    }));
+    let (mut exact, mut quantised, mut n) = (0.0f64, 0.0f64, 0);
+    for g in geos {
+        let Ok(axes) = kinematics::inverse(cfg, &g) else { continue };
+        n += 1;
+        exact = exact.max(geometry_error(&kinematics::forward(&axes), &g));
+        let pos = Position {
+            steps: target_steps(cfg, &axes),
+            homed: [true; 3],
+        };
+        quantised = quantised.max(geometry_error(&kinematics::forward(&pos.angles(cfg)), &g));
+    }
+    (exact, quantised, n)
+}
+
+fn max_step_error(cfg: &HeadConfig) -> (f64, u64) {
+    let pulse = units::seconds_to_ticks(cfg.driver.step_pulse_s, TICK_HZ) as u64;
+    let (mut worst, mut steps) = (0.0f64, 0u64);
+    for axis in Axis::ALL {
+        let c = cfg.axis(axis);
+        for dps in [c.max_speed_dps, c.home_slow_dps] {
+            for n in [1u32, 2, 3, 5, 17, 100, 1_000, 10_000, 40_000, 160_000] {
+                let t = trapezoid(c, n, dps);
+                let (mut exec, clock, edges) = executor(pulse);
+                assert!(trapezoid_blocks(&t, TICK_HZ, |b| exec.push(axis, b).is_ok()), "queue too short");
+                run(&mut exec, &clock, 0);
+                let e = edges.borrow();
+                assert_eq!(e.len(), n as usize);
+                for (k, (_, tick)) in e.iter().enumerate() {
+                    worst = worst.max((*tick as f64 - t.step_time(k as u32 + 1) * TICK_HZ as f64).abs());
+                }
+                steps += n as u64;
+            }
+        }
+    }
+    (worst, steps)
+}
+
+/// Three axes at constant rates R, 0.91 R, 0.83 R for 20 ms; the largest
+/// edge delay (ticks) and steps lost, with `isr_ticks` of service time.
+fn rate_trial(rate: f64, isr_ticks: u64, pulse: u64) -> (f64, u32, u64, f64) {
+    let (mut exec, clock, edges) = executor(pulse);
+    let mut want: Vec<Vec<f64>> = Vec::new();
+    for (i, f) in [1.0, 0.91, 0.83].iter().enumerate() {
+        let period = TICK_HZ as f64 / (rate * f);
+        let count = (0.02 * rate * f) as u32;
+        let b = StepBlock {
+            interval: (period * 4_294_967_296.0).round() as u64,
+            count,
+            add: 0,
+        };
+        exec.push(Axis::ALL[i], b).expect("queue");
+        want.push((1..=count).map(|k| (k as f64 * period).round()).collect());
+    }
+    let t0 = Instant::now();
+    let fires = run(&mut exec, &clock, isr_ticks);
+    let ns_per_fire = t0.elapsed().as_nanos() as f64 / fires as f64;
+    let e = edges.borrow();
+    let mut seen = [0usize; 3];
+    let mut delay = 0.0f64;
+    for (axis, tick) in e.iter() {
+        delay = delay.max(*tick as f64 - want[*axis][seen[*axis]]);
+        seen[*axis] += 1;
+    }
+    (delay, exec.collisions, fires, ns_per_fire)
+}
+
+fn main() {
+    let cfg = REFERENCE;
+    let (ik, ik_q, ik_points) = ik_errors(&cfg);
+    let finest_microstep = cfg
+        .axes
+        .iter()
+        .map(|a| 360.0 / a.microsteps_per_rev as f64)
+        .fold(f64::MAX, f64::min);
+    let (step_err, steps_checked) = max_step_error(&cfg);
+
+    let pulse = units::seconds_to_ticks(cfg.driver.step_pulse_s, TICK_HZ) as u64;
+    let isr_ticks = (ISR_BUDGET_CYCLES * TICK_HZ as u64).div_ceil(168_000_000);
+    let mut max_rate = 0.0;
+    let mut host_ns = 0.0;
+    let mut r = 5_000.0;
+    while r <= 400_000.0 {
+        let (delay, lost, _, ns) = rate_trial(r, isr_ticks, pulse);
+        if delay <= 1.0 && lost == 0 {
+            max_rate = r;
+            host_ns = ns;
+        } else {
+            break;
+        }
+        r *= 1.05;
+    }
+
+    let spec = ScanSpec::belcour();
+    let home = [0, 1, 2].map(|i| units::deg_to_steps(&cfg.axes[i], cfg.axes[i].home_deg));
+    let plan = scan_time(&cfg, &spec, visit_order(&cfg, &spec, home), home, 0.05, 0.1);
+    let raster = scan_time(&cfg, &spec, 0..spec.len(), home, 0.05, 0.1);
+    let serpentine = scan_time(&cfg, &spec, (0..spec.len()).filter_map(|o| spec.index_at_order(o)), home, 0.05, 0.1);
+
+    let out = serde_json::json!({
+        "ik_max_error_deg": ik,
+        "ik_quantised_max_error_deg": ik_q,
+        "ik_points": ik_points,
+        "microstep_deg": finest_microstep,
+        "max_step_error_ticks": step_err,
+        "steps_checked": steps_checked,
+        "max_step_rate_hz": max_rate,
+        "isr_budget_cycles": ISR_BUDGET_CYCLES,
+        "host_ns_per_interrupt": host_ns,
+        "plan_time_s": plan.total_s(),
+        "raster_time_s": raster.total_s(),
+        "plan_moves_s": plan.moves_s,
+        "raster_moves_s": raster.moves_s,
+        "measured_points": plan.measured,
+        "plan_over_raster": plan.total_s() / raster.total_s(),
+        "serpentine_time_s": serpentine.total_s(),
+    });
+    eprintln!(
+        "motion benchmark (reference axes: {:?} deg/s, {:?} deg/s²)",
+        cfg.axes.map(|a| a.max_speed_dps),
+        cfg.axes.map(|a| a.max_accel_dps2)
+    );
+    eprintln!("  IK round trip     {ik:.2e}° exact, {ik_q:.2e}° with microstep rounding, over {ik_points} geometries (microstep {finest_microstep:.2e}°)");
+    eprintln!("  step timing       {step_err:.3} ticks worst over {steps_checked} steps (≤ 1)");
+    eprintln!("  step rate         {max_rate:.0} Hz per axis, three axes, {ISR_BUDGET_CYCLES} cycles per interrupt (≥ 50 000)");
+    eprintln!(
+        "  Belcour grid      planned {:.0} s vs raster {:.0} s (moves {:.0} s vs {:.0} s), ratio {:.3} (≤ 0.75); plain serpentine {:.0} s",
+        plan.total_s(),
+        raster.total_s(),
+        plan.moves_s,
+        raster.moves_s,
+        plan.total_s() / raster.total_s(),
+        serpentine.total_s()
+    );
+    println!("{out}");
+}
