@@ -169,6 +169,12 @@ impl<B: Board> Head<B> {
                 }
             }
         }
+        if r.is_ok() {
+            // The switches sit just outside the travel: park the homed axes at
+            // 0° (the retro direction at normal incidence), inside it.
+            let park = [0, 1, 2].map(|i| if wanted[i] { motion::PARK[i] } else { self.pos.steps[i] });
+            r = motion::move_to(&mut self.hw, &self.cfg, &mut self.pos, park).await;
+        }
         if r.is_err() {
             self.safe_state();
         }

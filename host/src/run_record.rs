@@ -76,6 +76,8 @@ pub struct RunRecord {
     pub detection: Detection,
     /// The detector calibration taken before the scan, if any.
     pub calibration: Option<CalibrationReport>,
+    /// Duration the plan predicted before the scan (s); compare `counts.head_time_s`.
+    pub estimated_s: Option<f64>,
     pub counts: ScanOutcome,
     pub complete: bool,
 }
@@ -104,6 +106,7 @@ impl RunRecord {
             grid: Grid::from(spec),
             detection: Detection::from(det),
             calibration,
+            estimated_s: None,
             counts,
             complete: true,
         }

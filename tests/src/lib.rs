@@ -1,7 +1,9 @@
-//! Shared pieces of the test suites: proptest strategies for every message
-//! type, and small hardware doubles for driving the firmware core without
-//! the simulator.
+//! Shared pieces of the test suites and benchmarks: proptest strategies for
+//! every message type, hardware doubles for driving the firmware core without
+//! the simulator, the host model of the step-timer interrupt, and the chopped
+//! signal of the lock-in benchmark.
 
 pub mod chop_signal;
 pub mod doubles;
+pub mod step_log;
 pub mod strategies;

@@ -146,6 +146,11 @@ impl<P: OutputPin> Executor<P> {
         self.next_event()
     }
 
+    /// Gives the STEP pins back (for checking them in tests).
+    pub fn into_pins(self) -> [P; 3] {
+        self.pins
+    }
+
     /// Runs to completion against a clock that jumps to each event (the
     /// simulated head, tests); returns the tick at which the last pulse ended.
     pub fn run_to_end(&mut self) -> u64 {

@@ -18,6 +18,10 @@ use embedded_hal_async::delay::DelayNs;
 use gonio_shared::{Axis, AxisAngles, Fault};
 use trapezoid::Trapezoid;
 
+/// Where homing leaves the axes (microsteps): 0° on every axis, the retro
+/// direction at normal incidence, inside the travel. Plans start here.
+pub const PARK: [i32; 3] = [0; 3];
+
 /// Where the axes are, in microsteps from their zero.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub struct Position {

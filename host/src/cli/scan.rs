@@ -9,7 +9,10 @@ use crate::samples_csv::SampleWriter;
 use crate::scan::{self, ScanOutcome};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
-use gonio_shared::{DetectionSettings, Reference, ScanSpec};
+use gonio_firmware::board::REFERENCE;
+use gonio_firmware::motion::plan::{scan_time, visit_order};
+use gonio_firmware::motion::PARK;
+use gonio_shared::{DetectionReport, DetectionSettings, Reference, ScanSpec};
 
 /// Length of the detector calibration (s).
 const CALIBRATION_S: f32 = 1.0;
@@ -131,6 +134,16 @@ async fn scan_to_dir(target: &Target, spec: &ScanSpec, det: &DetectorArgs, dir: 
         None => None,
     };
     let detection = head.detection(settings).await?;
+    let estimate = estimate_s(spec, &detection);
+    if !json {
+        eprintln!(
+            "{} points; estimated duration {} (moves, {:.0} ms settle and {:.0} ms integration per point)",
+            spec.len(),
+            hms(estimate),
+            detection.settings.settle_s * 1e3,
+            detection.integration_s * 1e3
+        );
+    }
     let mut writer = SampleWriter::create(dir)?;
     let pb = scan::progress_bar(spec.len() as u64, json);
     let outcome = scan::run(&head, spec, &mut writer, &pb).await?;
@@ -139,9 +152,27 @@ async fn scan_to_dir(target: &Target, spec: &ScanSpec, det: &DetectorArgs, dir: 
         Target::Sim(c) => Some(c.material.clone()),
         Target::Port(_) => None,
     };
-    RunRecord::new(&id, material, spec, &detection, calibration, outcome.clone()).write(dir)?;
+    let mut record = RunRecord::new(&id, material, spec, &detection, calibration, outcome.clone());
+    record.estimated_s = Some(estimate);
+    record.write(dir)?;
     head.close().await;
     summarise(&outcome, &samples, json)
+}
+
+/// The head's plan replayed from the park position under the reference axis
+/// limits: moves, settle and integration (s), the latter with the chop periods
+/// the detector spends ranging the gain and letting the amplifier settle.
+fn estimate_s(spec: &ScanSpec, det: &DetectionReport) -> f64 {
+    let cfg = &REFERENCE;
+    let settle = cfg.detector.settle_periods as f64;
+    let extra_periods = if det.settings.auto_range { 2.0 * settle + 1.0 } else { settle };
+    let acquire = det.integration_s as f64 + extra_periods / det.chop_hz_actual as f64;
+    scan_time(cfg, spec, visit_order(cfg, spec, PARK), PARK, det.settings.settle_s as f64, acquire).total_s()
+}
+
+fn hms(s: f64) -> String {
+    let s = s.round() as u64;
+    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }
 
 fn summarise(o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {

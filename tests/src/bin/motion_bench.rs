@@ -15,74 +15,22 @@
 //!   order and in raster order (θi, θo, Δφ loops, Δφ innermost), moves under
 //!   the reference axis limits plus 50 ms settle and 100 ms integration per point.
 
-use embedded_hal::digital::{ErrorType, OutputPin};
 use gonio_firmware::board::{HeadConfig, REFERENCE};
 use gonio_firmware::hw::StepBlock;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::trapezoid_blocks;
-use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::motion::plan::{scan_time, visit_order};
-use gonio_firmware::motion::{target_steps, trapezoid, Position};
+use gonio_firmware::motion::{target_steps, trapezoid, Position, PARK};
 use gonio_firmware::units;
 use gonio_shared::{Axis, Geometry, ScanSpec};
+use gonio_tests::step_log::{executor, run, Scope};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
-use std::cell::{Cell, RefCell};
-use std::convert::Infallible;
-use std::rc::Rc;
 use std::time::Instant;
 
 const TICK_HZ: u32 = 1_000_000;
 /// Cycles of the 168 MHz MCU allowed per step-timer interrupt: one tick.
 const ISR_BUDGET_CYCLES: u64 = 168;
-
-/// A STEP pin that logs the tick of every rising edge.
-struct LogPin {
-    axis: usize,
-    clock: Rc<Cell<u64>>,
-    edges: Rc<RefCell<Vec<(usize, u64)>>>,
-}
-
-impl ErrorType for LogPin {
-    type Error = Infallible;
-}
-
-impl OutputPin for LogPin {
-    fn set_low(&mut self) -> Result<(), Infallible> {
-        Ok(())
-    }
-    fn set_high(&mut self) -> Result<(), Infallible> {
-        self.edges.borrow_mut().push((self.axis, self.clock.get()));
-        Ok(())
-    }
-}
-
-type Edges = Rc<RefCell<Vec<(usize, u64)>>>;
-
-fn executor(pulse: u64) -> (Executor<LogPin>, Rc<Cell<u64>>, Edges) {
-    let clock = Rc::new(Cell::new(0));
-    let edges = Rc::new(RefCell::new(Vec::new()));
-    let pins = [0, 1, 2].map(|axis| LogPin {
-        axis,
-        clock: clock.clone(),
-        edges: edges.clone(),
-    });
-    (Executor::new(pins, pulse), clock, edges)
-}
-
-/// Runs the executor with an interrupt that takes `isr_ticks` to service:
-/// an event due while the previous one is being handled waits for it.
-fn run(exec: &mut Executor<LogPin>, clock: &Cell<u64>, isr_ticks: u64) -> u64 {
-    let (mut next, mut busy_until, mut fires) = (exec.start(), 0u64, 0u64);
-    while let Some(t) = next {
-        let now = t.max(busy_until);
-        clock.set(now);
-        next = exec.fire(now);
-        busy_until = now + isr_ticks;
-        fires += 1;
-    }
-    fires
-}
 
 /// Distance (degrees) between two geometries in their frame-invariant terms:
 /// θi, θo and the angle ψ between light and view (Δφ alone is meaningless
@@ -139,12 +87,13 @@ fn max_step_error(cfg: &HeadConfig) -> (f64, u64) {
         for dps in [c.max_speed_dps, c.home_slow_dps] {
             for n in [1u32, 2, 3, 5, 17, 100, 1_000, 10_000, 40_000, 160_000] {
                 let t = trapezoid(c, n, dps);
-                let (mut exec, clock, edges) = executor(pulse);
+                let scope = Scope::default();
+                let mut exec = executor(&scope, pulse);
                 assert!(trapezoid_blocks(&t, TICK_HZ, |b| exec.push(axis, b).is_ok()), "queue too short");
-                run(&mut exec, &clock, 0);
-                let e = edges.borrow();
+                run(&mut exec, &scope, 0, 1, 0);
+                let e = scope.rises("step", axis.index());
                 assert_eq!(e.len(), n as usize);
-                for (k, (_, tick)) in e.iter().enumerate() {
+                for (k, tick) in e.iter().enumerate() {
                     worst = worst.max((*tick as f64 - t.step_time(k as u32 + 1) * TICK_HZ as f64).abs());
                 }
                 steps += n as u64;
@@ -157,7 +106,8 @@ fn max_step_error(cfg: &HeadConfig) -> (f64, u64) {
 /// Three axes at constant rates R, 0.91 R, 0.83 R for 20 ms; the largest
 /// edge delay (ticks) and steps lost, with `isr_ticks` of service time.
 fn rate_trial(rate: f64, isr_ticks: u64, pulse: u64) -> (f64, u32, u64, f64) {
-    let (mut exec, clock, edges) = executor(pulse);
+    let scope = Scope::default();
+    let mut exec = executor(&scope, pulse);
     let mut want: Vec<Vec<f64>> = Vec::new();
     for (i, f) in [1.0, 0.91, 0.83].iter().enumerate() {
         let period = TICK_HZ as f64 / (rate * f);
@@ -171,14 +121,13 @@ fn rate_trial(rate: f64, isr_ticks: u64, pulse: u64) -> (f64, u32, u64, f64) {
         want.push((1..=count).map(|k| (k as f64 * period).round()).collect());
     }
     let t0 = Instant::now();
-    let fires = run(&mut exec, &clock, isr_ticks);
+    let fires = run(&mut exec, &scope, 0, 1, isr_ticks);
     let ns_per_fire = t0.elapsed().as_nanos() as f64 / fires as f64;
-    let e = edges.borrow();
-    let mut seen = [0usize; 3];
     let mut delay = 0.0f64;
-    for (axis, tick) in e.iter() {
-        delay = delay.max(*tick as f64 - want[*axis][seen[*axis]]);
-        seen[*axis] += 1;
+    for (axis, want) in want.iter().enumerate() {
+        for (tick, w) in scope.rises("step", axis).iter().zip(want) {
+            delay = delay.max(*tick as f64 - w);
+        }
     }
     (delay, exec.collisions, fires, ns_per_fire)
 }
@@ -210,10 +159,9 @@ fn main() {
     }
 
     let spec = ScanSpec::belcour();
-    let home = [0, 1, 2].map(|i| units::deg_to_steps(&cfg.axes[i], cfg.axes[i].home_deg));
-    let plan = scan_time(&cfg, &spec, visit_order(&cfg, &spec, home), home, 0.05, 0.1);
-    let raster = scan_time(&cfg, &spec, 0..spec.len(), home, 0.05, 0.1);
-    let serpentine = scan_time(&cfg, &spec, (0..spec.len()).filter_map(|o| spec.index_at_order(o)), home, 0.05, 0.1);
+    let plan = scan_time(&cfg, &spec, visit_order(&cfg, &spec, PARK), PARK, 0.05, 0.1);
+    let raster = scan_time(&cfg, &spec, 0..spec.len(), PARK, 0.05, 0.1);
+    let serpentine = scan_time(&cfg, &spec, (0..spec.len()).filter_map(|o| spec.index_at_order(o)), PARK, 0.05, 0.1);
 
     let out = serde_json::json!({
         "ik_max_error_deg": ik,
