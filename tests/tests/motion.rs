@@ -224,3 +224,49 @@ proptest! {
         });
     }
 }
+
+/// A step timer whose interrupt never reports the end of a move.
+struct Stuck;
+
+impl StepTimer for Stuck {
+    const TICK_HZ: u32 = 1_000_000;
+    fn push(&mut self, _: Axis, _: StepBlock) -> Result<(), QueueFull> {
+        Ok(())
+    }
+    async fn run(&mut self) -> [u32; 3] {
+        std::future::pending().await
+    }
+    fn clear(&mut self) {}
+}
+
+struct StuckBoard;
+
+impl Board for StuckBoard {
+    type Out = LogPin;
+    type In = Open;
+    type Adc = ScriptedAdc;
+    type Steps = Stuck;
+    type Delay = ScopeDelay;
+    type Clock = FixedClock;
+}
+
+#[test]
+fn a_move_that_never_ends_is_a_stall_fault() {
+    let scope = Scope::default();
+    let mut hw = Hardware::<StuckBoard> {
+        dir: [0, 1, 2].map(|i| scope.pin("dir", i)),
+        enable_n: [0, 1, 2].map(|i| scope.pin("enable_n", i)),
+        home: [Open, Open, Open],
+        gain: [0, 1].map(|i| scope.pin("gain", i)),
+        laser: scope.pin("laser", 0),
+        adc: ScriptedAdc::default(),
+        steps: Stuck,
+        delay: ScopeDelay(scope.clone()),
+        clock: FixedClock,
+    };
+    let mut pos = Position::default();
+    let speeds = REFERENCE.axes.map(|a| a.max_speed_dps);
+    let r = block_on(move_by(&mut hw, &REFERENCE, &mut pos, [0, 800, 0], speeds));
+    assert_eq!(r, Err(gonio_shared::Fault::StepTimer(Axis::Cradle)));
+    assert_eq!(pos.steps, [0, 0, 0]);
+}

@@ -13,10 +13,14 @@ pub mod trapezoid;
 use crate::board::{AxisConfig, HeadConfig};
 use crate::hw::{Board, Hardware, StepTimer};
 use crate::units;
+use embassy_futures::select::{select, Either};
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::{Axis, AxisAngles, Fault};
 use trapezoid::Trapezoid;
+
+/// Slack (ms) beyond twice a move's scheduled duration before it counts as stalled.
+const STALL_MARGIN_MS: u32 = 500;
 
 /// Where homing leaves the axes (microsteps): 0° on every axis, the retro
 /// direction at normal incidence, inside the travel. Plans start here.
@@ -104,7 +108,19 @@ pub async fn move_by<B: Board>(
             return Err(Fault::StepTimer(axis));
         }
     }
-    let emitted = hw.steps.run().await;
+    // A move that outlasts its schedule by far means a stalled timer: stop it.
+    let expected = (0..3)
+        .map(|i| trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), speed_dps[i]).duration())
+        .fold(0.0, f64::max);
+    let limit_ms = (expected * 2.0 * 1e3) as u32 + STALL_MARGIN_MS;
+    let emitted = match select(hw.steps.run(), hw.delay.delay_ms(limit_ms)).await {
+        Either::First(e) => e,
+        Either::Second(()) => {
+            hw.steps.clear();
+            let axis = Axis::ALL.into_iter().find(|a| delta[a.index()] != 0).unwrap_or(Axis::Rotation);
+            return Err(Fault::StepTimer(axis));
+        }
+    };
     for axis in Axis::ALL {
         let i = axis.index();
         let e = emitted[i].min(delta[i].unsigned_abs()) as i32;
