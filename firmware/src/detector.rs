@@ -133,6 +133,13 @@ impl Detector {
         }
     }
 
+    /// Discards the periods the amplifier needs after a gain change.
+    async fn settle<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, buf: &mut [u16], flags: &mut SampleFlags) {
+        for _ in 0..cfg.detector.settle_periods {
+            Self::period(hw, buf, flags).await;
+        }
+    }
+
     fn full_scale<B: Board>() -> u16 {
         ((1u32 << <B::Adc as AdcStream>::BITS) - 1) as u16
     }
@@ -149,9 +156,7 @@ impl Detector {
         let full = Self::full_scale::<B>();
         let n_gains = cfg.detector.gains_v_per_a.len() as u8;
         for _ in 0..2 * n_gains {
-            for _ in 0..cfg.detector.settle_periods {
-                Self::period(hw, buf, flags).await;
-            }
+            Self::settle(hw, cfg, buf, flags).await;
             Self::period(hw, buf, flags).await;
             let (min, max) = buf.iter().fold((u16::MAX, 0), |(lo, hi), &c| (lo.min(c), hi.max(c)));
             if max >= full || min == 0 {
@@ -186,9 +191,7 @@ impl Detector {
         if self.settings.auto_range {
             self.auto_range(hw, cfg, buf, flags).await?;
         }
-        for _ in 0..cfg.detector.settle_periods {
-            Self::period(hw, buf, flags).await;
-        }
+        Self::settle(hw, cfg, buf, flags).await;
         Ok(())
     }
 

@@ -24,7 +24,7 @@ pub use fault::{Axis, Fault, Field, Unreachable};
 pub use geometry::{AxisAngles, Geometry};
 pub use identity::{Capabilities, Identity, PROTOCOL_VERSION};
 pub use sample::{Sample, SampleFlags};
-pub use sanity::{SanityConfig, SanityModel};
+pub use sanity::{SanityConfig, SanityKind, SanityModel};
 pub use scan::{AngleRange, ScanAccepted, ScanEvent, ScanSpec};
 pub use status::{HeadState, Status};
 

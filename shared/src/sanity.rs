@@ -33,9 +33,59 @@ pub enum SanityModel {
     },
 }
 
+/// Which model, and for `abc-retro` which cosine its retro lobe takes.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum SanityKind {
+    Lambert,
+    RetroPhong,
+    AbcRetro { back: bool },
+}
+
+impl SanityKind {
+    /// Number of parameters (`models.md` §2).
+    pub const fn arity(self) -> usize {
+        match self {
+            SanityKind::Lambert => 1,
+            SanityKind::RetroPhong => 6,
+            SanityKind::AbcRetro { .. } => 8,
+        }
+    }
+}
+
 impl SanityModel {
-    fn params(&self) -> heapless::Vec<f32, 8> {
-        let mut v = heapless::Vec::new();
+    /// Builds a model from its parameters in the order of `models.md`
+    /// (`kd, n, k1, k2, k3, k4` / `kd, r0, ab, bb, cb, ar, br, cr`); `None`
+    /// when the count is wrong.
+    pub fn from_params(kind: SanityKind, p: &[f32]) -> Option<Self> {
+        Some(match (kind, p) {
+            (SanityKind::Lambert, &[kd]) => SanityModel::Lambert { kd },
+            (SanityKind::RetroPhong, &[kd, n, k1, k2, k3, k4]) => SanityModel::RetroPhong { kd, n, k1, k2, k3, k4 },
+            (SanityKind::AbcRetro { back }, &[kd, r0, ab, bb, cb, ar, br, cr]) => SanityModel::AbcRetro {
+                kd,
+                r0,
+                ab,
+                bb,
+                cb,
+                ar,
+                br,
+                cr,
+                back,
+            },
+            _ => return None,
+        })
+    }
+
+    pub fn kind(&self) -> SanityKind {
+        match self {
+            SanityModel::Lambert { .. } => SanityKind::Lambert,
+            SanityModel::RetroPhong { .. } => SanityKind::RetroPhong,
+            SanityModel::AbcRetro { back, .. } => SanityKind::AbcRetro { back: *back },
+        }
+    }
+
+    /// The parameters in the order of `models.md`.
+    pub fn params(&self) -> heapless::Vec<f32, 8> {
         let s: &[f32] = match self {
             SanityModel::Lambert { kd } => &[*kd],
             SanityModel::RetroPhong { kd, n, k1, k2, k3, k4 } => &[*kd, *n, *k1, *k2, *k3, *k4],
@@ -52,8 +102,7 @@ impl SanityModel {
             } => &[*kd, *r0, *ab, *bb, *cb, *ar, *br, *cr],
         };
         // At most eight parameters by construction.
-        let _ = v.extend_from_slice(s);
-        v
+        heapless::Vec::from_slice(s).unwrap_or_default()
     }
 
     /// Every parameter finite and non-negative (all of them are magnitudes,

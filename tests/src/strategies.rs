@@ -138,28 +138,10 @@ pub fn scan_spec() -> impl Strategy<Value = ScanSpec> {
 }
 
 pub fn sanity_config() -> impl Strategy<Value = SanityConfig> {
-    let model = prop_oneof![
-        any_f32().prop_map(|kd| SanityModel::Lambert { kd }),
-        proptest::collection::vec(any_f32(), 6).prop_map(|p| SanityModel::RetroPhong {
-            kd: p[0],
-            n: p[1],
-            k1: p[2],
-            k2: p[3],
-            k3: p[4],
-            k4: p[5]
-        }),
-        (proptest::collection::vec(any_f32(), 8), any::<bool>()).prop_map(|(p, back)| SanityModel::AbcRetro {
-            kd: p[0],
-            r0: p[1],
-            ab: p[2],
-            bb: p[3],
-            cb: p[4],
-            ar: p[5],
-            br: p[6],
-            cr: p[7],
-            back
-        }),
-    ];
+    let model = (0usize..3, proptest::collection::vec(any_f32(), 8), any::<bool>()).prop_map(|(k, p, back)| {
+        let kind = [SanityKind::Lambert, SanityKind::RetroPhong, SanityKind::AbcRetro { back }][k];
+        SanityModel::from_params(kind, &p[..kind.arity()]).expect("arity")
+    });
     (model, (any_f32(), any_f32()), any_f32(), any_f32(), any_f32(), any::<bool>()).prop_map(|(model, (c, s), r, a, k, remeasure)| {
         SanityConfig {
             model,

@@ -20,6 +20,7 @@ use gonio_tests::doubles::{FixedClock, ScriptedAdc};
 use gonio_tests::step_log::{executor, run, LogPin, Scope};
 use proptest::prelude::*;
 use std::convert::Infallible;
+use std::marker::PhantomData;
 
 const TICK_NS: u64 = 1_000;
 
@@ -67,9 +68,9 @@ fn drop_and_check(exec: Executor<PinMock>) {
     }
 }
 
-/// A board whose pins log against a clock in nanoseconds, whose delay
-/// advances that clock, and whose step timer is the executor on that clock.
-struct Scoped;
+/// A board whose pins log against a clock in nanoseconds and whose delay
+/// advances that clock, with the step timer `S`.
+struct Scoped<S>(PhantomData<S>);
 
 struct Open;
 
@@ -114,33 +115,38 @@ impl StepTimer for ScopeSteps {
     }
 }
 
-impl Board for Scoped {
+impl<S: StepTimer> Board for Scoped<S> {
     type Out = LogPin;
     type In = Open;
     type Adc = ScriptedAdc;
-    type Steps = ScopeSteps;
+    type Steps = S;
     type Delay = ScopeDelay;
     type Clock = FixedClock;
 }
 
-#[test]
-fn dir_is_set_up_before_the_first_step_and_pulses_have_their_width() {
-    let scope = Scope::default();
-    let pulse = units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, 1_000_000) as u64;
-    let mut hw = Hardware::<Scoped> {
+fn hardware<S: StepTimer>(scope: &Scope, steps: S) -> Hardware<Scoped<S>> {
+    Hardware {
         dir: [0, 1, 2].map(|i| scope.pin("dir", i)),
         enable_n: [0, 1, 2].map(|i| scope.pin("enable_n", i)),
         home: [Open, Open, Open],
         gain: [0, 1].map(|i| scope.pin("gain", i)),
         laser: scope.pin("laser", 0),
         adc: ScriptedAdc::default(),
-        steps: ScopeSteps {
-            exec: executor(&scope, pulse),
-            scope: scope.clone(),
-        },
+        steps,
         delay: ScopeDelay(scope.clone()),
         clock: FixedClock,
+    }
+}
+
+#[test]
+fn dir_is_set_up_before_the_first_step_and_pulses_have_their_width() {
+    let scope = Scope::default();
+    let pulse = units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, 1_000_000) as u64;
+    let steps = ScopeSteps {
+        exec: executor(&scope, pulse),
+        scope: scope.clone(),
     };
+    let mut hw = hardware(&scope, steps);
     let mut pos = Position::default();
     let speeds = REFERENCE.axes.map(|a| a.max_speed_dps);
     block_on(move_by(&mut hw, &REFERENCE, &mut pos, [5, 0, -3], speeds)).unwrap();
@@ -239,31 +245,10 @@ impl StepTimer for Stuck {
     fn clear(&mut self) {}
 }
 
-struct StuckBoard;
-
-impl Board for StuckBoard {
-    type Out = LogPin;
-    type In = Open;
-    type Adc = ScriptedAdc;
-    type Steps = Stuck;
-    type Delay = ScopeDelay;
-    type Clock = FixedClock;
-}
-
 #[test]
 fn a_move_that_never_ends_is_a_stall_fault() {
     let scope = Scope::default();
-    let mut hw = Hardware::<StuckBoard> {
-        dir: [0, 1, 2].map(|i| scope.pin("dir", i)),
-        enable_n: [0, 1, 2].map(|i| scope.pin("enable_n", i)),
-        home: [Open, Open, Open],
-        gain: [0, 1].map(|i| scope.pin("gain", i)),
-        laser: scope.pin("laser", 0),
-        adc: ScriptedAdc::default(),
-        steps: Stuck,
-        delay: ScopeDelay(scope.clone()),
-        clock: FixedClock,
-    };
+    let mut hw = hardware(&scope, Stuck);
     let mut pos = Position::default();
     let speeds = REFERENCE.axes.map(|a| a.max_speed_dps);
     let r = block_on(move_by(&mut hw, &REFERENCE, &mut pos, [0, 800, 0], speeds));

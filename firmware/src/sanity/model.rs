@@ -4,7 +4,7 @@
 
 use super::fixed::Fx;
 use super::geometry::FixedGeometry;
-use gonio_shared::{Fault, Field, SanityModel};
+use gonio_shared::{Fault, Field, SanityKind, SanityModel};
 
 /// Largest value any model may reach (sr⁻¹), well inside Q31.32.
 const F_MAX: f32 = 1.0e8;
@@ -13,30 +13,12 @@ const K4_MAX: f32 = 20.0;
 /// ABC falloff exponents beyond this are indistinguishable from a delta.
 const ABC_EXPONENT_MAX: f32 = 1.0e3;
 
+/// A validated model: its kind and its parameters in Q31.32, in the order
+/// of `models.md`.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub enum FixedModel {
-    Lambert {
-        kd: Fx,
-    },
-    RetroPhong {
-        kd: Fx,
-        n: Fx,
-        k1: Fx,
-        k2: Fx,
-        k3: Fx,
-        k4: Fx,
-    },
-    AbcRetro {
-        kd: Fx,
-        r0: Fx,
-        ab: Fx,
-        bb: Fx,
-        cb: Fx,
-        ar: Fx,
-        br: Fx,
-        cr: Fx,
-        back: bool,
-    },
+pub struct FixedModel {
+    kind: SanityKind,
+    p: [Fx; 8],
 }
 
 fn fx(x: f32) -> Result<Fx, Fault> {
@@ -67,56 +49,33 @@ impl FixedModel {
     /// Converts and bounds an uploaded model (after `SanityModel::validate`).
     pub fn new(m: &SanityModel) -> Result<Self, Fault> {
         m.validate()?;
-        Ok(match *m {
-            SanityModel::Lambert { kd } => {
-                bounded(kd <= F_MAX)?;
-                FixedModel::Lambert { kd: fx(kd)? }
-            }
-            SanityModel::RetroPhong { kd, n, k1, k2, k3, k4 } => {
+        let v = m.params();
+        match (m.kind(), &v[..]) {
+            (SanityKind::Lambert, &[kd]) => bounded(kd <= F_MAX)?,
+            (SanityKind::RetroPhong, &[kd, n, k1, k2, k3, k4]) => {
                 bounded(k4 <= K4_MAX)?;
                 let worst = kd + (k3 * libm::expf(k4) + k1 + k2) * (n + 2.0);
                 bounded(worst.is_finite() && worst <= F_MAX)?;
-                FixedModel::RetroPhong {
-                    kd: fx(kd)?,
-                    n: fx(n)?,
-                    k1: fx(k1)?,
-                    k2: fx(k2)?,
-                    k3: fx(k3)?,
-                    k4: fx(k4)?,
-                }
             }
-            SanityModel::AbcRetro {
-                kd,
-                r0,
-                ab,
-                bb,
-                cb,
-                ar,
-                br,
-                cr,
-                back,
-            } => {
-                bounded(r0 <= 1.0 && kd + ab + ar <= F_MAX && cb <= ABC_EXPONENT_MAX && cr <= ABC_EXPONENT_MAX)?;
-                FixedModel::AbcRetro {
-                    kd: fx(kd)?,
-                    r0: fx(r0)?,
-                    ab: fx(ab)?,
-                    bb: fx(bb)?,
-                    cb: fx(cb)?,
-                    ar: fx(ar)?,
-                    br: fx(br)?,
-                    cr: fx(cr)?,
-                    back,
-                }
+            (SanityKind::AbcRetro { .. }, &[kd, r0, ab, _, cb, ar, _, cr]) => {
+                bounded(r0 <= 1.0 && kd + ab + ar <= F_MAX && cb <= ABC_EXPONENT_MAX && cr <= ABC_EXPONENT_MAX)?
             }
-        })
+            _ => return Err(Fault::InvalidValue(Field::ModelParameter)),
+        }
+        let mut p = [Fx::ZERO; 8];
+        for (x, &y) in p.iter_mut().zip(v.iter()) {
+            *x = fx(y)?;
+        }
+        Ok(FixedModel { kind: m.kind(), p })
     }
 
     /// `f_r` (sr⁻¹) at a geometry, integers only.
     pub fn eval(&self, g: &FixedGeometry) -> Fx {
-        match *self {
-            FixedModel::Lambert { kd } => kd.times(Fx::INV_PI),
-            FixedModel::RetroPhong { kd, n, k1, k2, k3, k4 } => {
+        let diffuse = self.p[0].times(Fx::INV_PI);
+        match self.kind {
+            SanityKind::Lambert => diffuse,
+            SanityKind::RetroPhong => {
+                let [_, n, k1, k2, k3, k4, _, _] = self.p;
                 let one_minus = Fx::ONE.minus(g.cos_i());
                 let kr = k1.times(one_minus).plus(k2);
                 let ks = k3.times(k4.times(one_minus).exp());
@@ -124,22 +83,13 @@ impl FixedModel {
                 let lobe = |c: Fx| if c.0 > 0 { c.powf(n) } else { Fx::ZERO };
                 let spec = ks.times(norm).times(lobe(g.mirror_dot_v()));
                 let retro = kr.times(norm).times(lobe(g.l_dot_v()));
-                kd.times(Fx::INV_PI).plus(spec).plus(retro)
+                diffuse.plus(spec).plus(retro)
             }
-            FixedModel::AbcRetro {
-                kd,
-                r0,
-                ab,
-                bb,
-                cb,
-                ar,
-                br,
-                cr,
-                back,
-            } => {
+            SanityKind::AbcRetro { back } => {
+                let [_, r0, ab, bb, cb, ar, br, cr] = self.p;
                 let spec = falloff(ar, br, cr, g.half()[2]).times(schlick(g.v_dot_half(), r0));
                 let retro = falloff(ab, bb, cb, g.retro_cos(back)).times(schlick(g.reflected_dot_back(), r0));
-                kd.times(Fx::INV_PI).plus(spec).plus(retro)
+                diffuse.plus(spec).plus(retro)
             }
         }
     }

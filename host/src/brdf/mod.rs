@@ -106,24 +106,15 @@ impl Material {
     /// The model as the head's sanity check evaluates it, if the head has it
     /// (`lambert`, `retro-phong` with the view cosine, `abc-retro`).
     pub fn sanity_model(&self) -> Option<gonio_shared::SanityModel> {
-        use gonio_shared::SanityModel as S;
+        use gonio_shared::{SanityKind, SanityModel};
+        let kind = match (self.model, self.param) {
+            (ModelId::Lambert, _) => SanityKind::Lambert,
+            (ModelId::RetroPhong, Param::View) => SanityKind::RetroPhong,
+            (ModelId::RetroPhong, Param::Back) => return None,
+            (ModelId::AbcRetro, p) => SanityKind::AbcRetro { back: p == Param::Back },
+        };
         let p: Vec<f32> = self.params.iter().map(|x| *x as f32).collect();
-        match (self.model, self.param, &p[..]) {
-            (ModelId::Lambert, _, &[kd]) => Some(S::Lambert { kd }),
-            (ModelId::RetroPhong, Param::View, &[kd, n, k1, k2, k3, k4]) => Some(S::RetroPhong { kd, n, k1, k2, k3, k4 }),
-            (ModelId::AbcRetro, param, &[kd, r0, ab, bb, cb, ar, br, cr]) => Some(S::AbcRetro {
-                kd,
-                r0,
-                ab,
-                bb,
-                cb,
-                ar,
-                br,
-                cr,
-                back: param == Param::Back,
-            }),
-            _ => None,
-        }
+        SanityModel::from_params(kind, &p)
     }
 
     /// `NAME=V,...` as accepted by [`Material::parse`].

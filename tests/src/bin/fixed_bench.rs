@@ -12,7 +12,7 @@
 
 use gonio_firmware::sanity::{FixedGeometry, FixedModel};
 use gonio_host::brdf::{Directions, Material, ModelId, Param};
-use gonio_shared::{Geometry, SanityModel};
+use gonio_shared::{Geometry, SanityKind, SanityModel};
 use std::time::Instant;
 
 struct Case {
@@ -30,14 +30,7 @@ fn retro_phong(name: &'static str, p: [f64; 6]) -> Case {
             params: p.to_vec(),
             param: Param::View,
         },
-        device: SanityModel::RetroPhong {
-            kd: f[0],
-            n: f[1],
-            k1: f[2],
-            k2: f[3],
-            k3: f[4],
-            k4: f[5],
-        },
+        device: SanityModel::from_params(SanityKind::RetroPhong, &f).expect("six parameters"),
     }
 }
 
@@ -50,17 +43,13 @@ fn abc(name: &'static str, p: [f64; 8], param: Param) -> Case {
             params: p.to_vec(),
             param,
         },
-        device: SanityModel::AbcRetro {
-            kd: f[0],
-            r0: f[1],
-            ab: f[2],
-            bb: f[3],
-            cb: f[4],
-            ar: f[5],
-            br: f[6],
-            cr: f[7],
-            back: param == Param::Back,
-        },
+        device: SanityModel::from_params(
+            SanityKind::AbcRetro {
+                back: param == Param::Back,
+            },
+            &f,
+        )
+        .expect("eight parameters"),
     }
 }
 
