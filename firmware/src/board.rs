@@ -34,8 +34,10 @@ impl AxisConfig {
 /// STEP/DIR driver timing (seconds).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct DriverTiming {
-    /// DIR must be stable this long before the first STEP edge.
+    /// DIR must be stable this long before the first STEP edge...
     pub dir_setup_s: f32,
+    /// ...and stay so this long after the last STEP edge of a move.
+    pub dir_hold_s: f32,
     /// Width of each STEP pulse.
     pub step_pulse_s: f32,
 }
@@ -112,6 +114,7 @@ pub const REFERENCE: HeadConfig = HeadConfig {
     ],
     driver: DriverTiming {
         dir_setup_s: 5.0e-6,
+        dir_hold_s: 5.0e-6,
         step_pulse_s: 3.0e-6,
     },
     optics: ArmOptics {

@@ -13,9 +13,13 @@ use gonio_firmware::units;
 use gonio_shared::{Axis, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags};
 use gonio_tests::doubles::{chop_period, done, expect, Pins, ScriptedAdc};
 
-/// DIR setup time of the reference drivers, as the core asks the delay for it.
-fn dir_setup() -> Delay {
-    Delay::async_delay_ns(units::seconds_to_ns(REFERENCE.driver.dir_setup_s))
+/// The delays of one move, as the core asks for them: the drivers' DIR
+/// setup time before the first step and the hold time after the last.
+fn moves(n: usize) -> Vec<Delay> {
+    let ns = |s: f32| Delay::async_delay_ns(units::seconds_to_ns(s));
+    (0..n)
+        .flat_map(|_| [ns(REFERENCE.driver.dir_setup_s), ns(REFERENCE.driver.dir_hold_s)])
+        .collect()
 }
 
 /// Microsteps of one fast homing chunk of the rotation stage (0.5°).
@@ -52,7 +56,7 @@ fn homing_finds_the_switch_backs_off_and_touches_slowly() {
         ],
     );
     expect(&mut pins.enable_n[0], &vec![Pin::set(State::Low); 4]);
-    let mut hw = pins.into_hardware(CheckedDelay::new(&[dir_setup(), dir_setup(), dir_setup(), dir_setup()]));
+    let mut hw = pins.into_hardware(CheckedDelay::new(&moves(4)));
     let mut pos = Position::default();
     block_on(home_axis(&mut hw, &REFERENCE, &mut pos, Axis::Rotation)).unwrap();
 
@@ -74,7 +78,7 @@ fn homing_faults_when_the_switch_never_closes() {
     expect(&mut pins.home[0], &vec![Pin::get(State::Low); chunks + 1]);
     expect(&mut pins.dir[0], &vec![Pin::set(State::Low); chunks]);
     expect(&mut pins.enable_n[0], &vec![Pin::set(State::Low); chunks]);
-    let mut hw = pins.into_hardware(CheckedDelay::new(&vec![dir_setup(); chunks]));
+    let mut hw = pins.into_hardware(CheckedDelay::new(&moves(chunks)));
     let mut pos = Position::default();
     let r = block_on(home_axis(&mut hw, &REFERENCE, &mut pos, Axis::Rotation));
     assert_eq!(r, Err(Fault::HomeSwitchNotFound(Axis::Rotation)));
@@ -92,7 +96,7 @@ fn homing_faults_when_the_switch_is_stuck_closed() {
     expect(&mut pins.home[0], &vec![Pin::get(State::High); backoff_chunks + 2]);
     expect(&mut pins.dir[0], &vec![Pin::set(State::High); backoff_chunks]);
     expect(&mut pins.enable_n[0], &vec![Pin::set(State::Low); backoff_chunks]);
-    let mut hw = pins.into_hardware(CheckedDelay::new(&vec![dir_setup(); backoff_chunks]));
+    let mut hw = pins.into_hardware(CheckedDelay::new(&moves(backoff_chunks)));
     let mut pos = Position::default();
     let r = block_on(home_axis(&mut hw, &REFERENCE, &mut pos, Axis::Rotation));
     assert_eq!(r, Err(Fault::HomeSwitchStuck(Axis::Rotation)));

@@ -174,6 +174,10 @@ fn dir_is_set_up_before_the_first_step_and_pulses_have_their_width() {
         assert!(!en.high && en.at <= rises[0]);
     }
     assert!(scope.rises("step", 1).is_empty());
+    // DIR held after the last STEP edge before anything else may happen.
+    let last_fall = edges.iter().filter(|e| e.pin == "step" && !e.high).map(|e| e.at).max().unwrap();
+    let hold_ns = units::seconds_to_ns(REFERENCE.driver.dir_hold_s) as u64;
+    assert_eq!(scope.clock.get(), last_fall + hold_ns);
 }
 
 proptest! {

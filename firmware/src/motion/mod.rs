@@ -114,7 +114,11 @@ pub async fn move_by<B: Board>(
         .fold(0.0, f64::max);
     let limit_ms = (expected * 2.0 * 1e3) as u32 + STALL_MARGIN_MS;
     let emitted = match select(hw.steps.run(), hw.delay.delay_ms(limit_ms)).await {
-        Either::First(e) => e,
+        Either::First(e) => {
+            // DIR hold time before the next move may change it.
+            hw.delay.delay_ns(units::seconds_to_ns(cfg.driver.dir_hold_s)).await;
+            e
+        }
         Either::Second(()) => {
             hw.steps.clear();
             let axis = Axis::ALL.into_iter().find(|a| delta[a.index()] != 0).unwrap_or(Axis::Rotation);
