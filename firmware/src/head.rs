@@ -298,8 +298,9 @@ impl<B: Board> Head<B> {
             return Err(Fault::NotHomed);
         }
         let first_order = spec.first_order;
-        // Replay the plan up to the first position (a resumed scan).
-        let mut planner = Planner::new(&spec, self.pos.steps);
+        // The plan always starts from the park position, wherever the stages
+        // are, so that the host and a resumed scan replay the same order.
+        let mut planner = Planner::new(&spec, motion::PARK);
         while planner.order() < first_order && planner.next(&self.cfg, &spec).is_some() {}
         self.scan = Some(ScanRun {
             spec,

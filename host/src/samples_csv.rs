@@ -92,6 +92,29 @@ impl SampleWriter {
         })
     }
 
+    /// Appends to the samples of an interrupted scan. A last line cut short
+    /// by a crash is dropped (its point is measured again).
+    pub fn append(dir: &Path) -> Result<Self> {
+        let part = dir.join("samples.csv.part");
+        if !part.exists() {
+            return Self::create(dir);
+        }
+        let text = std::fs::read(&part).with_context(|| format!("reading {}", part.display()))?;
+        let whole = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&part)
+            .with_context(|| format!("opening {}", part.display()))?;
+        file.set_len(whole as u64).context("dropping a partial last line")?;
+        let mut file = file;
+        std::io::Seek::seek(&mut file, std::io::SeekFrom::End(0))?;
+        Ok(SampleWriter {
+            csv: csv::WriterBuilder::new().has_headers(whole == 0).from_writer(file),
+            part,
+            done: dir.join("samples.csv"),
+        })
+    }
+
     /// Writes one sample and flushes it to the operating system.
     pub fn push(&mut self, s: &Sample) -> Result<()> {
         self.csv.serialize(Row::from(s)).context("writing a sample row")?;

@@ -106,3 +106,53 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
     assert!(!again.status.success());
     assert!(text(&again).contains("already holds a scan"));
 }
+
+#[test]
+fn a_scan_killed_at_a_random_point_resumes_to_exactly_the_grid() {
+    use rand::Rng;
+    use std::time::{Duration, Instant};
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scan");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_gonio"))
+        .args(["scan", "--sim", "--out", out.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Kill it with SIGKILL once a random number of samples are on disk.
+    let kill_after = rand::rng().random_range(20..1500);
+    let part = out.join("samples.csv.part");
+    let t0 = Instant::now();
+    loop {
+        let rows = std::fs::read_to_string(&part).map(|t| t.lines().count()).unwrap_or(0);
+        if rows > kill_after || t0.elapsed() > Duration::from_secs(120) {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    assert!(!out.join("samples.csv").exists(), "the scan finished before it was killed");
+
+    let o = gonio(&["scan", "--resume", out.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let idx = csv_indices(&out.join("samples.csv"));
+    let unique: BTreeSet<u32> = idx.iter().copied().collect();
+    assert_eq!(
+        unique.len(),
+        idx.len(),
+        "a point was measured twice (killed after {kill_after} rows)"
+    );
+    let spec = gonio_shared::ScanSpec::belcour();
+    let reachable: BTreeSet<u32> = (0..spec.len())
+        .filter(|&i| gonio_firmware::kinematics::inverse(&gonio_firmware::board::REFERENCE, &spec.point(i).unwrap()).is_ok())
+        .collect();
+    assert_eq!(unique, reachable, "points missing after resuming (killed after {kill_after} rows)");
+    assert!(!part.exists());
+    let run: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["counts"]["measured"].as_u64(), Some(idx.len() as u64));
+    // A complete scan is not resumed again.
+    let again = gonio(&["scan", "--resume", out.to_str().unwrap()]);
+    assert!(!again.status.success());
+    assert!(text(&again).contains("complete scan"));
+}

@@ -10,10 +10,10 @@ mod retro_phong;
 pub use frame::{Directions, Param};
 
 use anyhow::{bail, Context, Result};
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// A model id and its parameters, in the order of `models.md`.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Material {
     pub model: ModelId,
     pub params: Vec<f64>,
@@ -21,7 +21,7 @@ pub struct Material {
     pub param: Param,
 }
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum ModelId {
     Lambert,

@@ -4,7 +4,8 @@
 use anyhow::{bail, Context, Result};
 use gonio_shared::{DetectionSettings, Geometry, Reference};
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "lowercase")]
 pub enum ReferenceArg {
     Square,
     Sine,
@@ -12,7 +13,7 @@ pub enum ReferenceArg {
     Matched,
 }
 
-#[derive(Debug, Clone, clap::Args)]
+#[derive(Debug, Clone, clap::Args, serde::Serialize, serde::Deserialize)]
 pub struct DetectorArgs {
     /// Demodulation reference.
     #[arg(long, value_enum, default_value = "square")]

@@ -4,6 +4,7 @@ mod detector;
 mod devices;
 mod grid;
 mod material;
+mod plan;
 mod scan;
 mod sim;
 

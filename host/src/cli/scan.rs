@@ -3,9 +3,10 @@
 use super::detector::DetectorArgs;
 use super::grid::GridArgs;
 use super::material::SimHeadArgs;
+use super::plan::{PlanTarget, ScanPlan};
 use crate::client::{Head, Target};
 use crate::run_record::RunRecord;
-use crate::samples_csv::SampleWriter;
+use crate::samples_csv::{Row, SampleWriter};
 use crate::scan::{self, ScanOutcome};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
@@ -42,7 +43,8 @@ pub struct OutputArgs {
 }
 
 #[derive(Debug, clap::Args)]
-#[command(group(clap::ArgGroup::new("head").required(true).args(["sim", "port"])))]
+#[command(group(clap::ArgGroup::new("head").args(["sim", "port"])))]
+#[command(group(clap::ArgGroup::new("dest").required(true).args(["out", "resume"])))]
 pub struct ScanArgs {
     /// Scan the simulated head (in this process).
     #[arg(long)]
@@ -50,9 +52,13 @@ pub struct ScanArgs {
     /// Serial port of a head (its USB port, or a `gonio sim` pseudo-terminal).
     #[arg(long, value_name = "PATH")]
     pub port: Option<String>,
-    /// Output directory.
+    /// Output directory of a new scan.
     #[arg(long)]
-    pub out: PathBuf,
+    pub out: Option<PathBuf>,
+    /// Finish the interrupted scan in this directory (same grid, head and
+    /// detector settings; no point measured twice, none left out).
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["sim", "out", "force"])]
+    pub resume: Option<PathBuf>,
     #[command(flatten)]
     pub grid: GridArgs,
     #[command(flatten)]
@@ -68,16 +74,48 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         seed: a.seed,
         ..SimConfig::default()
     };
-    scan_to_dir(&Target::Sim(sim), &ScanSpec::belcour(), &DetectorArgs::demo(), &a.out, &a.output).await
+    let plan = ScanPlan::new(&Target::Sim(sim), &ScanSpec::belcour(), &DetectorArgs::demo());
+    scan_to_dir(&plan, &a.out, &a.output, None).await
 }
 
 pub async fn scan(a: ScanArgs) -> Result<()> {
-    let spec = a.grid.spec()?;
-    let target = match &a.port {
-        Some(p) => Target::Port(p.clone()),
-        None => Target::Sim(a.sim_head.config()?),
+    if let Some(dir) = &a.resume {
+        let mut plan = ScanPlan::read(dir)?;
+        if let Some(p) = &a.port {
+            // The head may come back on another port.
+            plan.target = PlanTarget::Port { path: p.clone() };
+        }
+        return scan_to_dir(&plan, dir, &a.output, Some(resume_from(dir)?)).await;
+    }
+    let target = match (&a.port, a.sim) {
+        (Some(p), _) => Target::Port(p.clone()),
+        (None, true) => Target::Sim(a.sim_head.config()?),
+        (None, false) => bail!("one of --sim or --port is required"),
     };
-    scan_to_dir(&target, &spec, &a.detector, &a.out, &a.output).await
+    let plan = ScanPlan::new(&target, &a.grid.spec()?, &a.detector);
+    let out = a.out.context("--out is required")?;
+    scan_to_dir(&plan, &out, &a.output, None).await
+}
+
+/// The first visit position an interrupted scan has not stored.
+fn resume_from(dir: &Path) -> Result<u32> {
+    if dir.join("samples.csv").exists() {
+        bail!("{} holds a complete scan; nothing to resume", dir.display());
+    }
+    let part = dir.join("samples.csv.part");
+    if !part.exists() {
+        return Ok(0);
+    }
+    // Rows are whole up to the last newline; a cut last line is measured again.
+    let text = std::fs::read(&part).with_context(|| format!("reading {}", part.display()))?;
+    let whole = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+    let mut r = csv::Reader::from_reader(&text[..whole]);
+    let mut next = 0;
+    for (i, row) in r.deserialize::<Row>().enumerate() {
+        let row = row.with_context(|| format!("{}: row {}", part.display(), i + 2))?;
+        next = next.max(row.order.map_or(0, |o| o + 1));
+    }
+    Ok(next)
 }
 
 /// Refuses to mix a new scan into a directory that holds one.
@@ -95,11 +133,18 @@ fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
     Ok(())
 }
 
-/// Connects first, so a head that cannot be reached leaves no files behind.
-async fn scan_to_dir(target: &Target, spec: &ScanSpec, det: &DetectorArgs, dir: &Path, output: &OutputArgs) -> Result<()> {
+/// Runs a plan into `dir`: a new scan, or the rest of one from visit position
+/// `resume`. Connects first, so a head that cannot be reached leaves no files
+/// behind.
+async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: Option<u32>) -> Result<()> {
     let json = output.json;
+    let (target, det) = (plan.target(), &plan.detector);
+    let spec = &ScanSpec {
+        first_order: resume.unwrap_or(0),
+        ..plan.spec.clone()
+    };
     let (settings, calibrate_at) = det.plan()?;
-    let head = Head::connect(target).await?;
+    let head = Head::connect(&target).await?;
     let id = head.identity().clone();
     if !json {
         eprintln!(
@@ -111,7 +156,10 @@ async fn scan_to_dir(target: &Target, spec: &ScanSpec, det: &DetectorArgs, dir: 
             if id.simulated { ", simulated" } else { "" }
         );
     }
-    prepare_dir(dir, output.force)?;
+    if resume.is_none() {
+        prepare_dir(dir, output.force)?;
+        plan.write(dir)?;
+    }
     // The chop timing is set first: a calibration holds for that timing.
     head.detection(DetectionSettings {
         reference: Reference::Square,
@@ -144,11 +192,24 @@ async fn scan_to_dir(target: &Target, spec: &ScanSpec, det: &DetectorArgs, dir: 
             detection.integration_s * 1e3
         );
     }
-    let mut writer = SampleWriter::create(dir)?;
+    let mut writer = match resume {
+        Some(first) => {
+            if !json {
+                eprintln!("resuming at position {first} of {}", spec.len());
+            }
+            SampleWriter::append(dir)?
+        }
+        None => SampleWriter::create(dir)?,
+    };
     let pb = scan::progress_bar(spec.len() as u64, json);
-    let outcome = scan::run(&head, spec, &mut writer, &pb).await?;
+    let mut outcome = scan::run(&head, spec, &mut writer, &pb).await?;
     let samples = writer.finish()?;
-    let material = match target {
+    if resume.is_some() {
+        // Counts of the whole scan, not only of this session.
+        outcome.measured = crate::samples_csv::read(&samples)?.len() as u32;
+        outcome.skipped = outcome.points - outcome.measured;
+    }
+    let material = match &target {
         Target::Sim(c) => Some(c.material.clone()),
         Target::Port(_) => None,
     };
@@ -160,14 +221,16 @@ async fn scan_to_dir(target: &Target, spec: &ScanSpec, det: &DetectorArgs, dir: 
 }
 
 /// The head's plan replayed from the park position under the reference axis
-/// limits: moves, settle and integration (s), the latter with the chop periods
-/// the detector spends ranging the gain and letting the amplifier settle.
+/// limits, from the scan's first position on: moves, settle and integration
+/// (s), the latter with the chop periods the detector spends ranging the gain
+/// and letting the amplifier settle.
 fn estimate_s(spec: &ScanSpec, det: &DetectionReport) -> f64 {
     let cfg = &REFERENCE;
     let settle = cfg.detector.settle_periods as f64;
     let extra_periods = if det.settings.auto_range { 2.0 * settle + 1.0 } else { settle };
     let acquire = det.integration_s as f64 + extra_periods / det.chop_hz_actual as f64;
-    scan_time(cfg, spec, visit_order(cfg, spec, PARK), PARK, det.settings.settle_s as f64, acquire).total_s()
+    let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
+    scan_time(cfg, spec, rest, PARK, det.settings.settle_s as f64, acquire).total_s()
 }
 
 fn hms(s: f64) -> String {

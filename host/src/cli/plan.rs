@@ -1,0 +1,67 @@
+//! `scan.json`: what a scan was asked to do, written before its first sample
+//! so `gonio scan --resume DIR` can finish an interrupted scan exactly.
+
+use super::detector::DetectorArgs;
+use crate::brdf::Material;
+use crate::client::Target;
+use crate::sim::SimConfig;
+use anyhow::{Context, Result};
+use gonio_shared::ScanSpec;
+use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Which head.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum PlanTarget {
+    Sim { material: Material, seed: u64 },
+    Port { path: String },
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct ScanPlan {
+    pub target: PlanTarget,
+    pub spec: ScanSpec,
+    pub detector: DetectorArgs,
+}
+
+const FILE: &str = "scan.json";
+
+impl ScanPlan {
+    pub fn new(target: &Target, spec: &ScanSpec, detector: &DetectorArgs) -> Self {
+        let target = match target {
+            Target::Sim(c) => PlanTarget::Sim {
+                material: c.material.clone(),
+                seed: c.seed,
+            },
+            Target::Port(p) => PlanTarget::Port { path: p.clone() },
+        };
+        ScanPlan {
+            target,
+            spec: spec.clone(),
+            detector: detector.clone(),
+        }
+    }
+
+    pub fn target(&self) -> Target {
+        match &self.target {
+            PlanTarget::Sim { material, seed } => Target::Sim(SimConfig {
+                material: material.clone(),
+                seed: *seed,
+                ..SimConfig::default()
+            }),
+            PlanTarget::Port { path } => Target::Port(path.clone()),
+        }
+    }
+
+    pub fn write(&self, dir: &Path) -> Result<()> {
+        let path = dir.join(FILE);
+        std::fs::write(&path, serde_json::to_string_pretty(self)? + "\n").with_context(|| format!("writing {}", path.display()))
+    }
+
+    pub fn read(dir: &Path) -> Result<Self> {
+        let path = dir.join(FILE);
+        let text = std::fs::read_to_string(&path).with_context(|| format!("{} holds no scan to resume ({FILE} missing)", dir.display()))?;
+        serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))
+    }
+}
