@@ -32,6 +32,15 @@ fn every_command_has_help() {
 }
 
 #[test]
+fn devices_lists_heads_as_json() {
+    let o = gonio(&["devices", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let list: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    // No head is plugged into the test machine.
+    assert_eq!(list, serde_json::json!([]));
+}
+
+#[test]
 fn an_unreachable_port_fails_cleanly_and_writes_nothing() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("scan");

@@ -31,8 +31,18 @@ fn tty_of(info: &nusb::DeviceInfo) -> Option<String> {
 }
 
 pub fn devices(a: DevicesArgs) -> Result<()> {
-    let found: Vec<Found> = nusb::list_devices()
-        .context("listing USB devices")?
+    let listing = match nusb::list_devices() {
+        Ok(l) => Some(l),
+        // A machine (or container) without a USB bus has no head on it.
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            eprintln!("note: no USB bus visible on this machine");
+            None
+        }
+        Err(e) => return Err(e).context("listing USB devices"),
+    };
+    let found: Vec<Found> = listing
+        .into_iter()
+        .flatten()
         .filter(|d| d.vendor_id() == USB_VID && d.product_id() == USB_PID)
         .map(|d| Found {
             serial: d.serial_number().map(str::to_string),
