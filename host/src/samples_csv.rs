@@ -99,8 +99,7 @@ impl SampleWriter {
         if !part.exists() {
             return Self::create(dir);
         }
-        let text = std::fs::read(&part).with_context(|| format!("reading {}", part.display()))?;
-        let whole = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
+        let whole = whole_lines(&part)?.len();
         let file = std::fs::OpenOptions::new()
             .write(true)
             .open(&part)
@@ -128,6 +127,28 @@ impl SampleWriter {
         std::fs::rename(&self.part, &self.done).with_context(|| format!("renaming to {}", self.done.display()))?;
         Ok(self.done)
     }
+}
+
+/// The bytes of a file up to its last newline: the rows written whole
+/// (a crash can cut the last one short).
+fn whole_lines(path: &Path) -> Result<Vec<u8>> {
+    let mut text = std::fs::read(path).with_context(|| format!("reading {}", path.display()))?;
+    text.truncate(text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1));
+    Ok(text)
+}
+
+/// The rows an interrupted scan stored whole in `dir` (none if it stored nothing).
+pub fn stored_rows(dir: &Path) -> Result<Vec<Row>> {
+    let part = dir.join("samples.csv.part");
+    if !part.exists() {
+        return Ok(Vec::new());
+    }
+    let text = whole_lines(&part)?;
+    csv::Reader::from_reader(&text[..])
+        .deserialize()
+        .enumerate()
+        .map(|(i, row)| row.with_context(|| format!("{}: row {}", part.display(), i + 2)))
+        .collect()
 }
 
 /// Reads a samples file back.

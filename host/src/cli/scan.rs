@@ -6,7 +6,7 @@ use super::material::SimHeadArgs;
 use super::plan::{PlanTarget, ScanPlan};
 use crate::client::{Head, Target};
 use crate::run_record::RunRecord;
-use crate::samples_csv::{Row, SampleWriter};
+use crate::samples_csv::{stored_rows, SampleWriter};
 use crate::scan::{self, ScanOutcome};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
@@ -102,20 +102,7 @@ fn resume_from(dir: &Path) -> Result<u32> {
     if dir.join("samples.csv").exists() {
         bail!("{} holds a complete scan; nothing to resume", dir.display());
     }
-    let part = dir.join("samples.csv.part");
-    if !part.exists() {
-        return Ok(0);
-    }
-    // Rows are whole up to the last newline; a cut last line is measured again.
-    let text = std::fs::read(&part).with_context(|| format!("reading {}", part.display()))?;
-    let whole = text.iter().rposition(|&b| b == b'\n').map_or(0, |i| i + 1);
-    let mut r = csv::Reader::from_reader(&text[..whole]);
-    let mut next = 0;
-    for (i, row) in r.deserialize::<Row>().enumerate() {
-        let row = row.with_context(|| format!("{}: row {}", part.display(), i + 2))?;
-        next = next.max(row.order.map_or(0, |o| o + 1));
-    }
-    Ok(next)
+    Ok(stored_rows(dir)?.iter().filter_map(|r| r.order).map(|o| o + 1).max().unwrap_or(0))
 }
 
 /// Refuses to mix a new scan into a directory that holds one.
