@@ -84,11 +84,6 @@ impl<B: Board> Head<B> {
         head
     }
 
-    /// The hardware, for the binary's watchdog and for tests.
-    pub fn hardware(&mut self) -> &mut Hardware<B> {
-        &mut self.hw
-    }
-
     /// Laser off, conversions stopped, drivers disabled, step queues emptied.
     /// Pin errors are ignored here: there is nothing safer left to do.
     pub fn safe_state(&mut self) {

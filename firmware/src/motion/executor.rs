@@ -4,6 +4,7 @@
 //! timer when to fire next. The chip's TIM5 interrupt, the simulated head and
 //! the tests all run this same code.
 
+use super::blocks::to_tick;
 use crate::hw::{QueueFull, StepBlock};
 use embedded_hal::digital::OutputPin;
 use gonio_shared::Axis;
@@ -55,7 +56,7 @@ impl Track {
     }
 
     fn next_tick(&self) -> Option<u64> {
-        (self.left > 0).then(|| (self.next + (1 << 31)) >> 32)
+        (self.left > 0).then(|| to_tick(self.next))
     }
 
     /// After a step: the next one of the block, or of the next block.

@@ -56,11 +56,4 @@ impl Trapezoid {
     pub fn duration(&self) -> f64 {
         self.total
     }
-
-    /// The first and last step of the cruise (none for a triangular move).
-    pub fn cruise_steps(&self) -> Option<(u32, u32)> {
-        let first = libm::floor(self.x1) as u32 + 1;
-        let last = libm::ceil(self.n as f64 - self.x1) as u32 - 1;
-        (self.peak >= self.v && first < last).then_some((first, last))
-    }
 }
