@@ -7,6 +7,8 @@
 pub mod brdf;
 pub mod cli;
 pub mod client;
+pub mod fit;
+pub mod formats;
 pub mod link;
 pub mod run_record;
 pub mod samples_csv;

@@ -29,15 +29,17 @@ pub struct ScanOutcome {
 }
 
 /// A bar on a terminal, nothing otherwise (or when `quiet`).
-pub fn progress_bar(len: u64, quiet: bool) -> ProgressBar {
+pub fn progress_bar(len: u64, quiet: bool, task: &str, items: &str) -> ProgressBar {
     if quiet {
         return ProgressBar::hidden();
     }
     let pb = ProgressBar::new(len);
     pb.set_style(
-        ProgressStyle::with_template("{spinner} scanning [{bar:40}] {pos}/{len} points, {msg} ({eta} left)")
-            .unwrap_or_else(|_| ProgressStyle::default_bar())
-            .progress_chars("=> "),
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} {task} [{{bar:40}}] {{pos}}/{{len}} {items}, {{msg}} ({{eta}} left)"
+        ))
+        .unwrap_or_else(|_| ProgressStyle::default_bar())
+        .progress_chars("=> "),
     );
     pb
 }

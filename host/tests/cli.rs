@@ -24,6 +24,10 @@ fn every_command_has_help() {
         &["scan", "--help"],
         &["devices", "--help"],
         &["sim", "--help"],
+        &["fit", "--help"],
+        &["compare", "--help"],
+        &["eval", "--help"],
+        &["dhr", "--help"],
     ] {
         let o = gonio(cmd);
         assert!(o.status.success(), "{cmd:?}: {}", text(&o));

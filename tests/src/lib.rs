@@ -7,3 +7,4 @@ pub mod chop_signal;
 pub mod doubles;
 pub mod step_log;
 pub mod strategies;
+pub mod synthetic;

@@ -36,7 +36,9 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
     let dir = tempfile::tempdir().unwrap();
     let spec = small_grid();
     let mut out = SampleWriter::create(dir.path()).unwrap();
-    let outcome = scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true)).await.unwrap();
+    let outcome = scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true, "scanning", "points"))
+        .await
+        .unwrap();
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
     head.close().await;
 
@@ -181,7 +183,7 @@ async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
     assert!(head.identity().simulated);
     assert_eq!(head.identity().protocol_version, PROTOCOL_VERSION);
     let mut out = SampleWriter::create(dir.path()).unwrap();
-    let outcome = scan::run(&head, &small_grid(), &mut out, &scan::progress_bar(0, true))
+    let outcome = scan::run(&head, &small_grid(), &mut out, &scan::progress_bar(0, true, "scanning", "points"))
         .await
         .unwrap();
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();

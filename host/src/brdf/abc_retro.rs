@@ -3,18 +3,16 @@
 //! with `c = cos_B` (back) or `cos_R` (view). Belcour's `(1 − n·h)` is used,
 //! not Spieringhs eq. 10's misprint `(1 − o·h)`.
 
-use super::frame::{dot, schlick, Directions, Param};
+use super::frame::Param;
+use super::geometry::Geometry;
+use super::scalar::{pow, schlick, Scalar};
 use std::f64::consts::PI;
 
-/// Parameters in the order `kd, r0, ab, bb, cb, ar, br, cr`.
-pub fn eval(d: &Directions, p: &[f64], param: Param) -> f64 {
-    let [kd, r0, ab, bb, cb, ar, br, cr] = p[..] else {
-        return f64::NAN;
-    };
-    let h = d.half();
-    let b = d.back();
-    let specular = ar / (1.0 + br * (1.0 - h[2])).powf(cr) * schlick(dot(d.v, h), r0);
-    let c = d.retro_cos(param);
-    let retro = ab / (1.0 + bb * (1.0 - c)).powf(cb) * schlick(dot(d.reflected_v(), b), r0);
+/// Parameters `kd, r0, ab, bb, cb, ar, br, cr`.
+pub fn eval<T: Scalar>(g: &Geometry, p: &[T], param: Param) -> T {
+    let [kd, r0, ab, bb, cb, ar, br, cr] = [p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]];
+    let one = T::one();
+    let specular = ar / pow(one + br * (1.0 - g.nh), cr) * schlick(g.vh, r0);
+    let retro = ab / pow(one + bb * (1.0 - g.retro_cos(param)), cb) * schlick(g.vpb, r0);
     kd / PI + specular + retro
 }

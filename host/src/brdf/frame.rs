@@ -85,8 +85,3 @@ impl Directions {
         }
     }
 }
-
-/// Schlick's Fresnel `r0 + (1 − r0)(1 − u)^5`, `u` clamped to [0, 1].
-pub fn schlick(u: f64, r0: f64) -> f64 {
-    r0 + (1.0 - r0) * (1.0 - u.clamp(0.0, 1.0)).powi(5)
-}

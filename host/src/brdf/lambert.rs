@@ -1,5 +1,8 @@
 //! `lambert`: `kd/π`.
 
-pub fn eval(kd: f64) -> f64 {
-    kd / std::f64::consts::PI
+use super::scalar::Scalar;
+use std::f64::consts::PI;
+
+pub fn eval<T: Scalar>(p: &[T]) -> T {
+    p[0] / PI
 }

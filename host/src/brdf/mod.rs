@@ -3,11 +3,23 @@
 //! these; the fitting engine builds on the same evaluations.
 
 mod abc_retro;
+mod beckmann_retro;
+mod blinn_retro;
+mod catalog;
+pub mod dhr;
+mod five_param;
 pub mod frame;
+pub mod geometry;
+mod lafortune;
 mod lambert;
+mod oren_nayar;
 mod retro_phong;
+pub mod scalar;
 
+pub use catalog::{Bound, HandGradient, ModelId, Spread};
 pub use frame::{Directions, Param};
+pub use geometry::Geometry;
+pub use retro_phong::energy_sum as retro_phong_energy_sum;
 
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
@@ -19,41 +31,6 @@ pub struct Material {
     pub params: Vec<f64>,
     /// Cosine of the retro lobe (`retro-phong`'s published form is `view`).
     pub param: Param,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "kebab-case")]
-pub enum ModelId {
-    Lambert,
-    RetroPhong,
-    AbcRetro,
-}
-
-impl ModelId {
-    pub const ALL: [ModelId; 3] = [ModelId::Lambert, ModelId::RetroPhong, ModelId::AbcRetro];
-
-    pub fn name(self) -> &'static str {
-        match self {
-            ModelId::Lambert => "lambert",
-            ModelId::RetroPhong => "retro-phong",
-            ModelId::AbcRetro => "abc-retro",
-        }
-    }
-
-    pub fn param_names(self) -> &'static [&'static str] {
-        match self {
-            ModelId::Lambert => &["kd"],
-            ModelId::RetroPhong => &["kd", "n", "k1", "k2", "k3", "k4"],
-            ModelId::AbcRetro => &["kd", "r0", "ab", "bb", "cb", "ar", "br", "cr"],
-        }
-    }
-
-    pub fn parse(s: &str) -> Result<Self> {
-        ModelId::ALL.into_iter().find(|m| m.name() == s).with_context(|| {
-            let valid: Vec<_> = ModelId::ALL.iter().map(|m| m.name()).collect();
-            format!("unknown model `{s}`; valid models: {}", valid.join(", "))
-        })
-    }
 }
 
 impl Material {
@@ -95,12 +72,7 @@ impl Material {
 
     /// `f_r` (sr⁻¹) for a pair of directions.
     pub fn eval(&self, d: &Directions) -> f64 {
-        let p = &self.params;
-        match self.model {
-            ModelId::Lambert => lambert::eval(p[0]),
-            ModelId::RetroPhong => retro_phong::eval(d, p, self.param),
-            ModelId::AbcRetro => abc_retro::eval(d, p, self.param),
-        }
+        self.model.eval(&Geometry::new(d), &self.params, self.param)
     }
 
     /// The model as the head's sanity check evaluates it, if the head has it
@@ -112,6 +84,7 @@ impl Material {
             (ModelId::RetroPhong, Param::View) => SanityKind::RetroPhong,
             (ModelId::RetroPhong, Param::Back) => return None,
             (ModelId::AbcRetro, p) => SanityKind::AbcRetro { back: p == Param::Back },
+            _ => return None,
         };
         let p: Vec<f32> = self.params.iter().map(|x| *x as f32).collect();
         SanityModel::from_params(kind, &p)

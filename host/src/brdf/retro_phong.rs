@@ -1,43 +1,48 @@
 //! `retro-phong` (Spieringhs et al. 2023, eq. 15, 17, 18; the equations, not
 //! the swapped Mitsuba listing of their Appendix A):
-//! `kd/π + ks(θi)(n+2)/(2π)·max(0, r(l)·v)^n + kr(θi)(n+2)/(2π)·max(0, l·v)^n`,
+//! `kd/π + ks(θi)(n+2)/(2π)·max(0, r(l)·v)^n + kr(θi)(n+2)/(2π)·max(0, c)^n`,
 //! `kr(θi) = k1(1 − cosθi) + k2`, `ks(θi) = k3·exp(k4(1 − cosθi))`.
 
-use super::frame::{dot, Directions, Param};
+use super::frame::Param;
+use super::geometry::Geometry;
+use super::scalar::{pow_geo, Scalar};
 use std::f64::consts::PI;
 
-/// Parameters in the order `kd, n, k1, k2, k3, k4`; the retro lobe's cosine is
-/// `l·v` in the view parametrization (the published model) or `cos_B`.
-pub fn eval(d: &Directions, p: &[f64], param: Param) -> f64 {
-    let [kd, n, k1, k2, k3, k4] = p[..] else {
-        return f64::NAN;
-    };
-    let one_minus_cos = 1.0 - d.cos_i();
+/// Parameters `kd, n, k1, k2, k3, k4`; `c = l·v` in the view parametrization
+/// (the published model) or `cos_B`.
+pub fn eval<T: Scalar>(g: &Geometry, p: &[T], param: Param) -> T {
+    let [kd, n, k1, k2, k3, k4] = [p[0], p[1], p[2], p[3], p[4], p[5]];
+    let one_minus_cos = 1.0 - g.cos_i;
     let kr = k1 * one_minus_cos + k2;
     let ks = k3 * (k4 * one_minus_cos).exp();
     let norm = (n + 2.0) / (2.0 * PI);
-    let lobe = |c: f64| c.max(0.0).powf(n);
-    kd / PI + ks * norm * lobe(dot(d.mirror_l(), d.v)) + kr * norm * lobe(d.retro_cos(param))
+    kd / PI + ks * norm * pow_geo(g.ln_mirror, n) + kr * norm * pow_geo(g.retro_ln(param), n)
+}
+
+/// Spieringhs §8's energy check: `kd + ks(θi) + kr(θi)`, below 1 when energy is conserved.
+pub fn energy_sum(p: &[f64], cos_i: f64) -> f64 {
+    let one_minus_cos = 1.0 - cos_i;
+    p[0] + p[4] * (p[5] * one_minus_cos).exp() + p[2] * one_minus_cos + p[3]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::brdf::Directions;
 
     #[test]
     fn retro_peak_and_mirror_peak() {
         let (kd, n, k1, k2, k3, k4) = (0.62, 24.0, 0.158, 0.0415, 0.00133, 5.47);
         let norm = (n + 2.0) / (2.0 * PI);
-        // Pure retroreflection at 60°: l·v = 1, mirror lobe r(l)·v = cos 120° < 0.
         let p = [kd, n, k1, k2, k3, k4];
-        let d = Directions::from_degrees(60.0, 60.0, 0.0);
+        let at = |ti, to, dp| Geometry::new(&Directions::from_degrees(ti, to, dp));
+        // Pure retroreflection at 60°: l·v = 1, mirror lobe r(l)·v = cos 120° < 0.
         let want = kd / PI + (k1 * 0.5 + k2) * norm;
-        assert!((eval(&d, &p, Param::View) - want).abs() < 1e-12);
+        assert!((eval(&at(60.0, 60.0, 0.0), &p, Param::View) - want).abs() < 1e-12);
         // At pure retroreflection the back vector is the normal: cos_B = 1 too.
-        assert!((eval(&d, &p, Param::Back) - want).abs() < 1e-12);
+        assert!((eval(&at(60.0, 60.0, 0.0), &p, Param::Back) - want).abs() < 1e-12);
         // Mirror direction at 60°: r(l)·v = 1, l·v = cos 120°.
-        let d = Directions::from_degrees(60.0, 60.0, 180.0);
         let want = kd / PI + k3 * (k4 * 0.5).exp() * norm;
-        assert!((eval(&d, &p, Param::View) - want).abs() < 1e-12);
+        assert!((eval(&at(60.0, 60.0, 180.0), &p, Param::View) - want).abs() < 1e-12);
     }
 }

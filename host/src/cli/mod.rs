@@ -2,8 +2,10 @@
 
 mod detector;
 mod devices;
+mod fit;
 mod grid;
 mod material;
+mod model_eval;
 mod plan;
 mod scan;
 mod sim;
@@ -12,7 +14,11 @@ use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
 
 #[derive(Debug, Parser)]
-#[command(name = "gonio", version, about = "Retroreflection BRDF measurement head: scan, store, simulate")]
+#[command(
+    name = "gonio",
+    version,
+    about = "Retroreflection BRDF measurement head: scan, store, simulate, fit"
+)]
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
@@ -28,6 +34,14 @@ pub enum Command {
     Devices(devices::DevicesArgs),
     /// Run a simulated head on a pseudo-terminal, for `gonio scan --port PATH`.
     Sim(sim::SimArgs),
+    /// Fit one model to a data file (ALTA .dat or calibrated CSV), no starting point needed.
+    Fit(fit::FitArgs),
+    /// Fit every model to a data file and compare them (RMSE, NRMSE, NCC).
+    Compare(fit::CompareArgs),
+    /// Evaluate a model at one geometry.
+    Eval(model_eval::EvalArgs),
+    /// Directional-hemispherical reflectance of a model, and its energy check.
+    Dhr(model_eval::DhrArgs),
 }
 
 /// Runs a command to completion.
@@ -41,5 +55,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scan(a) => rt.block_on(scan::scan(a)),
         Command::Devices(a) => devices::devices(a),
         Command::Sim(a) => sim::sim(a),
+        Command::Fit(a) => fit::fit_cmd(a),
+        Command::Compare(a) => fit::compare_cmd(a),
+        Command::Eval(a) => model_eval::eval_cmd(a),
+        Command::Dhr(a) => model_eval::dhr_cmd(a),
     }
 }

@@ -188,7 +188,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         }
         None => SampleWriter::create(dir)?,
     };
-    let pb = scan::progress_bar(spec.len() as u64, json);
+    let pb = scan::progress_bar(spec.len() as u64, json, "scanning", "points");
     let mut outcome = scan::run(&head, spec, &mut writer, &pb).await?;
     let samples = writer.finish()?;
     if resume.is_some() {

@@ -1,0 +1,232 @@
+//! `gonio fit` and `gonio compare`: models fitted to a data file (ALTA `.dat`
+//! or the calibrated sample CSV).
+
+use crate::brdf::{ModelId, Param};
+use crate::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
+use crate::formats;
+use anyhow::{bail, Context, Result};
+use serde_json::{json, Map, Value};
+use std::path::{Path, PathBuf};
+
+/// Which samples a fit sees, and how they are weighed.
+#[derive(Debug, Clone, clap::Args)]
+pub struct FitOptions {
+    /// Cosine of the retro lobes: `back` (cos_B) or `view` (cos_R = l·v).
+    #[arg(long, value_enum, default_value = "view")]
+    pub param: ParamArg,
+    /// Fit the retro half-space only (|Δφ| ≤ 90°).
+    #[arg(long)]
+    pub retro_only: bool,
+    /// Fit only these incidence angles (degrees, comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub theta_i: Vec<f64>,
+    /// Leave these incidence angles (degrees) out of the fit and report how
+    /// well the fit predicts them (cross-validation, as Zhang et al.).
+    #[arg(long, value_delimiter = ',')]
+    pub holdout_theta_i: Vec<f64>,
+    /// Sample weights in the least-squares sum.
+    #[arg(long, value_enum, default_value = "uniform")]
+    pub weights: Weighting,
+    /// Units the residuals are taken in (default: the file's own).
+    #[arg(long, value_enum)]
+    pub units: Option<Units>,
+    /// Seed of the global search.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ParamArg {
+    Back,
+    View,
+}
+
+impl From<ParamArg> for Param {
+    fn from(p: ParamArg) -> Param {
+        match p {
+            ParamArg::Back => Param::Back,
+            ParamArg::View => Param::View,
+        }
+    }
+}
+
+#[derive(Debug, clap::Args)]
+pub struct FitArgs {
+    /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
+    pub file: PathBuf,
+    /// Model id (models.md): lambert, retro-phong, abc-retro, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param.
+    #[arg(long)]
+    pub model: String,
+    /// Hold a parameter at a value, NAME=V (repeatable).
+    #[arg(long)]
+    pub fix: Vec<String>,
+    /// Write the fit as JSON to this file as well.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    #[command(flatten)]
+    pub options: FitOptions,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct CompareArgs {
+    /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
+    pub file: PathBuf,
+    #[command(flatten)]
+    pub options: FitOptions,
+}
+
+/// The data a fit sees (domain restriction applied), and the held-out part.
+struct Domain {
+    train: Dataset,
+    holdout: Option<Dataset>,
+}
+
+fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
+    let data = formats::load(path)?;
+    let data = data.filter(|s| (!o.retro_only || s.on_retro_side()) && (o.theta_i.is_empty() || theta_in(s.theta_i, &o.theta_i)));
+    let all_angles = data.incidence_angles_deg();
+    let (train, holdout) = if o.holdout_theta_i.is_empty() {
+        (data, None)
+    } else {
+        let h = data.filter(|s| theta_in(s.theta_i, &o.holdout_theta_i));
+        if h.observations.is_empty() {
+            bail!(
+                "no samples at the held-out incidence angles {:?}°; the data has {:?}°",
+                o.holdout_theta_i,
+                all_angles
+            );
+        }
+        (data.filter(|s| !theta_in(s.theta_i, &o.holdout_theta_i)), Some(h))
+    };
+    if train.observations.is_empty() {
+        bail!(
+            "no samples left to fit after the domain restriction (data has θi {:?}°)",
+            all_angles
+        );
+    }
+    Ok(Domain { train, holdout })
+}
+
+fn spec(model: ModelId, fixes: &[String], o: &FitOptions, data: &Dataset) -> Result<FitSpec> {
+    let mut fixed = Vec::new();
+    for f in fixes {
+        let (name, v) = f.split_once('=').with_context(|| format!("--fix `{f}` is not NAME=VALUE"))?;
+        let i = model.param_index(name.trim())?;
+        let v: f64 = v.trim().parse().with_context(|| format!("--fix {name}: `{v}` is not a number"))?;
+        let b = model.bounds()[i];
+        if !(b.lo..=b.hi).contains(&v) {
+            bail!("--fix {name}={v} is outside the model's range [{}, {}]", b.lo, b.hi);
+        }
+        fixed.push((i, v));
+    }
+    Ok(FitSpec {
+        param: o.param.into(),
+        units: o.units.unwrap_or(data.units),
+        weighting: o.weights,
+        fixed,
+        seed: o.seed,
+        ..FitSpec::new(model)
+    })
+}
+
+/// The JSON object of a fit (the contract of issue #6).
+pub fn fit_json(f: &Fit, units: Units, holdout: Option<&fit::Metrics>) -> Value {
+    let m = &f.material;
+    let names = m.model.param_names();
+    let params: Map<String, Value> = names.iter().zip(&m.params).map(|(n, v)| (n.to_string(), json!(v))).collect();
+    let stderr: Map<String, Value> = names.iter().zip(&f.stderr).map(|(n, v)| (n.to_string(), json!(v))).collect();
+    let parametrization = if m.model.has_retro_cosine() { json!(m.param) } else { Value::Null };
+    let mut v = json!({
+        "model": m.model.name(), "parametrization": parametrization, "params": params, "stderr": stderr,
+        "rmse": f.metrics.rmse, "nrmse": f.metrics.nrmse, "ncc": f.metrics.ncc, "l2": f.metrics.l2,
+        "samples": f.samples, "seconds": f.seconds, "units": units,
+    });
+    if let Some(h) = holdout {
+        v["holdout"] = json!(h);
+    }
+    v
+}
+
+struct Outcome {
+    fit: Fit,
+    holdout: Option<fit::Metrics>,
+    json: Value,
+}
+
+fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain) -> Result<Outcome> {
+    let spec = spec(model, fixes, o, &d.train)?;
+    let f = fit::fit(&d.train, &spec).with_context(|| format!("fitting {}", model.name()))?;
+    let holdout = d.holdout.as_ref().map(|h| fit::evaluate(&f.material, h));
+    let json = fit_json(&f, d.train.units, holdout.as_ref());
+    Ok(Outcome { fit: f, holdout, json })
+}
+
+pub fn fit_cmd(a: FitArgs) -> Result<()> {
+    let model = ModelId::parse(&a.model)?;
+    let d = domain(&a.file, &a.options)?;
+    let Outcome { fit: f, holdout, json: v } = run_one(model, &a.fix, &a.options, &d)?;
+    if let Some(out) = &a.out {
+        std::fs::write(out, serde_json::to_string_pretty(&v)? + "\n").with_context(|| format!("cannot write {}", out.display()))?;
+    }
+    if a.options.json {
+        println!("{v}");
+        return Ok(());
+    }
+    println!("{} ({} samples, {:.2} s)", model.name(), f.samples, f.seconds);
+    for ((n, p), e) in model.param_names().iter().zip(&f.material.params).zip(&f.stderr) {
+        match e {
+            Some(e) => println!("  {n:>8} = {p:<14.6e} ± {e:.2e}"),
+            None if a.fix.iter().any(|s| s.split('=').next().map(str::trim) == Some(n)) => println!("  {n:>8} = {p:<14.6e} (fixed)"),
+            None => println!("  {n:>8} = {p:<14.6e}"),
+        }
+    }
+    println!(
+        "  rmse {:.4e}  nrmse {:.4e}  ncc {:.5}  l2 {:.4e}",
+        f.metrics.rmse, f.metrics.nrmse, f.metrics.ncc, f.metrics.l2
+    );
+    if let Some(h) = &holdout {
+        println!(
+            "  held out θi {:?}°: rmse {:.4e}  nrmse {:.4e}  ncc {:.5}",
+            a.options.holdout_theta_i, h.rmse, h.nrmse, h.ncc
+        );
+    }
+    Ok(())
+}
+
+pub fn compare_cmd(a: CompareArgs) -> Result<()> {
+    let d = domain(&a.file, &a.options)?;
+    let bar = crate::scan::progress_bar(ModelId::ALL.len() as u64, a.options.json, "fitting", "models");
+    let mut rows = Vec::new();
+    for model in ModelId::ALL {
+        bar.set_message(model.name());
+        rows.push(run_one(model, &[], &a.options, &d)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    if a.options.json {
+        println!("{}", Value::Array(rows.into_iter().map(|r| r.json).collect()));
+        return Ok(());
+    }
+    println!("{} samples ({:?})", d.train.observations.len(), d.train.units);
+    println!(
+        "{:<16} {:>6} {:>12} {:>12} {:>9} {:>8}",
+        "model", "coeffs", "RMSE", "NRMSE", "NCC", "s"
+    );
+    for r in &rows {
+        let f = &r.fit;
+        let m = &f.metrics;
+        let k = f.material.params.len();
+        println!(
+            "{:<16} {k:>6} {:>12.4e} {:>12.4e} {:>9.5} {:>8.2}",
+            f.material.model.name(),
+            m.rmse,
+            m.nrmse,
+            m.ncc,
+            f.seconds
+        );
+    }
+    Ok(())
+}

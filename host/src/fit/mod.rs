@@ -1,0 +1,195 @@
+//! The fitting engine: every model of `models.md`, bounded least squares
+//! seeded by a global search (no starting point needed), per-sample weights,
+//! domain restriction, fixed parameters, fitting in `f_r` or `f_r·cosθo`,
+//! standard errors, and cross-validation by held-out incidence angles.
+
+pub mod data;
+mod global;
+mod local;
+pub mod metrics;
+mod problem;
+pub mod transform;
+
+pub use data::{Dataset, Observation, Units};
+pub use metrics::Metrics;
+pub use problem::Problem;
+
+use crate::brdf::{Material, ModelId, Param};
+use anyhow::{bail, Result};
+use nalgebra::DMatrix;
+use std::time::Instant;
+
+/// How the samples are weighted in the least-squares sum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Weighting {
+    /// Every sample alike (the metrics' own weighting).
+    Uniform,
+    /// `1/σ` from each sample's uncertainty (the head's noise estimate).
+    Sigma,
+    /// `1/|y|`: relative errors, for data spanning decades.
+    Relative,
+}
+
+/// What to fit and how.
+#[derive(Debug, Clone)]
+pub struct FitSpec {
+    pub model: ModelId,
+    pub param: Param,
+    /// Units the residuals are taken in.
+    pub units: Units,
+    pub weighting: Weighting,
+    /// Parameters held at a value: `(index, value)`.
+    pub fixed: Vec<(usize, f64)>,
+    /// Seed of the global search.
+    pub seed: u64,
+    /// Start here with a local fit only, instead of the global search.
+    pub start: Option<Vec<f64>>,
+}
+
+impl FitSpec {
+    pub fn new(model: ModelId) -> Self {
+        FitSpec {
+            model,
+            param: Param::View,
+            units: Units::Fr,
+            weighting: Weighting::Uniform,
+            fixed: Vec::new(),
+            seed: 1,
+            start: None,
+        }
+    }
+}
+
+/// A fitted model and how well it fits.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    pub material: Material,
+    /// Standard error of each parameter; `None` for fixed ones or where the
+    /// normal matrix is singular.
+    pub stderr: Vec<Option<f64>>,
+    /// Metrics on the fitted samples, in the data's units.
+    pub metrics: Metrics,
+    pub samples: usize,
+    pub seconds: f64,
+    /// Weighted sum of squared residuals at the optimum.
+    pub cost: f64,
+}
+
+/// Builds the least-squares problem of a data set.
+pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
+    let model = spec.model;
+    let n = model.param_names().len();
+    if data.observations.is_empty() {
+        bail!("no samples to fit (after the domain restriction)");
+    }
+    let mut template: Vec<f64> = model.bounds().iter().map(|b| (b.lo + b.hi) / 2.0).collect();
+    for &(i, v) in &spec.fixed {
+        if i >= n || !v.is_finite() {
+            bail!("a fixed parameter must be one of {} and finite", model.param_names().join(", "));
+        }
+        template[i] = v;
+    }
+    let free: Vec<usize> = (0..n).filter(|i| !spec.fixed.iter().any(|(j, _)| j == i)).collect();
+    if free.is_empty() {
+        bail!("every parameter of {} is fixed: nothing to fit", model.name());
+    }
+    let data = data.in_units(spec.units)?;
+    let y: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
+    let floor = 1e-3 * y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let mut weight = Vec::with_capacity(y.len());
+    for (k, o) in data.observations.iter().enumerate() {
+        weight.push(match spec.weighting {
+            Weighting::Uniform => 1.0,
+            Weighting::Relative => 1.0 / y[k].abs().max(floor).max(f64::MIN_POSITIVE),
+            Weighting::Sigma => match o.sigma {
+                Some(s) if s > 0.0 && s.is_finite() => 1.0 / s,
+                _ => bail!(
+                    "--weights sigma needs a positive uncertainty on every sample (sample {} has none)",
+                    k + 1
+                ),
+            },
+        });
+    }
+    Ok(Problem {
+        model,
+        param: spec.param,
+        geos: data.observations.iter().map(Observation::geometry).collect(),
+        scale: data.observations.iter().map(|o| o.unit_factor(spec.units)).collect(),
+        y,
+        weight,
+        template,
+        free,
+    })
+}
+
+/// Fits a model to a data set.
+pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
+    let t0 = Instant::now();
+    let problem = problem(data, spec)?;
+    let x = solve(&problem, spec.start.as_deref(), spec.seed);
+    let material = Material {
+        model: spec.model,
+        params: problem.full(&x),
+        param: spec.param,
+    };
+    let stderr = standard_errors(&problem, &x);
+    let cost = problem.cost(&x);
+    Ok(Fit {
+        metrics: evaluate(&material, data),
+        stderr,
+        samples: data.observations.len(),
+        seconds: t0.elapsed().as_secs_f64(),
+        cost,
+        material,
+    })
+}
+
+/// The free parameters at the optimum: a local fit from `start` (every
+/// parameter, clamped into the bounds), or the seeded global search.
+pub fn solve(problem: &Problem, start: Option<&[f64]>, seed: u64) -> Vec<f64> {
+    match start {
+        Some(start) => {
+            let s: Vec<f64> = problem
+                .free
+                .iter()
+                .zip(problem.bounds())
+                .map(|(&i, b)| start[i].clamp(b.lo, b.hi))
+                .collect();
+            local::minimize(problem, &s).0
+        }
+        None => global::search(problem, seed),
+    }
+}
+
+/// The metrics of a material on a data set, in the data's units.
+pub fn evaluate(material: &Material, data: &Dataset) -> Metrics {
+    let measured: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
+    let model: Vec<f64> = data
+        .observations
+        .iter()
+        .map(|o| o.unit_factor(data.units) * material.eval(&o.directions()))
+        .collect();
+    Metrics::new(&measured, &model)
+}
+
+/// `sqrt(diag(s²(JᵀJ)⁻¹))` with `s² = Σr²/(N − p)`, `J` the weighted
+/// Jacobian in the parameters themselves (not the transformed ones).
+fn standard_errors(problem: &Problem, x: &[f64]) -> Vec<Option<f64>> {
+    let n = problem.template.len();
+    let (r, j) = problem.residuals_and_jacobian(x);
+    let dof = r.len().saturating_sub(x.len());
+    let mut out = vec![None; n];
+    if dof == 0 {
+        return out;
+    }
+    let s2 = r.iter().map(|v| v * v).sum::<f64>() / dof as f64;
+    let normal: DMatrix<f64> = j.transpose() * &j;
+    let Some(inv) = normal.try_inverse() else {
+        return out;
+    };
+    for (k, &i) in problem.free.iter().enumerate() {
+        let v = s2 * inv[(k, k)];
+        out[i] = (v.is_finite() && v >= 0.0).then(|| v.sqrt());
+    }
+    out
+}

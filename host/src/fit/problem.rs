@@ -1,0 +1,152 @@
+//! One least-squares problem: a model, the samples it is fitted to, the
+//! weights, and which parameters are free. Residuals are
+//! `w_k·(s_k·f(g_k; p) − y_k)`, with `s_k` the factor from `f_r` to the
+//! fitting units (1 or `cosθo`), and exact Jacobians by forward-mode
+//! differentiation (`num-dual`).
+
+use crate::brdf::{Bound, Geometry, HandGradient, ModelId, Param};
+use nalgebra::{Const, DMatrix, U1};
+use num_dual::DualSVec64;
+
+#[derive(Debug, Clone)]
+pub struct Problem {
+    pub model: ModelId,
+    pub param: Param,
+    pub geos: Vec<Geometry>,
+    /// Targets in the fitting units.
+    pub y: Vec<f64>,
+    /// `f_r` → fitting units, per sample.
+    pub scale: Vec<f64>,
+    pub weight: Vec<f64>,
+    /// Every parameter; the free ones are overwritten on evaluation.
+    pub template: Vec<f64>,
+    /// Indices of the free parameters.
+    pub free: Vec<usize>,
+}
+
+impl Problem {
+    pub fn bounds(&self) -> Vec<Bound> {
+        let all = self.model.bounds();
+        self.free.iter().map(|&i| all[i]).collect()
+    }
+
+    /// Every parameter, with the free ones set to `x`.
+    pub fn full(&self, x: &[f64]) -> Vec<f64> {
+        let mut p = self.template.clone();
+        for (&i, &v) in self.free.iter().zip(x) {
+            p[i] = v;
+        }
+        p
+    }
+
+    /// Model values in the fitting units.
+    pub fn predict(&self, x: &[f64]) -> Vec<f64> {
+        let p = self.full(x);
+        self.geos
+            .iter()
+            .zip(&self.scale)
+            .map(|(g, s)| s * self.model.eval(g, &p, self.param))
+            .collect()
+    }
+
+    /// Weighted residuals.
+    pub fn residuals(&self, x: &[f64]) -> Vec<f64> {
+        let p = self.full(x);
+        (0..self.geos.len())
+            .map(|k| self.weight[k] * (self.scale[k] * self.model.eval(&self.geos[k], &p, self.param) - self.y[k]))
+            .collect()
+    }
+
+    /// `Σ r²`; infinite where the model overflows.
+    pub fn cost(&self, x: &[f64]) -> f64 {
+        let sum: f64 = self.residuals(x).iter().map(|r| r * r).sum();
+        if sum.is_finite() {
+            sum
+        } else {
+            f64::INFINITY
+        }
+    }
+
+    /// Residuals and `∂r/∂x` for the free parameters. The dual numbers carry
+    /// exactly as many derivatives as there are free parameters (up to the 8
+    /// of `abc-retro`), so a one-parameter fit does not pay for eight.
+    pub fn residuals_and_jacobian(&self, x: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        if let Some(gradient) = self.model.hand_gradient() {
+            return self.hand_jacobian(x, gradient);
+        }
+        match self.free.len() {
+            1 => self.jacobian_n::<1>(x),
+            2 => self.jacobian_n::<2>(x),
+            3 => self.jacobian_n::<3>(x),
+            4 => self.jacobian_n::<4>(x),
+            5 => self.jacobian_n::<5>(x),
+            6 => self.jacobian_n::<6>(x),
+            7 => self.jacobian_n::<7>(x),
+            _ => self.jacobian_n::<8>(x),
+        }
+    }
+
+    fn hand_jacobian(&self, x: &[f64], gradient: HandGradient) -> (Vec<f64>, DMatrix<f64>) {
+        let full = self.full(x);
+        let mut grad = vec![0.0; full.len()];
+        self.weighted_rows(self.free.len(), |g, row| {
+            let f = gradient(g, &full, &mut grad);
+            row.extend(self.free.iter().map(|&i| grad[i]));
+            f
+        })
+    }
+
+    fn jacobian_n<const N: usize>(&self, x: &[f64]) -> (Vec<f64>, DMatrix<f64>) {
+        let full = self.full(x);
+        let mut p: Vec<DualSVec64<N>> = full.iter().map(|&v| DualSVec64::from_re(v)).collect();
+        for (j, &i) in self.free.iter().enumerate() {
+            p[i] = DualSVec64::from_re(full[i]).derivative(j);
+        }
+        self.weighted_rows(N, |g, row| {
+            let f = self.model.eval(g, &p, self.param);
+            row.extend(f.eps.unwrap_generic(Const::<N>, U1).iter());
+            f.re
+        })
+    }
+
+    /// Residuals and Jacobian from `sample`, which returns `f_r` at a
+    /// geometry and appends its `n` derivatives to the row.
+    fn weighted_rows(&self, n: usize, mut sample: impl FnMut(&Geometry, &mut Vec<f64>) -> f64) -> (Vec<f64>, DMatrix<f64>) {
+        let m = self.geos.len();
+        let mut r = Vec::with_capacity(m);
+        let mut rows = Vec::with_capacity(m * n);
+        for k in 0..m {
+            let start = rows.len();
+            let f = sample(&self.geos[k], &mut rows);
+            let ws = self.weight[k] * self.scale[k];
+            rows[start..].iter_mut().for_each(|d| *d *= ws);
+            r.push(self.weight[k] * (self.scale[k] * f - self.y[k]));
+        }
+        (r, DMatrix::from_row_slice(m, n, &rows))
+    }
+
+    /// A problem on about `n` of the samples: the global search's cheap
+    /// proxy. Narrow lobes show only in a few samples near their peaks, which
+    /// a plain stride would miss; so the `n/4` samples of largest weighted
+    /// target are always in, and a stride over the rest fills up.
+    pub fn subset(&self, n: usize) -> Problem {
+        let m = self.geos.len();
+        if m <= n {
+            return self.clone();
+        }
+        let mut by_size: Vec<usize> = (0..m).collect();
+        by_size.sort_by(|&a, &b| (self.weight[b] * self.y[b]).abs().total_cmp(&(self.weight[a] * self.y[a]).abs()));
+        let mut keep = vec![false; m];
+        by_size.iter().take(n / 4).for_each(|&k| keep[k] = true);
+        let stride = m.div_ceil(n - n / 4);
+        (0..m).step_by(stride).for_each(|k| keep[k] = true);
+        let pick = |v: &Vec<f64>| (0..m).filter(|&k| keep[k]).map(|k| v[k]).collect();
+        Problem {
+            geos: (0..m).filter(|&k| keep[k]).map(|k| self.geos[k]).collect(),
+            y: pick(&self.y),
+            scale: pick(&self.scale),
+            weight: pick(&self.weight),
+            ..self.clone()
+        }
+    }
+}

@@ -1,0 +1,63 @@
+//! The project's calibrated sample CSV (`docs/samples-csv.md`): columns found
+//! by name, `theta_i_deg, theta_o_deg, dphi_deg` and either `brdf_sr` (`f_r`)
+//! or `brdf_cos_sr` (`f_r·cosθo`), optionally `brdf_sigma_sr` /
+//! `brdf_cos_sigma_sr`. Other columns (the raw values) are ignored. Rows
+//! flagged as rejected (`flags` with the saturated or weak-signal bits) are
+//! left out when a `usable` column says `false`.
+
+use crate::fit::{Dataset, Observation, Units};
+use anyhow::{anyhow, bail, Context, Result};
+
+pub fn parse(text: &str) -> Result<Dataset> {
+    if text.trim().is_empty() {
+        bail!("line 1: the file is empty");
+    }
+    let mut reader = csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(text.as_bytes());
+    let header = reader.headers().context("line 1: cannot read the CSV header")?.clone();
+    let col = |name: &str| header.iter().position(|h| h == name);
+    let need = |name: &str| col(name).ok_or_else(|| anyhow!("line 1: missing column `{name}`"));
+    let (ti, to, dp) = (need("theta_i_deg")?, need("theta_o_deg")?, need("dphi_deg")?);
+    let (units, value, sigma) = match (col("brdf_sr"), col("brdf_cos_sr")) {
+        (Some(v), _) => (Units::Fr, v, col("brdf_sigma_sr")),
+        (None, Some(v)) => (Units::FrCos, v, col("brdf_cos_sigma_sr")),
+        (None, None) => bail!("line 1: no value column: expected `brdf_sr` (f_r) or `brdf_cos_sr` (f_r·cosθo)"),
+    };
+    let usable = col("usable");
+    let mut observations = Vec::new();
+    for record in reader.records() {
+        let record = record.context("malformed CSV")?;
+        let line = record.position().map(|p| p.line()).unwrap_or(0);
+        let num = |i: usize| -> Result<f64> {
+            let f = record.get(i).unwrap_or("");
+            let v: f64 = f
+                .parse()
+                .map_err(|_| anyhow!("line {line}: column `{}`: `{f}` is not a number", &header[i]))?;
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                bail!("line {line}: column `{}`: `{f}` is not a finite number", &header[i])
+            }
+        };
+        if usable.and_then(|u| record.get(u)) == Some("false") {
+            continue;
+        }
+        observations.push(Observation {
+            theta_i: num(ti)?.to_radians(),
+            theta_o: num(to)?.to_radians(),
+            dphi: num(dp)?.to_radians(),
+            value: num(value)?,
+            sigma: match sigma {
+                Some(s) if !record.get(s).unwrap_or("").is_empty() => Some(num(s)?),
+                _ => None,
+            },
+        });
+    }
+    if observations.is_empty() {
+        bail!("line 2: no data rows");
+    }
+    Ok(Dataset {
+        units,
+        observations,
+        metadata: Vec::new(),
+    })
+}

@@ -1,0 +1,298 @@
+//! `gonio fit`, `compare`, `eval` and `dhr` as a user runs them, on ALTA and
+//! CSV files written here from a known material.
+
+use gonio_host::brdf::{Material, ModelId};
+use gonio_host::fit::{Dataset, Observation, Units};
+use gonio_host::formats::alta;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn gonio(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_gonio"))
+        .args(args)
+        .output()
+        .expect("running gonio")
+}
+
+fn text(o: &Output) -> String {
+    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
+}
+
+/// Noise-free samples of a material on the Belcour grid (θo < 90°).
+fn dataset(m: &Material, units: Units) -> Dataset {
+    let mut observations = Vec::new();
+    for ti in [15.0f64, 30.0, 60.0] {
+        for k in 0..30 {
+            for j in 0..36 {
+                let mut o = Observation {
+                    theta_i: ti.to_radians(),
+                    theta_o: (3.0 * k as f64).to_radians(),
+                    dphi: (-180.0 + 10.0 * j as f64).to_radians(),
+                    value: 0.0,
+                    sigma: None,
+                };
+                o.value = m.eval(&o.directions()) * o.unit_factor(units);
+                observations.push(o);
+            }
+        }
+    }
+    Dataset {
+        units,
+        observations,
+        metadata: vec!["material: synthetic".into()],
+    }
+}
+
+fn tape() -> Material {
+    Material::parse(ModelId::RetroPhong, "kd=0.62,n=24,k1=0.158,k2=0.0415,k3=0.00133,k4=5.47").unwrap()
+}
+
+fn write_alta(dir: &Path, m: &Material, units: Units) -> PathBuf {
+    let p = dir.join("data.dat");
+    std::fs::write(&p, alta::write(&dataset(m, units))).unwrap();
+    p
+}
+
+#[test]
+fn fit_json_has_the_contract_fields_and_recovers_the_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_alta(dir.path(), &tape(), Units::FrCos);
+    let o = gonio(&["fit", file.to_str().unwrap(), "--model", "retro-phong", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    for key in [
+        "model",
+        "parametrization",
+        "params",
+        "stderr",
+        "rmse",
+        "nrmse",
+        "ncc",
+        "l2",
+        "samples",
+        "seconds",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}: {v}");
+    }
+    assert_eq!(v["model"], "retro-phong");
+    assert_eq!(v["parametrization"], "view");
+    assert_eq!(v["samples"], 3240);
+    let names: Vec<&String> = v["params"].as_object().unwrap().keys().collect();
+    assert_eq!(names, ["kd", "n", "k1", "k2", "k3", "k4"]);
+    for (name, want) in ["kd", "n", "k1", "k2", "k3", "k4"].iter().zip(tape().params) {
+        let got = v["params"][name].as_f64().unwrap();
+        assert!((got - want).abs() <= 1e-6 * want.abs(), "{name}: {got} vs {want}");
+    }
+    assert!(v["ncc"].as_f64().unwrap() > 0.999_999);
+}
+
+#[test]
+fn fixed_parameters_stay_put_and_held_out_angles_are_predicted() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_alta(dir.path(), &tape(), Units::Fr);
+    let o = gonio(&[
+        "fit",
+        file.to_str().unwrap(),
+        "--model",
+        "retro-phong",
+        "--fix",
+        "kd=0.62",
+        "--holdout-theta-i",
+        "30",
+        "--retro-only",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["params"]["kd"], 0.62);
+    assert_eq!(v["stderr"]["kd"], Value::Null);
+    // Retro half-space (|Δφ| ≤ 90°: 19 of 36 azimuths) of θi 15° and 60°.
+    assert_eq!(v["samples"], 2 * 30 * 19);
+    assert!(v["holdout"]["ncc"].as_f64().unwrap() > 0.9999, "{v}");
+}
+
+#[test]
+fn compare_lists_every_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_alta(dir.path(), &tape(), Units::Fr);
+    let o = gonio(&["compare", file.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Vec<Value> = serde_json::from_slice(&o.stdout).unwrap();
+    let models: Vec<&str> = v.iter().map(|f| f["model"].as_str().unwrap()).collect();
+    assert_eq!(models, ModelId::ALL.map(|m| m.name()));
+    let best = v
+        .iter()
+        .min_by(|a, b| a["rmse"].as_f64().unwrap().total_cmp(&b["rmse"].as_f64().unwrap()))
+        .unwrap();
+    assert_eq!(best["model"], "retro-phong");
+    let table = gonio(&["compare", file.to_str().unwrap()]);
+    assert!(
+        text(&table).contains("NRMSE") && text(&table).contains("five-param"),
+        "{}",
+        text(&table)
+    );
+}
+
+#[test]
+fn eval_and_dhr() {
+    let o = gonio(&[
+        "eval",
+        "--model",
+        "lambert",
+        "--params",
+        "kd=0.5",
+        "--theta-i",
+        "30",
+        "--theta-o",
+        "10",
+        "--dphi",
+        "-40",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["fr"].as_f64().unwrap() - 0.5 / std::f64::consts::PI).abs() < 1e-15);
+    let o = gonio(&["dhr", "--model", "lambert", "--params", "kd=0.5", "--theta-i", "45", "--json"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["dhr"].as_f64().unwrap() - 0.5).abs() < 1e-4, "{v}");
+    assert_eq!(v["energy_conserving"], true);
+    let o = gonio(&[
+        "dhr",
+        "--model",
+        "retro-phong",
+        "--params",
+        &tape().params_string(),
+        "--theta-i",
+        "60",
+        "--json",
+    ]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["kd_ks_kr"].as_f64().unwrap() < 1.0, "{v}");
+}
+
+#[test]
+fn mistakes_name_the_valid_choices_or_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = write_alta(dir.path(), &tape(), Units::Fr);
+    let g = good.to_str().unwrap();
+    let bad = |name: &str, content: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, content).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let header = "#DIM 3 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN\n#VS 0\n";
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec!["fit".into(), g.into(), "--model".into(), "phong".into()],
+            "valid models: lambert, retro-phong",
+        ),
+        (
+            vec![
+                "fit".into(),
+                g.into(),
+                "--model".into(),
+                "lambert".into(),
+                "--fix".into(),
+                "ks=1".into(),
+            ],
+            "valid: kd",
+        ),
+        (
+            vec![
+                "eval".into(),
+                "--model".into(),
+                "lambert".into(),
+                "--params".into(),
+                "kd=1,q=2".into(),
+                "--theta-i".into(),
+                "1".into(),
+                "--theta-o".into(),
+                "1".into(),
+                "--dphi".into(),
+                "0".into(),
+            ],
+            "valid: kd",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad(
+                    "dim.dat",
+                    "#DIM 2 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN\n0.1 0.2 0.3\n",
+                ),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 4: #DIM says 2 inputs",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad("nan.dat", &format!("{header}0.1 0.2 0.3 0.5\n0.1 0.2 NaN 0.5\n")),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 6: `NaN` is not a finite number",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad("word.dat", &format!("{header}0.1 0.2 abc 0.5\n")),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 5: `abc` is not a number",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad("nohead.dat", "0.1 0.2 0.3 0.5\n"),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 1: data before the header",
+        ),
+        (
+            vec!["fit".into(), bad("empty.dat", ""), "--model".into(), "lambert".into()],
+            "missing header",
+        ),
+        (
+            vec!["fit".into(), bad("empty.csv", ""), "--model".into(), "lambert".into()],
+            "line 1: the file is empty",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad("bad.csv", "theta_i_deg,theta_o_deg,dphi_deg,brdf_sr\n30,10,0,0.2\n30,x,0,0.2\n"),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 3: column `theta_o_deg`: `x` is not a number",
+        ),
+        (
+            vec!["fit".into(), "/nonexistent.dat".into(), "--model".into(), "lambert".into()],
+            "cannot read /nonexistent.dat",
+        ),
+        (
+            vec![
+                "dhr".into(),
+                "--model".into(),
+                "lambert".into(),
+                "--params".into(),
+                "kd=1".into(),
+                "--theta-i".into(),
+                "95".into(),
+            ],
+            "must be in [0, 90)",
+        ),
+    ];
+    for (args, says) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = gonio(&args);
+        let msg = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {msg}");
+        assert!(msg.contains(says), "{args:?}: `{msg}` does not say `{says}`");
+        assert!(!msg.contains("panicked"), "{msg}");
+    }
+}

@@ -1,0 +1,182 @@
+//! `fit-bench`: the fitting engine on synthetic data, against
+//! `scipy.optimize.least_squares` (method `trf`) run in the same benchmark.
+//!
+//! Per model: 7 000 samples at Belcour grid geometries from the reference
+//! parameters (`gonio_tests::synthetic::reference`) with 2 % multiplicative
+//! noise, f_r units, uniform weights. Figures:
+//! - `seconds`, `rmse`, `ncc`: the same fit by both from the same start (the
+//!   centre of the search cube mapped through the bounds), same bounds, same
+//!   data: the engine's bounded LM against `least_squares(method="trf")`
+//!   (`scipy_seconds`, `scipy_rmse`). Both are timed on prepared data: the
+//!   geometry terms are computed once before either clock starts (scipy gets
+//!   them from the engine). Median of 5 runs each. `speedup_vs_scipy =
+//!   scipy_seconds / seconds`, `rmse_ratio_vs_scipy = rmse / scipy_rmse`
+//!   (rounded to 12 decimals);
+//! - `global_seconds`, `global_rmse`: the engine's whole fit with no starting
+//!   point (global search + local fit, seed 1, data preparation included),
+//!   `global_rmse_ratio_vs_scipy`;
+//! - `global_hits`: of 20 seeds of the global search, how many reach the best
+//!   known optimum (the lowest cost any run found, the fit started at the
+//!   truth included) within 1e-6 relative;
+//! - `model_agreement`: largest relative difference between the numpy model
+//!   and the Rust model on the data at the reference parameters.
+//!
+//! Installs scipy with pip if it is missing. Prints one JSON object.
+
+use gonio_host::brdf::{Geometry, ModelId};
+use gonio_host::fit::{self, transform, FitSpec, Problem};
+use gonio_tests::synthetic;
+use serde_json::{json, Map, Value};
+use std::io::Write;
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+const SAMPLES: usize = 7000;
+const NOISE: f64 = 0.02;
+const SEEDS: u64 = 20;
+/// Timed runs of each same-start fit, both sides; the median is reported.
+const REPEATS: usize = 5;
+
+/// RMSE ratios are rounded to 12 decimals: two fits at the same optimum
+/// differ only by the order of summation below that.
+fn round12(x: f64) -> f64 {
+    (x * 1e12).round() / 1e12
+}
+
+fn ensure_scipy() {
+    let ok = |c: &mut Command| c.status().map(|s| s.success()).unwrap_or(false);
+    if !ok(Command::new("python3").args(["-c", "import scipy, numpy"])) {
+        eprintln!("fit-bench: installing scipy with pip");
+        if !ok(Command::new("python3").args(["-m", "pip", "install", "--quiet", "scipy"])) {
+            eprintln!("fit-bench: pip install scipy failed");
+            std::process::exit(1);
+        }
+    }
+}
+
+fn geometry_json(p: &Problem) -> Value {
+    let col = |f: &dyn Fn(&Geometry) -> f64| Value::from(p.geos.iter().map(f).collect::<Vec<f64>>());
+    json!({
+        "cos_i": col(&|g| g.cos_i), "cos_o": col(&|g| g.cos_o), "mirror": col(&|g| g.mirror),
+        "c": col(&|g| g.retro_cos(p.param)), "nh": col(&|g| g.nh), "vh": col(&|g| g.vh), "vpb": col(&|g| g.vpb),
+        "lv_xy": col(&|g| g.lv_xy), "lv_z": col(&|g| g.lv_z), "tan_i": col(&|g| g.tan_i), "tan_o": col(&|g| g.tan_o),
+        "oren_nayar": col(&|g| g.oren_nayar), "one_minus_cos_gamma": col(&|g| g.ln_one_minus_cos_gamma.exp()),
+        "zhang_g_over_cos_o": col(&|g| g.zhang_g_over_cos_o),
+    })
+}
+
+fn scipy(job: &Value) -> Value {
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/python/fit_scipy.py");
+    let mut child = Command::new("python3")
+        .arg(script)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .expect("python3 runs");
+    child
+        .stdin
+        .take()
+        .expect("piped")
+        .write_all(job.to_string().as_bytes())
+        .expect("job written");
+    let out = child.wait_with_output().expect("python3 finishes");
+    assert!(out.status.success(), "fit_scipy.py failed");
+    serde_json::from_slice(&out.stdout).expect("fit_scipy.py prints JSON")
+}
+
+fn rmse(p: &Problem, x: &[f64]) -> f64 {
+    (p.cost(x) / p.y.len() as f64).sqrt()
+}
+
+fn main() {
+    ensure_scipy();
+    let mut report = Map::new();
+    let mut worst = (f64::INFINITY, 0.0f64, SEEDS);
+    for model in ModelId::ALL {
+        let truth = synthetic::reference(model);
+        let data = synthetic::samples(&truth, SAMPLES, NOISE, 7);
+        let spec = FitSpec::new(model);
+        let problem = fit::problem(&data, &spec).expect("synthetic data fit");
+        let bounds = model.bounds();
+        let start: Vec<f64> = bounds.iter().map(|b| transform::from_unit(b, 0.5)).collect();
+        let job = |extra: Value| {
+            let mut j = json!({
+                "model": model.name(), "geometry": geometry_json(&problem), "y": problem.y, "weight": problem.weight,
+                "scale": problem.scale, "start": start, "lo": bounds.iter().map(|b| b.lo).collect::<Vec<_>>(),
+                "hi": bounds.iter().map(|b| b.hi).collect::<Vec<_>>(),
+            });
+            if let (Value::Object(a), Value::Object(b)) = (&mut j, extra) {
+                a.extend(b);
+            }
+            j
+        };
+        let numpy = scipy(&job(json!({ "check": truth.params })));
+        let agreement = numpy["values"]
+            .as_array()
+            .expect("values")
+            .iter()
+            .zip(problem.predict(&truth.params))
+            .map(|(a, b)| (a.as_f64().unwrap_or(f64::NAN) - b).abs() / b.abs().max(1e-12))
+            .fold(0.0, f64::max);
+
+        let full = fit::fit(&data, &spec).expect("fit");
+        let mut times = Vec::new();
+        let mut local = Vec::new();
+        for _ in 0..REPEATS {
+            let t0 = Instant::now();
+            local = fit::solve(&problem, Some(&start), 1);
+            times.push(t0.elapsed().as_secs_f64());
+        }
+        times.sort_by(f64::total_cmp);
+        let local_seconds = times[REPEATS / 2];
+        let sp = scipy(&job(json!({ "repeats": REPEATS })));
+        let sp_params: Vec<f64> = sp["params"]
+            .as_array()
+            .expect("params")
+            .iter()
+            .map(|v| v.as_f64().unwrap_or(f64::NAN))
+            .collect();
+        let sp_seconds = sp["seconds"].as_f64().unwrap_or(f64::NAN);
+        let sp_rmse = rmse(&problem, &sp_params);
+
+        let from_truth = fit::fit(
+            &data,
+            &FitSpec {
+                start: Some(truth.params.clone()),
+                ..spec.clone()
+            },
+        )
+        .expect("fit from truth");
+        let costs: Vec<f64> = (1..=SEEDS)
+            .map(|seed| fit::fit(&data, &FitSpec { seed, ..spec.clone() }).expect("seeded fit").cost)
+            .collect();
+        let best = costs
+            .iter()
+            .copied()
+            .chain([from_truth.cost, full.cost, problem.cost(&local), problem.cost(&sp_params)])
+            .fold(f64::INFINITY, f64::min);
+        let hits = costs.iter().filter(|&&c| c <= best * (1.0 + 1e-6)).count() as u64;
+
+        let global_rmse = rmse(&problem, &problem.free.iter().map(|&i| full.material.params[i]).collect::<Vec<_>>());
+        let local_rmse = rmse(&problem, &local);
+        let speedup = sp_seconds / local_seconds;
+        let ratio = round12(local_rmse / sp_rmse);
+        worst = (worst.0.min(speedup), worst.1.max(ratio), worst.2.min(hits));
+        report.insert(
+            model.name().into(),
+            json!({
+                "seconds": local_seconds, "rmse": local_rmse, "scipy_seconds": sp_seconds, "scipy_rmse": sp_rmse,
+                "scipy_nfev": sp["nfev"], "speedup_vs_scipy": speedup, "rmse_ratio_vs_scipy": ratio,
+                "global_seconds": full.seconds, "global_rmse": global_rmse, "global_rmse_ratio_vs_scipy": round12(global_rmse / sp_rmse),
+                "ncc": full.metrics.ncc, "params": full.material.params,
+                "global_hits": hits, "global_seeds": SEEDS, "model_agreement": agreement,
+            }),
+        );
+    }
+    report.insert("samples".into(), SAMPLES.into());
+    report.insert("noise".into(), NOISE.into());
+    report.insert("min_speedup_vs_scipy".into(), worst.0.into());
+    report.insert("max_rmse_ratio_vs_scipy".into(), worst.1.into());
+    report.insert("min_global_hits".into(), worst.2.into());
+    println!("{}", Value::Object(report));
+}
