@@ -25,6 +25,7 @@ fn every_command_has_help() {
         &["devices", "--help"],
         &["sim", "--help"],
         &["fit", "--help"],
+        &["convert", "--help"],
         &["compare", "--help"],
         &["eval", "--help"],
         &["dhr", "--help"],

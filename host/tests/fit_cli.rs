@@ -113,6 +113,29 @@ fn fixed_parameters_stay_put_and_held_out_angles_are_predicted() {
 }
 
 #[test]
+fn convert_writes_alta_that_reads_back_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("brdf.csv");
+    let mut w = String::from("theta_i_deg,theta_o_deg,dphi_deg,brdf_sr,brdf_sigma_sr\n");
+    for (k, v) in [0.123456789012345f64, 7.5e-3, 41.25].iter().enumerate() {
+        w.push_str(&format!("30,{},{},{v},0.001\n", 10 * k + 5, 40 * k as i32 - 40));
+    }
+    std::fs::write(&csv, w).unwrap();
+    let dat = dir.path().join("out.dat");
+    let o = gonio(&["convert", csv.to_str().unwrap(), dat.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let back = alta::parse(&std::fs::read_to_string(&dat).unwrap()).unwrap();
+    let values: Vec<f64> = back.observations.iter().map(|o| o.value).collect();
+    assert_eq!(values, [0.123456789012345, 7.5e-3, 41.25]);
+    assert!(back.metadata.iter().any(|m| m.contains("converted by gonio")));
+    let o = gonio(&["convert", csv.to_str().unwrap(), dat.to_str().unwrap(), "--units", "fr-cos"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(std::fs::read_to_string(&dat)
+        .unwrap()
+        .contains("#PARAM_OUT INV_STERADIAN_COSINE_FACTOR"));
+}
+
+#[test]
 fn compare_lists_every_model() {
     let dir = tempfile::tempdir().unwrap();
     let file = write_alta(dir.path(), &tape(), Units::Fr);

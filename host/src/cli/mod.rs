@@ -1,5 +1,6 @@
 //! Command-line interface. Angles on the command line are in degrees.
 
+mod convert;
 mod detector;
 mod devices;
 mod fit;
@@ -38,6 +39,8 @@ pub enum Command {
     Fit(fit::FitArgs),
     /// Fit every model to a data file and compare them (RMSE, NRMSE, NCC).
     Compare(fit::CompareArgs),
+    /// Write a data file (ALTA .dat or calibrated CSV) as ALTA text.
+    Convert(convert::ConvertArgs),
     /// Evaluate a model at one geometry.
     Eval(model_eval::EvalArgs),
     /// Directional-hemispherical reflectance of a model, and its energy check.
@@ -57,6 +60,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sim(a) => sim::sim(a),
         Command::Fit(a) => fit::fit_cmd(a),
         Command::Compare(a) => fit::compare_cmd(a),
+        Command::Convert(a) => convert::convert_cmd(a),
         Command::Eval(a) => model_eval::eval_cmd(a),
         Command::Dhr(a) => model_eval::dhr_cmd(a),
     }

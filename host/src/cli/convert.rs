@@ -1,0 +1,33 @@
+//! `gonio convert`: a BRDF data file (ALTA `.dat` or calibrated sample CSV)
+//! written as ALTA text, in the units asked for.
+
+use crate::fit::Units;
+use crate::formats::{self, alta};
+use anyhow::{Context, Result};
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub struct ConvertArgs {
+    /// Input: ALTA text (.dat) or calibrated sample CSV (.csv).
+    pub input: PathBuf,
+    /// Output ALTA file (ISOTROPIC_TL_TV_PROJ_DPHI, #VS 0).
+    pub output: PathBuf,
+    /// Output units (default: the input's).
+    #[arg(long, value_enum)]
+    pub units: Option<Units>,
+}
+
+pub fn convert_cmd(a: ConvertArgs) -> Result<()> {
+    let mut data = formats::load(&a.input)?;
+    if let Some(u) = a.units {
+        data = data.in_units(u)?;
+    }
+    data.metadata.push(format!(
+        "converted by gonio {} from {}",
+        env!("CARGO_PKG_VERSION"),
+        a.input.display()
+    ));
+    std::fs::write(&a.output, alta::write(&data)).with_context(|| format!("cannot write {}", a.output.display()))?;
+    eprintln!("{} samples written to {}", data.observations.len(), a.output.display());
+    Ok(())
+}
