@@ -124,7 +124,9 @@ impl Head {
             .subscribe_exclusive::<ScanEventTopic>(1024)
             .await
             .map_err(|e| anyhow!("cannot subscribe to scan events: {e:?}"))?;
-        let accepted = fault(call::<ScanEndpoint>(&self.client, spec, QUICK).await?).context("scan refused")?;
+        // A scan continued from a later position (resume, drift monitor) has
+        // the head replay its plan up to there first: seconds, not a quick reply.
+        let accepted = fault(call::<ScanEndpoint>(&self.client, spec, MOTION).await?).context("scan refused")?;
         Ok((accepted, sub))
     }
 

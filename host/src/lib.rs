@@ -5,6 +5,7 @@
 //! [`run_record`] store them; [`brdf`] holds the models of `models.md`.
 
 pub mod brdf;
+pub mod calibration;
 pub mod cli;
 pub mod client;
 pub mod fit;

@@ -3,8 +3,8 @@
 
 use crate::client::Head;
 use crate::samples_csv::SampleWriter;
-use anyhow::{bail, Result};
-use gonio_shared::{ScanEvent, ScanSpec};
+use anyhow::{bail, Context, Result};
+use gonio_shared::{Fault, Geometry, ScanEvent, ScanSpec};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -44,13 +44,30 @@ pub fn progress_bar(len: u64, quiet: bool, task: &str, items: &str) -> ProgressB
     pb
 }
 
-/// Runs `spec` to the end, appending every sample to `out`.
-pub async fn run(head: &Head, spec: &ScanSpec, out: &mut SampleWriter, pb: &ProgressBar) -> Result<ScanOutcome> {
+/// A laser-drift monitor: one geometry of the mounted target, measured
+/// before the scan, after every `every` scan positions, and after the scan.
+/// Its readings track the laser's power through the scan (`gonio calibrate`
+/// interpolates them). The scan is paused for it with an abort between two
+/// points and continued from the next position, as a resume would.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, serde::Deserialize)]
+pub struct Monitor {
+    pub at: Geometry,
+    pub every: u32,
+}
+
+/// How a stretch of scan ended.
+enum Stretch {
+    Finished,
+    /// Paused for the monitor; continue at this visit position.
+    Paused(u32),
+}
+
+/// Runs `spec` to the end, appending every sample (and every monitor
+/// reading, a row without scan position) to `out`.
+pub async fn run(head: &Head, spec: &ScanSpec, out: &mut SampleWriter, pb: &ProgressBar, monitor: Option<&Monitor>) -> Result<ScanOutcome> {
     let t0 = Instant::now();
-    let (accepted, mut events) = head.start_scan(spec).await?;
-    pb.set_length((accepted.points - accepted.first_order) as u64);
     let mut outcome = ScanOutcome {
-        points: accepted.points,
+        points: spec.len(),
         measured: 0,
         skipped: 0,
         skipped_by_reason: BTreeMap::new(),
@@ -58,8 +75,82 @@ pub async fn run(head: &Head, spec: &ScanSpec, out: &mut SampleWriter, pb: &Prog
         head_time_s: 0.0,
         wall_time_s: 0.0,
     };
+    let mut clock = HeadClock::default();
+    let mut first = spec.first_order;
+    pb.set_length((outcome.points - first) as u64);
+    loop {
+        if let Some(m) = monitor {
+            read_monitor(head, m, out, &mut clock).await?;
+        }
+        let stop_at = monitor.map(|m| first.saturating_add(m.every.max(1)));
+        let stretch = ScanSpec {
+            first_order: first,
+            ..spec.clone()
+        };
+        match run_stretch(head, &stretch, out, pb, &mut outcome, &mut clock, stop_at).await? {
+            Stretch::Finished => break,
+            Stretch::Paused(next) => first = next,
+        }
+    }
+    if let Some(m) = monitor {
+        read_monitor(head, m, out, &mut clock).await?;
+    }
+    pb.finish_and_clear();
+    outcome.head_time_s = clock.span_s();
+    outcome.wall_time_s = t0.elapsed().as_secs_f64();
+    Ok(outcome)
+}
+
+/// Readings per monitor visit: every sample of the scan is referred to them,
+/// so their noise is averaged down (`gonio calibrate` merges a visit's readings).
+pub const MONITOR_READINGS: usize = 4;
+
+/// One visit to the monitor geometry: a move, then [`MONITOR_READINGS`]
+/// measurements in place.
+async fn read_monitor(head: &Head, m: &Monitor, out: &mut SampleWriter, clock: &mut HeadClock) -> Result<()> {
+    for k in 0..MONITOR_READINGS {
+        let at = (k == 0).then_some(m.at);
+        let s = head.measure(at).await.context("measuring the laser-drift monitor")?;
+        out.push(&s)?;
+        clock.saw(s.timestamp_us);
+    }
+    Ok(())
+}
+
+/// First and last timestamp the head reported (µs).
+#[derive(Default)]
+struct HeadClock {
+    first: Option<u64>,
+    last: u64,
+}
+
+impl HeadClock {
+    fn saw(&mut self, t_us: u64) {
+        self.first.get_or_insert(t_us);
+        self.last = t_us;
+    }
+
+    fn span_s(&self) -> f64 {
+        self.last.saturating_sub(self.first.unwrap_or(self.last)) as f64 * 1e-6
+    }
+}
+
+/// Runs the scan from `spec.first_order`, to the end or, with `stop_at`,
+/// until that visit position has been reached (then aborts it between points).
+async fn run_stretch(
+    head: &Head,
+    spec: &ScanSpec,
+    out: &mut SampleWriter,
+    pb: &ProgressBar,
+    outcome: &mut ScanOutcome,
+    clock: &mut HeadClock,
+    stop_at: Option<u32>,
+) -> Result<Stretch> {
+    let (accepted, mut events) = head.start_scan(spec).await?;
+    outcome.points = accepted.points;
     let mut expected = accepted.first_order;
-    let (mut first_ts, mut last_ts) = (None, 0u64);
+    let (mut measured, mut skipped) = (0, 0);
+    let mut pausing = false;
     loop {
         let ev = match tokio::time::timeout(EVENT_TIMEOUT, events.recv()).await {
             Err(_) => bail!(
@@ -84,35 +175,38 @@ pub async fn run(head: &Head, spec: &ScanSpec, out: &mut SampleWriter, pb: &Prog
         match ev {
             ScanEvent::Sample(s) => {
                 out.push(&s)?;
+                measured += 1;
                 outcome.measured += 1;
                 if s.flags.0 & !gonio_shared::SampleFlags::THROUGH_SPLITTER != 0 {
                     outcome.flagged += 1;
                 }
-                first_ts.get_or_insert(s.timestamp_us);
-                last_ts = s.timestamp_us;
+                clock.saw(s.timestamp_us);
             }
             ScanEvent::Skipped { reason, .. } => {
+                skipped += 1;
                 outcome.skipped += 1;
                 *outcome.skipped_by_reason.entry(reason.to_string()).or_default() += 1;
             }
-            ScanEvent::Finished { measured, skipped } => {
-                if (measured, skipped) != (outcome.measured, outcome.skipped) {
-                    bail!(
-                        "the head counted {measured} measured and {skipped} skipped points, the host {} and {}",
-                        outcome.measured,
-                        outcome.skipped
-                    );
+            ScanEvent::Finished {
+                measured: head_measured,
+                skipped: head_skipped,
+            } => {
+                if (head_measured, head_skipped) != (measured, skipped) {
+                    bail!("the head counted {head_measured} measured and {head_skipped} skipped points, the host {measured} and {skipped}");
                 }
-                break;
+                return Ok(Stretch::Finished);
             }
             ScanEvent::Stopped { next_order, reason } => {
+                if pausing && reason == Fault::Aborted && next_order == expected {
+                    return Ok(Stretch::Paused(next_order));
+                }
                 bail!("the head stopped the scan: {reason}; resume from position {next_order}")
             }
         }
         pb.set_message(format!("{} measured, {} unreachable", outcome.measured, outcome.skipped));
+        if !pausing && stop_at.is_some_and(|p| expected >= p && expected < outcome.points) {
+            head.abort().await.context("pausing the scan for the laser-drift monitor")?;
+            pausing = true;
+        }
     }
-    pb.finish_and_clear();
-    outcome.head_time_s = last_ts.saturating_sub(first_ts.unwrap_or(last_ts)) as f64 * 1e-6;
-    outcome.wall_time_s = t0.elapsed().as_secs_f64();
-    Ok(outcome)
 }

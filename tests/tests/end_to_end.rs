@@ -36,7 +36,7 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
     let dir = tempfile::tempdir().unwrap();
     let spec = small_grid();
     let mut out = SampleWriter::create(dir.path()).unwrap();
-    let outcome = scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true, "scanning", "points"))
+    let outcome = scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true, "scanning", "points"), None)
         .await
         .unwrap();
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
@@ -183,9 +183,15 @@ async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
     assert!(head.identity().simulated);
     assert_eq!(head.identity().protocol_version, PROTOCOL_VERSION);
     let mut out = SampleWriter::create(dir.path()).unwrap();
-    let outcome = scan::run(&head, &small_grid(), &mut out, &scan::progress_bar(0, true, "scanning", "points"))
-        .await
-        .unwrap();
+    let outcome = scan::run(
+        &head,
+        &small_grid(),
+        &mut out,
+        &scan::progress_bar(0, true, "scanning", "points"),
+        None,
+    )
+    .await
+    .unwrap();
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
     assert_eq!(rows.len() as u32, outcome.measured);
     assert_eq!(outcome.measured + outcome.skipped, small_grid().len());

@@ -52,7 +52,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
 
     let dir = tempfile::tempdir().unwrap();
     let mut out = SampleWriter::create(dir.path()).unwrap();
-    scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true, "scanning", "points"))
+    scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true, "scanning", "points"), None)
         .await
         .unwrap();
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();

@@ -56,21 +56,23 @@ impl DetectorArgs {
         let at = match &self.calibrate_at {
             None if settings.reference == Reference::Matched => bail!("--reference matched needs --calibrate-at TI,TO,DPHI"),
             None => None,
-            Some(s) => {
-                let v: Vec<f32> = s
-                    .split(',')
-                    .map(|x| {
-                        x.trim()
-                            .parse::<f32>()
-                            .with_context(|| format!("--calibrate-at: `{x}` is not a number"))
-                    })
-                    .collect::<Result<_>>()?;
-                let [ti, to, dp] = v[..] else {
-                    bail!("--calibrate-at takes THETA_I,THETA_O,DPHI");
-                };
-                Some(Geometry::new(ti, to, dp))
-            }
+            Some(s) => Some(parse_geometry(s).context("--calibrate-at")?),
         };
         Ok((settings, at))
     }
+}
+
+/// `THETA_I,THETA_O,DPHI` in degrees (the head refuses what it cannot reach).
+pub fn parse_geometry(s: &str) -> Result<Geometry> {
+    let v: Vec<f32> = s
+        .split(',')
+        .map(|x| x.trim().parse::<f32>().with_context(|| format!("`{x}` is not a number")))
+        .collect::<Result<_>>()?;
+    let [ti, to, dp] = v[..] else {
+        bail!("takes THETA_I,THETA_O,DPHI (degrees), got `{s}`");
+    };
+    if v.iter().any(|x| !x.is_finite()) {
+        bail!("angles must be finite, got `{s}`");
+    }
+    Ok(Geometry::new(ti, to, dp))
 }

@@ -15,6 +15,14 @@ pub struct SimHeadArgs {
     /// Seed of the simulated head's noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Laser power drift of the simulated head: relative amplitude of a
+    /// one-hour sinusoid (0.05 = ±5 %).
+    #[arg(long, default_value_t = 0.0)]
+    pub laser_drift: f64,
+    /// The simulated head's clock at power-up (s), to continue the time (and
+    /// the drift) of an earlier run, e.g. the reference plate's.
+    #[arg(long, default_value_t = 0.0)]
+    pub clock_start_s: f64,
 }
 
 impl SimHeadArgs {
@@ -25,10 +33,19 @@ impl SimHeadArgs {
             None if model == ModelId::RetroPhong => Material::tape(),
             None => bail!("--params is required for --material {}", model.name()),
         };
-        Ok(SimConfig {
+        if !(0.0..0.5).contains(&self.laser_drift) {
+            bail!("--laser-drift {} must be in [0, 0.5)", self.laser_drift);
+        }
+        if !(self.clock_start_s.is_finite() && self.clock_start_s >= 0.0) {
+            bail!("--clock-start-s must be a finite time ≥ 0");
+        }
+        let mut cfg = SimConfig {
             material,
             seed: self.seed,
+            clock_start_s: self.clock_start_s,
             ..SimConfig::default()
-        })
+        };
+        cfg.photodiode.laser_drift = self.laser_drift;
+        Ok(cfg)
     }
 }

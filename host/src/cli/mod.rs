@@ -1,5 +1,6 @@
 //! Command-line interface. Angles on the command line are in degrees.
 
+mod calibrate;
 mod convert;
 mod detector;
 mod devices;
@@ -8,6 +9,7 @@ mod grid;
 mod material;
 mod model_eval;
 mod plan;
+mod reference;
 mod scan;
 mod sim;
 
@@ -35,6 +37,8 @@ pub enum Command {
     Devices(devices::DevicesArgs),
     /// Run a simulated head on a pseudo-terminal, for `gonio scan --port PATH`.
     Sim(sim::SimArgs),
+    /// Turn a scan into BRDF values with a reference-plate scan, correcting laser drift.
+    Calibrate(calibrate::CalibrateArgs),
     /// Fit one model to a data file (ALTA .dat or calibrated CSV), no starting point needed.
     Fit(fit::FitArgs),
     /// Fit every model to a data file and compare them (RMSE, NRMSE, NCC).
@@ -58,6 +62,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Scan(a) => rt.block_on(scan::scan(a)),
         Command::Devices(a) => devices::devices(a),
         Command::Sim(a) => sim::sim(a),
+        Command::Calibrate(a) => calibrate::calibrate_cmd(a),
         Command::Fit(a) => fit::fit_cmd(a),
         Command::Compare(a) => fit::compare_cmd(a),
         Command::Convert(a) => convert::convert_cmd(a),

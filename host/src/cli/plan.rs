@@ -4,6 +4,7 @@
 use super::detector::DetectorArgs;
 use crate::brdf::Material;
 use crate::client::Target;
+use crate::scan::Monitor;
 use crate::sim::SimConfig;
 use anyhow::{Context, Result};
 use gonio_shared::ScanSpec;
@@ -14,8 +15,17 @@ use std::path::Path;
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]
 pub enum PlanTarget {
-    Sim { material: Material, seed: u64 },
-    Port { path: String },
+    Sim {
+        material: Material,
+        seed: u64,
+        #[serde(default)]
+        laser_drift: f64,
+        #[serde(default)]
+        clock_start_s: f64,
+    },
+    Port {
+        path: String,
+    },
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -23,6 +33,13 @@ pub struct ScanPlan {
     pub target: PlanTarget,
     pub spec: ScanSpec,
     pub detector: DetectorArgs,
+    /// Laser-drift monitor: a geometry measured before, every so many points
+    /// during, and after the scan.
+    #[serde(default)]
+    pub monitor: Option<Monitor>,
+    /// Measure the reference plate before the scan (`reference.csv`).
+    #[serde(default)]
+    pub reference_plate: bool,
 }
 
 const FILE: &str = "scan.json";
@@ -33,6 +50,8 @@ impl ScanPlan {
             Target::Sim(c) => PlanTarget::Sim {
                 material: c.material.clone(),
                 seed: c.seed,
+                laser_drift: c.photodiode.laser_drift,
+                clock_start_s: c.clock_start_s,
             },
             Target::Port(p) => PlanTarget::Port { path: p.clone() },
         };
@@ -40,16 +59,28 @@ impl ScanPlan {
             target,
             spec: spec.clone(),
             detector: detector.clone(),
+            monitor: None,
+            reference_plate: false,
         }
     }
 
     pub fn target(&self) -> Target {
         match &self.target {
-            PlanTarget::Sim { material, seed } => Target::Sim(SimConfig {
-                material: material.clone(),
-                seed: *seed,
-                ..SimConfig::default()
-            }),
+            PlanTarget::Sim {
+                material,
+                seed,
+                laser_drift,
+                clock_start_s,
+            } => {
+                let mut c = SimConfig {
+                    material: material.clone(),
+                    seed: *seed,
+                    clock_start_s: *clock_start_s,
+                    ..SimConfig::default()
+                };
+                c.photodiode.laser_drift = *laser_drift;
+                Target::Sim(c)
+            }
             PlanTarget::Port { path } => Target::Port(path.clone()),
         }
     }

@@ -4,10 +4,11 @@ use super::detector::DetectorArgs;
 use super::grid::GridArgs;
 use super::material::SimHeadArgs;
 use super::plan::{PlanTarget, ScanPlan};
+use super::reference;
 use crate::client::{Head, Target};
 use crate::run_record::RunRecord;
 use crate::samples_csv::{stored_rows, SampleWriter};
-use crate::scan::{self, ScanOutcome};
+use crate::scan::{self, Monitor, ScanOutcome};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
 use gonio_firmware::board::REFERENCE;
@@ -61,6 +62,19 @@ pub struct ScanArgs {
     pub resume: Option<PathBuf>,
     #[command(flatten)]
     pub grid: GridArgs,
+    /// Laser-drift monitor geometry θi,θo,Δφ (degrees), measured before, during
+    /// and after the scan; `gonio calibrate` corrects the drift with it.
+    #[arg(long, value_name = "TI,TO,DPHI")]
+    pub monitor: Option<String>,
+    /// Scan positions between two monitor readings (each pause has the head
+    /// replay its plan to continue, so not too few).
+    #[arg(long, default_value_t = 500, requires = "monitor")]
+    pub monitor_every: u32,
+    /// Measure the Lambertian reference plate first (written to
+    /// reference.csv), then the sample: the operator is asked to swap them
+    /// (the simulated head swaps them itself). For `gonio calibrate`.
+    #[arg(long)]
+    pub reference_plate: bool,
     #[command(flatten)]
     pub detector: DetectorArgs,
     #[command(flatten)]
@@ -92,7 +106,17 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         (None, true) => Target::Sim(a.sim_head.config()?),
         (None, false) => bail!("one of --sim or --port is required"),
     };
-    let plan = ScanPlan::new(&target, &a.grid.spec()?, &a.detector);
+    let mut plan = ScanPlan::new(&target, &a.grid.spec()?, &a.detector);
+    if let Some(m) = &a.monitor {
+        if a.monitor_every == 0 {
+            bail!("--monitor-every must be at least 1");
+        }
+        plan.monitor = Some(Monitor {
+            at: super::detector::parse_geometry(m).context("--monitor")?,
+            every: a.monitor_every,
+        });
+    }
+    plan.reference_plate = a.reference_plate;
     let out = a.out.context("--out is required")?;
     scan_to_dir(&plan, &out, &a.output, None).await
 }
@@ -169,6 +193,9 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         None => None,
     };
     let detection = head.detection(settings).await?;
+    if plan.reference_plate && resume.is_none() {
+        reference::measure_plate(&head, &target, dir, json).await?;
+    }
     let estimate = estimate_s(spec, &detection);
     if !json {
         eprintln!(
@@ -189,11 +216,11 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         None => SampleWriter::create(dir)?,
     };
     let pb = scan::progress_bar(spec.len() as u64, json, "scanning", "points");
-    let mut outcome = scan::run(&head, spec, &mut writer, &pb).await?;
+    let mut outcome = scan::run(&head, spec, &mut writer, &pb, plan.monitor.as_ref()).await?;
     let samples = writer.finish()?;
     if resume.is_some() {
         // Counts of the whole scan, not only of this session.
-        outcome.measured = crate::samples_csv::read(&samples)?.len() as u32;
+        outcome.measured = crate::samples_csv::read(&samples)?.iter().filter(|r| r.index.is_some()).count() as u32;
         outcome.skipped = outcome.points - outcome.measured;
     }
     let material = match &target {

@@ -119,7 +119,7 @@ impl AdcStream for SimAdc {
         let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64;
         let vref = w.cfg.detector.adc_vref as f64;
         let sig_a = if w.laser {
-            w.photodiode.signal_a(&w.material, &w.cfg, w.angles(), |d| w.defect(d))
+            w.photodiode.signal_a(w.target(), &w.cfg, w.angles(), |d| w.defect(d)) * w.photodiode.laser_factor(w.t_s)
         } else {
             0.0
         };

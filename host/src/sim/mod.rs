@@ -33,6 +33,31 @@ pub struct SimConfig {
     pub protocol_version: u16,
     /// Dust specks on the sample (see [`World::defect`]).
     pub dust: Vec<gonio_shared::Geometry>,
+    /// The head's clock at power-up (s): a run that follows another on the
+    /// same lab day (the reference plate, then the sample) continues its time,
+    /// and with it the laser's drift.
+    pub clock_start_s: f64,
+    /// What is on the sample holder: the operator's hand in the simulation.
+    pub mount: Mount,
+}
+
+/// Which target sits on the sample holder. Shared between the host (the
+/// operator swapping the sample for the reference plate) and the simulated
+/// head, which stays powered and homed meanwhile.
+#[derive(Debug, Clone, Default)]
+pub struct Mount(std::sync::Arc<std::sync::atomic::AtomicBool>);
+
+/// Hemispherical reflectance of the simulated head's reference plate (Spectralon).
+pub const PLATE_RHO: f64 = 0.99;
+
+impl Mount {
+    pub fn set_plate(&self, plate: bool) {
+        self.0.store(plate, std::sync::atomic::Ordering::SeqCst);
+    }
+
+    pub fn plate(&self) -> bool {
+        self.0.load(std::sync::atomic::Ordering::SeqCst)
+    }
 }
 
 impl Default for SimConfig {
@@ -43,6 +68,8 @@ impl Default for SimConfig {
             seed: 1,
             protocol_version: PROTOCOL_VERSION,
             dust: Vec::new(),
+            clock_start_s: 0.0,
+            mount: Mount::default(),
         }
     }
 }

@@ -35,6 +35,10 @@ pub struct Photodiode {
     pub offset_wander_s: f64,
     /// First-order time constant of the amplifier (s).
     pub tau_s: f64,
+    /// Laser power drift: relative amplitude and period (s) of a slow
+    /// sinusoid in the head's clock (a diode laser warming up and cycling).
+    pub laser_drift: f64,
+    pub laser_drift_period_s: f64,
 }
 
 impl Default for Photodiode {
@@ -53,6 +57,8 @@ impl Default for Photodiode {
             offset_wander_v: 0.005,
             offset_wander_s: 600.0,
             tau_s: 80.0e-6,
+            laser_drift: 0.0,
+            laser_drift_period_s: 3600.0,
         }
     }
 }
@@ -101,6 +107,11 @@ impl Photodiode {
             1.0
         };
         self.laser_w * self.responsivity_a_per_w * material.eval(&d) * defect(&d) * d.cos_o() * self.solid_angle_sr * splitter
+    }
+
+    /// Laser power at time `t` relative to its nominal value.
+    pub fn laser_factor(&self, t: f64) -> f64 {
+        1.0 + self.laser_drift * (std::f64::consts::TAU * t / self.laser_drift_period_s).sin()
     }
 
     /// Offset, its slow drift, pickup and noise (V) at time `t`.

@@ -34,6 +34,9 @@ pub struct World {
     /// Running chop timer and the time its current period started.
     pub chop: Option<ChopTiming>,
     pub material: Material,
+    /// The reference plate (Lambertian, `PLATE_RHO`) and whether it is mounted.
+    pub plate: Material,
+    pub mount: super::Mount,
     pub photodiode: Photodiode,
     /// Dust specks: direction pairs (θi, θo, |Δφ| in degrees) that reflect
     /// [`DUST_FACTOR`] times the material's value.
@@ -42,6 +45,15 @@ pub struct World {
 }
 
 impl World {
+    /// The target on the holder.
+    pub fn target(&self) -> &Material {
+        if self.mount.plate() {
+            &self.plate
+        } else {
+            &self.material
+        }
+    }
+
     pub fn new(cfg: HeadConfig, sim: &SimConfig) -> Self {
         // Power-up: the stages are wherever they were left.
         let start = [12.3f32, -4.0, 33.0];
@@ -55,7 +67,7 @@ impl World {
         });
         World {
             cfg,
-            t_s: 0.0,
+            t_s: sim.clock_start_s,
             steps,
             stops,
             dir_positive: [true; 3],
@@ -64,6 +76,8 @@ impl World {
             laser: false,
             chop: None,
             material: sim.material.clone(),
+            plate: Material::parse(crate::brdf::ModelId::Lambert, &format!("kd={}", super::PLATE_RHO)).expect("a valid Lambertian"),
+            mount: sim.mount.clone(),
             photodiode: sim.photodiode.clone(),
             dust: sim.dust.clone(),
             rng: StdRng::seed_from_u64(sim.seed),

@@ -1,0 +1,71 @@
+//! The reference-plate step of `gonio scan --reference-plate`: the plate is
+//! mounted, measured at a few geometries inside and outside the beam
+//! splitter's zone, and swapped for the sample, with the head homed and the
+//! laser's clock running throughout (so `gonio calibrate` can tie the
+//! plate's scale to the sample's drift monitor without a gap).
+
+use crate::client::{Head, Target};
+use crate::samples_csv::Row;
+use anyhow::{Context, Result};
+use gonio_shared::Geometry;
+use std::path::Path;
+
+/// File of the plate's samples in a scan directory.
+pub const FILE: &str = "reference.csv";
+
+/// Plate geometries (θi, θo, Δφ in degrees): pure retroreflection (through
+/// the splitter) and off-retro directions clear of the blind zone.
+const PLATE_POINTS: [(f32, f32, f32); 16] = [
+    (15.0, 15.0, 0.0),
+    (30.0, 30.0, 0.0),
+    (45.0, 45.0, 0.0),
+    (60.0, 60.0, 0.0),
+    (30.0, 0.0, 0.0),
+    (30.0, 20.0, 90.0),
+    (30.0, 40.0, 90.0),
+    (30.0, 60.0, 90.0),
+    (30.0, 20.0, 180.0),
+    (30.0, 40.0, 180.0),
+    (30.0, 60.0, 180.0),
+    (15.0, 45.0, 180.0),
+    (45.0, 15.0, 90.0),
+    (60.0, 30.0, 180.0),
+    (60.0, 10.0, 90.0),
+    (15.0, 60.0, 0.0),
+];
+
+/// Asks the operator (or the simulation) to put `what` on the holder.
+fn mount(target: &Target, plate: bool, json: bool) -> Result<()> {
+    match target {
+        Target::Sim(c) => c.mount.set_plate(plate),
+        Target::Port(_) => {
+            let what = if plate { "the reference plate" } else { "the sample" };
+            if !json {
+                eprintln!("mount {what} on the holder and press Enter");
+            }
+            let mut line = String::new();
+            std::io::stdin().read_line(&mut line).context("waiting for the operator")?;
+        }
+    }
+    Ok(())
+}
+
+/// Measures the plate, writes `reference.csv`, and puts the sample back.
+pub async fn measure_plate(head: &Head, target: &Target, dir: &Path, json: bool) -> Result<()> {
+    mount(target, true, json)?;
+    let path = dir.join(FILE);
+    let mut w = csv::Writer::from_path(&path).with_context(|| format!("creating {}", path.display()))?;
+    for (ti, to, dp) in PLATE_POINTS {
+        let s = head
+            .measure(Some(Geometry::new(ti, to, dp)))
+            .await
+            .with_context(|| format!("measuring the reference plate at ({ti}°, {to}°, {dp}°)"))?;
+        w.serialize(Row::from(&s))?;
+    }
+    w.flush().with_context(|| format!("writing {}", path.display()))?;
+    mount(target, false, json)?;
+    if !json {
+        eprintln!("reference plate measured at {} geometries: {}", PLATE_POINTS.len(), path.display());
+    }
+    Ok(())
+}
