@@ -11,6 +11,7 @@ pub mod client;
 pub mod fit;
 pub mod formats;
 pub mod link;
+pub mod plot;
 pub mod run_record;
 pub mod samples_csv;
 pub mod scan;

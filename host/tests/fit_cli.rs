@@ -135,6 +135,64 @@ fn convert_writes_alta_that_reads_back_exactly() {
         .contains("#PARAM_OUT INV_STERADIAN_COSINE_FACTOR"));
 }
 
+/// Plot structure, not pixels: every picture in both formats, not blank, and
+/// one curve (plus its legend line) per fit in the incidence-plane plots.
+#[test]
+fn fit_and_plot_draw_every_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_alta(dir.path(), &tape(), Units::Fr);
+    let f = file.to_str().unwrap();
+    let (fit_a, fit_b) = (dir.path().join("a.json"), dir.path().join("b.json"));
+    let plots = dir.path().join("fit-plots");
+    let o = gonio(&[
+        "fit",
+        f,
+        "--model",
+        "retro-phong",
+        "--out",
+        fit_a.to_str().unwrap(),
+        "--plot",
+        plots.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = gonio(&["fit", f, "--model", "lambert", "--out", fit_b.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let both = dir.path().join("both");
+    let o = gonio(&[
+        "plot",
+        f,
+        "--out",
+        both.to_str().unwrap(),
+        "--fit",
+        fit_a.to_str().unwrap(),
+        "--fit",
+        fit_b.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    for (d, fits) in [(&plots, 1), (&both, 2)] {
+        for ti in ["15", "30", "60"] {
+            for kind in ["plane", "hemisphere", "residuals"] {
+                let png = d.join(format!("{kind}-{ti}.png"));
+                let svg = d.join(format!("{kind}-{ti}.svg"));
+                // A blank 720×720 PNG compresses to a few kB.
+                assert!(std::fs::metadata(&png).unwrap().len() > 20_000, "{} too small", png.display());
+                assert!(std::fs::metadata(&svg).unwrap().len() > 5_000, "{}", svg.display());
+            }
+            let svg = std::fs::read_to_string(d.join(format!("plane-{ti}.svg"))).unwrap();
+            for (k, color) in ["#D62728", "#1F77B4"].iter().enumerate() {
+                let curves = svg
+                    .matches(&format!("<polyline fill=\"none\" opacity=\"1\" stroke=\"{color}\""))
+                    .count();
+                assert_eq!(curves, if k < fits { 2 } else { 0 }, "θi {ti}: curves of fit {k}");
+            }
+            assert!(
+                svg.contains("\nretro\n") && svg.contains("\nmirror\n"),
+                "retro and mirror directions marked"
+            );
+        }
+    }
+}
+
 #[test]
 fn compare_lists_every_model() {
     let dir = tempfile::tempdir().unwrap();

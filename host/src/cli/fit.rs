@@ -66,6 +66,9 @@ pub struct FitArgs {
     /// Write the fit as JSON to this file as well.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Draw the data and the fit into this directory (PNG and SVG).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
     #[command(flatten)]
     pub options: FitOptions,
 }
@@ -170,6 +173,9 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let Outcome { fit: f, holdout, json: v } = run_one(model, &a.fix, &a.options, &d)?;
     if let Some(out) = &a.out {
         std::fs::write(out, serde_json::to_string_pretty(&v)? + "\n").with_context(|| format!("cannot write {}", out.display()))?;
+    }
+    if let Some(dir) = &a.plot {
+        crate::plot::render(&d.train, std::slice::from_ref(&f.material), dir)?;
     }
     if a.options.json {
         println!("{v}");

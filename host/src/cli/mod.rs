@@ -9,6 +9,7 @@ mod grid;
 mod material;
 mod model_eval;
 mod plan;
+mod plot;
 mod reference;
 mod scan;
 mod sim;
@@ -43,6 +44,8 @@ pub enum Command {
     Fit(fit::FitArgs),
     /// Fit every model to a data file and compare them (RMSE, NRMSE, NCC).
     Compare(fit::CompareArgs),
+    /// Pictures of a data file and fits: incidence-plane, hemisphere and residual plots.
+    Plot(plot::PlotArgs),
     /// Write a data file (ALTA .dat or calibrated CSV) as ALTA text.
     Convert(convert::ConvertArgs),
     /// Evaluate a model at one geometry.
@@ -66,6 +69,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Fit(a) => fit::fit_cmd(a),
         Command::Compare(a) => fit::compare_cmd(a),
         Command::Convert(a) => convert::convert_cmd(a),
+        Command::Plot(a) => plot::plot_cmd(a),
         Command::Eval(a) => model_eval::eval_cmd(a),
         Command::Dhr(a) => model_eval::dhr_cmd(a),
     }
