@@ -73,7 +73,7 @@ pub fn minimize(problem: &Problem, start: &[f64]) -> (Vec<f64>, usize) {
     if !s.cost.is_finite() {
         return (start.to_vec(), evaluations);
     }
-    let (mut lambda, mut nu) = (1e-6, 10.0);
+    let (mut lambda, mut nu) = (1e-3, 10.0);
     let mut scale = DVector::zeros(start.len());
     'outer: for _ in 0..MAX_ITERATIONS {
         let j = match s.j.take() {
