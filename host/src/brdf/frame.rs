@@ -76,12 +76,4 @@ impl Directions {
     pub fn back(&self) -> [f64; 3] {
         unit_sum(self.reflected_v(), self.l)
     }
-
-    /// The retro lobe's cosine in a parametrization.
-    pub fn retro_cos(&self, p: Param) -> f64 {
-        match p {
-            Param::Back => self.back()[2],
-            Param::View => dot(self.l, self.v).max(0.0),
-        }
-    }
 }

@@ -40,6 +40,6 @@ pub fn search(problem: &Problem, seed: u64) -> Vec<f64> {
         None => vec![0.5; n],
     };
     // Polish on the thinned data first (cheap), then on everything.
-    let (x, _) = local::minimize(&thin, &to_x(&z));
-    local::minimize(problem, &x).0
+    let x = local::minimize(&thin, &to_x(&z));
+    local::minimize(problem, &x)
 }

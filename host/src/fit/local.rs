@@ -34,18 +34,16 @@ struct State {
 }
 
 /// Minimises from `start` (free parameters, inside the bounds); returns the
-/// free parameters at the minimum and the number of model evaluations.
+/// free parameters at the minimum.
 ///
 /// A trial point right after an accepted step is evaluated with its Jacobian
 /// (one pass gives both), since it is usually accepted too; after a
 /// rejection only the residuals are taken, since more rejections tend to
 /// follow while the damping grows.
-pub fn minimize(problem: &Problem, start: &[f64]) -> (Vec<f64>, usize) {
+pub fn minimize(problem: &Problem, start: &[f64]) -> Vec<f64> {
     let bounds = problem.bounds();
     let external = |u: &DVector<f64>| -> Vec<f64> { bounds.iter().zip(u.iter()).map(|(b, &u)| to_external(b, u)).collect() };
-    let mut evaluations = 0;
-    let mut evaluate = |u: DVector<f64>, with_jacobian: bool| {
-        evaluations += 1;
+    let evaluate = |u: DVector<f64>, with_jacobian: bool| {
         let x = external(&u);
         let (r, j) = if with_jacobian {
             let (r, mut j) = problem.residuals_and_jacobian(&x);
@@ -71,7 +69,7 @@ pub fn minimize(problem: &Problem, start: &[f64]) -> (Vec<f64>, usize) {
         true,
     );
     if !s.cost.is_finite() {
-        return (start.to_vec(), evaluations);
+        return start.to_vec();
     }
     let (mut lambda, mut nu) = (1e-3, 10.0);
     let mut scale = DVector::zeros(start.len());
@@ -140,5 +138,5 @@ pub fn minimize(problem: &Problem, start: &[f64]) -> (Vec<f64>, usize) {
             }
         }
     }
-    (external(&s.u), evaluations)
+    external(&s.u)
 }

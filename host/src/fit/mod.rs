@@ -155,7 +155,7 @@ pub fn solve(problem: &Problem, start: Option<&[f64]>, seed: u64) -> Vec<f64> {
                 .zip(problem.bounds())
                 .map(|(&i, b)| start[i].clamp(b.lo, b.hi))
                 .collect();
-            local::minimize(problem, &s).0
+            local::minimize(problem, &s)
         }
         None => global::search(problem, seed),
     }
