@@ -6,18 +6,8 @@ use gonio_host::brdf::{Directions, Material};
 use gonio_host::calibration::Calibration;
 use gonio_host::samples_csv::{self, Row};
 use std::path::Path;
-use std::process::{Command, Output};
-
-fn gonio(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gonio"))
-        .args(args)
-        .output()
-        .expect("running gonio")
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
+mod common;
+use common::{gonio, text};
 
 fn truth(r: &Row) -> f64 {
     Material::tape().eval(&Directions::from_degrees(

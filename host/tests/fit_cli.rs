@@ -6,18 +6,8 @@ use gonio_host::fit::{Dataset, Observation, Units};
 use gonio_host::formats::alta;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn gonio(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_gonio"))
-        .args(args)
-        .output()
-        .expect("running gonio")
-}
-
-fn text(o: &Output) -> String {
-    format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
-}
+mod common;
+use common::{gonio, text};
 
 /// Noise-free samples of a material on the Belcour grid (θo < 90°).
 fn dataset(m: &Material, units: Units) -> Dataset {
