@@ -12,6 +12,7 @@ pub mod fit;
 pub mod formats;
 pub mod link;
 pub mod plot;
+pub mod report;
 pub mod run_record;
 pub mod samples_csv;
 pub mod scan;

@@ -19,6 +19,9 @@ fn every_command_has_help() {
         &["fit", "--help"],
         &["convert", "--help"],
         &["compare", "--help"],
+        &["calibrate", "--help"],
+        &["plot", "--help"],
+        &["export", "--help"],
         &["eval", "--help"],
         &["dhr", "--help"],
     ] {
@@ -82,6 +85,8 @@ fn csv_indices(path: &Path) -> Vec<u32> {
     lines.map(|l| l.split(',').nth(col).unwrap().parse().unwrap()).collect()
 }
 
+/// The demo's whole chain: scan (once per reachable point), calibration,
+/// comparison, report.
 #[test]
 fn demo_scans_the_belcour_grid_once_per_reachable_point() {
     let dir = tempfile::tempdir().unwrap();
@@ -107,6 +112,17 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
     assert_eq!(run["grid"]["points"].as_u64(), Some(points));
     assert_eq!(run["head"]["simulated"], true);
     assert!(!out.join("samples.csv.part").exists());
+    // Calibrated on the virtual plate, every model fitted, the true one best.
+    assert_eq!(summary["calibration"]["usable"].as_u64(), Some(measured));
+    assert_eq!(summary["models"].as_array().unwrap().len(), 8);
+    assert_eq!(summary["best_model"], "retro-phong", "{summary}");
+    let models: Vec<&str> = summary["models"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|m| m["model"].as_str().unwrap())
+        .collect();
+    common::check_report(&out, &models, &["15", "30", "60"]);
     // A second demo into the same directory is refused rather than mixed in.
     let again = gonio(&["demo", "--out", out.to_str().unwrap()]);
     assert!(!again.status.success());

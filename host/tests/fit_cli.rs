@@ -147,6 +147,15 @@ fn fit_and_plot_draw_every_picture() {
     assert!(o.status.success(), "{}", text(&o));
     let o = gonio(&["fit", f, "--model", "lambert", "--out", fit_b.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
+    // The fit as a BRDF Explorer shader (its GLSL is checked in tests/tests/brdf_export.rs).
+    let brdf = dir.path().join("a.brdf");
+    let o = gonio(&["export", fit_a.to_str().unwrap(), brdf.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let shader = std::fs::read_to_string(&brdf).unwrap();
+    assert!(shader.starts_with("analytic\n") && shader.contains("vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)"));
+    for name in ModelId::RetroPhong.param_names() {
+        assert!(shader.contains(&format!("\nfloat {name} ")), "parameter line of {name}");
+    }
     let both = dir.path().join("both");
     let o = gonio(&[
         "plot",
@@ -183,6 +192,8 @@ fn fit_and_plot_draw_every_picture() {
     }
 }
 
+/// The comparison as JSON, as a table, and as `report.html` (with every fit
+/// and its shader beside it).
 #[test]
 fn compare_lists_every_model() {
     let dir = tempfile::tempdir().unwrap();
@@ -197,12 +208,19 @@ fn compare_lists_every_model() {
         .min_by(|a, b| a["rmse"].as_f64().unwrap().total_cmp(&b["rmse"].as_f64().unwrap()))
         .unwrap();
     assert_eq!(best["model"], "retro-phong");
-    let table = gonio(&["compare", file.to_str().unwrap()]);
+    let report = dir.path().join("report");
+    let table = gonio(&["compare", file.to_str().unwrap(), "--report", report.to_str().unwrap()]);
     assert!(
         text(&table).contains("NRMSE") && text(&table).contains("five-param"),
         "{}",
         text(&table)
     );
+    let names = ModelId::ALL.map(|m| m.name());
+    let html = common::check_report(&report, &names, &["15", "30", "60"]);
+    // Best first.
+    let models = &html[html.find("<h2>Models</h2>").unwrap()..];
+    let first_row = models.find("<td class=\"l\">").map(|i| &models[i..i + 40]).unwrap();
+    assert!(first_row.contains("retro-phong"), "{first_row}");
 }
 
 #[test]

@@ -34,7 +34,20 @@ fn rows(dir: &std::path::Path) -> Result<Vec<samples_csv::Row>> {
     samples_csv::read(&p)
 }
 
-pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
+/// A calibrated scan: what `gonio calibrate` wrote and reports.
+pub struct Calibrated {
+    pub cal: Calibration,
+    pub drift: calibration::Drift,
+    pub samples: usize,
+    pub usable: usize,
+    /// `calibration.json`'s content.
+    pub summary: serde_json::Value,
+    /// `calibrated.csv`.
+    pub csv: PathBuf,
+}
+
+/// Calibrates a scan directory: writes calibrated.csv and calibration.json.
+pub fn calibrate(a: &CalibrateArgs) -> Result<Calibrated> {
     let reference = a.reference.clone().unwrap_or_else(|| a.scan.join(super::reference::FILE));
     let (plate, monitor) = if reference.is_dir() {
         let all = rows(&reference).context("reading the reference plate's scan")?;
@@ -65,6 +78,25 @@ pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
     });
     let path = a.scan.join("calibration.json");
     std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n").with_context(|| format!("writing {}", path.display()))?;
+    Ok(Calibrated {
+        cal,
+        drift,
+        samples: calibrated.len(),
+        usable,
+        summary,
+        csv,
+    })
+}
+
+pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
+    let Calibrated {
+        cal,
+        drift,
+        samples,
+        usable,
+        summary,
+        csv,
+    } = calibrate(&a)?;
     if a.json {
         println!("{summary}");
         return Ok(());
@@ -78,6 +110,7 @@ pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
         if cal.splitter_measured { "measured" } else { "given" },
         cal.reference_samples
     );
+    let (lo, hi) = drift.range();
     match drift.readings() {
         0 => println!("no laser-drift monitor in the sample scan: no drift correction"),
         n => println!(
@@ -86,6 +119,6 @@ pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
             100.0 * hi
         ),
     }
-    println!("{usable} of {} samples usable; written to {}", calibrated.len(), csv.display());
+    println!("{usable} of {samples} samples usable; written to {}", csv.display());
     Ok(())
 }

@@ -5,7 +5,7 @@ use crate::brdf::{ModelId, Param};
 use crate::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
 use crate::formats;
 use anyhow::{bail, Context, Result};
-use serde_json::{json, Map, Value};
+use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// Which samples a fit sees, and how they are weighed.
@@ -38,6 +38,23 @@ pub struct FitOptions {
     pub json: bool,
 }
 
+impl Default for FitOptions {
+    /// The command line's defaults: the whole data set, uniform weights,
+    /// the view cosine, the file's units.
+    fn default() -> Self {
+        FitOptions {
+            param: ParamArg::View,
+            retro_only: false,
+            theta_i: Vec::new(),
+            holdout_theta_i: Vec::new(),
+            weights: Weighting::Uniform,
+            units: None,
+            seed: 1,
+            json: false,
+        }
+    }
+}
+
 #[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum ParamArg {
     Back,
@@ -66,6 +83,9 @@ pub struct FitArgs {
     /// Write the fit as JSON to this file as well.
     #[arg(long)]
     pub out: Option<PathBuf>,
+    /// Write the fit as a Disney BRDF Explorer shader (.brdf) as well.
+    #[arg(long)]
+    pub brdf: Option<PathBuf>,
     /// Draw the data and the fit into this directory (PNG and SVG).
     #[arg(long)]
     pub plot: Option<PathBuf>,
@@ -77,17 +97,21 @@ pub struct FitArgs {
 pub struct CompareArgs {
     /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
     pub file: PathBuf,
+    /// Write DIR/report.html: the comparison table, every fit as JSON and
+    /// BRDF Explorer shader (DIR/fits), pictures of the best fits (DIR/plots).
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
     #[command(flatten)]
     pub options: FitOptions,
 }
 
 /// The data a fit sees (domain restriction applied), and the held-out part.
-struct Domain {
+pub struct Domain {
     train: Dataset,
     holdout: Option<Dataset>,
 }
 
-fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
+pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
     let data = formats::load(path)?;
     let data = data.filter(|s| (!o.retro_only || s.on_retro_side()) && (o.theta_i.is_empty() || theta_in(s.theta_i, &o.theta_i)));
     let all_angles = data.incidence_angles_deg();
@@ -135,35 +159,17 @@ fn spec(model: ModelId, fixes: &[String], o: &FitOptions, data: &Dataset) -> Res
     })
 }
 
-/// The JSON object of a fit (the contract of issue #6).
-pub fn fit_json(f: &Fit, units: Units, holdout: Option<&fit::Metrics>) -> Value {
-    let m = &f.material;
-    let names = m.model.param_names();
-    let params: Map<String, Value> = names.iter().zip(&m.params).map(|(n, v)| (n.to_string(), json!(v))).collect();
-    let stderr: Map<String, Value> = names.iter().zip(&f.stderr).map(|(n, v)| (n.to_string(), json!(v))).collect();
-    let parametrization = if m.model.has_retro_cosine() { json!(m.param) } else { Value::Null };
-    let mut v = json!({
-        "model": m.model.name(), "parametrization": parametrization, "params": params, "stderr": stderr,
-        "rmse": f.metrics.rmse, "nrmse": f.metrics.nrmse, "ncc": f.metrics.ncc, "l2": f.metrics.l2,
-        "samples": f.samples, "seconds": f.seconds, "units": units,
-    });
-    if let Some(h) = holdout {
-        v["holdout"] = json!(h);
-    }
-    v
-}
-
-struct Outcome {
-    fit: Fit,
-    holdout: Option<fit::Metrics>,
-    json: Value,
+pub struct Outcome {
+    pub fit: Fit,
+    pub holdout: Option<fit::Metrics>,
+    pub json: Value,
 }
 
 fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain) -> Result<Outcome> {
     let spec = spec(model, fixes, o, &d.train)?;
     let f = fit::fit(&d.train, &spec).with_context(|| format!("fitting {}", model.name()))?;
     let holdout = d.holdout.as_ref().map(|h| fit::evaluate(&f.material, h));
-    let json = fit_json(&f, d.train.units, holdout.as_ref());
+    let json = fit::file::to_json(&f, d.train.units, holdout.as_ref());
     Ok(Outcome { fit: f, holdout, json })
 }
 
@@ -172,7 +178,10 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let d = domain(&a.file, &a.options)?;
     let Outcome { fit: f, holdout, json: v } = run_one(model, &a.fix, &a.options, &d)?;
     if let Some(out) = &a.out {
-        std::fs::write(out, serde_json::to_string_pretty(&v)? + "\n").with_context(|| format!("cannot write {}", out.display()))?;
+        fit::file::write(out, &v)?;
+    }
+    if let Some(out) = &a.brdf {
+        super::export::write_brdf(&f.material, &a.file.display().to_string(), out)?;
     }
     if let Some(dir) = &a.plot {
         crate::plot::render(&d.train, std::slice::from_ref(&f.material), dir)?;
@@ -202,16 +211,46 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     Ok(())
 }
 
-pub fn compare_cmd(a: CompareArgs) -> Result<()> {
-    let d = domain(&a.file, &a.options)?;
-    let bar = crate::scan::progress_bar(ModelId::ALL.len() as u64, a.options.json, "fitting", "models");
+/// Every model fitted to the same data, in catalogue order.
+pub fn compare(d: &Domain, o: &FitOptions) -> Result<Vec<Outcome>> {
+    let bar = crate::scan::progress_bar(ModelId::ALL.len() as u64, o.json, "fitting", "models");
     let mut rows = Vec::new();
     for model in ModelId::ALL {
         bar.set_message(model.name());
-        rows.push(run_one(model, &[], &a.options, &d)?);
+        rows.push(run_one(model, &[], o, d)?);
         bar.inc(1);
     }
     bar.finish_and_clear();
+    Ok(rows)
+}
+
+/// Writes `dir/report.html` of a comparison.
+pub fn report(dir: &Path, title: String, facts: Vec<(String, String)>, d: &Domain, rows: &[Outcome]) -> Result<PathBuf> {
+    let fits: Vec<Fit> = rows.iter().map(|r| r.fit.clone()).collect();
+    let holdout: Vec<_> = rows.iter().map(|r| r.holdout).collect();
+    crate::report::write(
+        dir,
+        &crate::report::Report {
+            title,
+            facts,
+            data: &d.train,
+            fits: &fits,
+            holdout: &holdout,
+        },
+    )
+}
+
+pub fn compare_cmd(a: CompareArgs) -> Result<()> {
+    let d = domain(&a.file, &a.options)?;
+    let rows = compare(&d, &a.options)?;
+    if let Some(dir) = &a.report {
+        let mut facts = vec![("data".to_string(), a.file.display().to_string())];
+        facts.extend(d.train.metadata.iter().map(|m| ("metadata".to_string(), m.clone())));
+        let path = report(dir, format!("Model comparison: {}", a.file.display()), facts, &d, &rows)?;
+        if !a.options.json {
+            eprintln!("report: {}", path.display());
+        }
+    }
     if a.options.json {
         println!("{}", Value::Array(rows.into_iter().map(|r| r.json).collect()));
         return Ok(());

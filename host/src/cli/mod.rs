@@ -4,6 +4,7 @@ mod calibrate;
 mod convert;
 mod detector;
 mod devices;
+mod export;
 mod fit;
 mod grid;
 mod material;
@@ -48,6 +49,8 @@ pub enum Command {
     Plot(plot::PlotArgs),
     /// Write a data file (ALTA .dat or calibrated CSV) as ALTA text.
     Convert(convert::ConvertArgs),
+    /// Write a fit (FIT.json) as a Disney BRDF Explorer .brdf shader.
+    Export(export::ExportArgs),
     /// Evaluate a model at one geometry.
     Eval(model_eval::EvalArgs),
     /// Directional-hemispherical reflectance of a model, and its energy check.
@@ -70,6 +73,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Compare(a) => fit::compare_cmd(a),
         Command::Convert(a) => convert::convert_cmd(a),
         Command::Plot(a) => plot::plot_cmd(a),
+        Command::Export(a) => export::export_cmd(a),
         Command::Eval(a) => model_eval::eval_cmd(a),
         Command::Dhr(a) => model_eval::dhr_cmd(a),
     }

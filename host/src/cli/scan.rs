@@ -1,6 +1,8 @@
 //! `gonio demo` and `gonio scan`: connect, home, scan, store, summarise.
 
+use super::calibrate;
 use super::detector::DetectorArgs;
+use super::fit::{self, FitOptions};
 use super::grid::GridArgs;
 use super::material::SimHeadArgs;
 use super::plan::{PlanTarget, ScanPlan};
@@ -83,13 +85,84 @@ pub struct ScanArgs {
     pub output: OutputArgs,
 }
 
+/// The whole chain on the simulated head: the reference plate and the
+/// Belcour grid in one session, calibration, every model fitted, and
+/// `report.html` with the comparison table and the pictures.
 pub async fn demo(a: DemoArgs) -> Result<()> {
     let sim = SimConfig {
         seed: a.seed,
         ..SimConfig::default()
     };
-    let plan = ScanPlan::new(&Target::Sim(sim), &ScanSpec::belcour(), &DetectorArgs::demo());
-    scan_to_dir(&plan, &a.out, &a.output, None).await
+    let truth = sim.material.clone();
+    let mut plan = ScanPlan::new(&Target::Sim(sim), &ScanSpec::belcour(), &DetectorArgs::demo());
+    plan.reference_plate = true;
+    let (outcome, samples) = scan_to_dir(&plan, &a.out, &a.output, None).await?;
+    let json = a.output.json;
+    if !json {
+        summarise(&outcome, &samples, false)?;
+    }
+    let calibrated = calibrate::calibrate(&calibrate::CalibrateArgs {
+        scan: a.out.clone(),
+        reference: None,
+        rho_ref: crate::sim::PLATE_RHO,
+        splitter: None,
+        json,
+    })?;
+    let options = FitOptions {
+        json,
+        ..FitOptions::default()
+    };
+    let domain = fit::domain(&calibrated.csv, &options)?;
+    let rows = fit::compare(&domain, &options)?;
+    let facts = vec![
+        ("head".to_string(), "simulated (gonio demo)".to_string()),
+        (
+            "virtual material".to_string(),
+            format!("{} {}", truth.model.name(), truth.params_string()),
+        ),
+        (
+            "scan".to_string(),
+            format!(
+                "{} points of the Belcour grid: {} measured, {} unreachable, {} flagged",
+                outcome.points, outcome.measured, outcome.skipped, outcome.flagged
+            ),
+        ),
+        (
+            "calibration".to_string(),
+            format!(
+                "reference plate ρ = {}: K = {:.5e} A·sr (±{:.3} %), splitter {:.4}",
+                crate::sim::PLATE_RHO,
+                calibrated.cal.scale_a_sr,
+                100.0 * calibrated.cal.scale_rel_sd,
+                calibrated.cal.splitter
+            ),
+        ),
+        ("data".to_string(), calibrated.csv.display().to_string()),
+    ];
+    let report = fit::report(&a.out, "gonio demo: simulated retroreflective tape".into(), facts, &domain, &rows)?;
+    let best = rows
+        .iter()
+        .min_by(|x, y| x.fit.metrics.rmse.total_cmp(&y.fit.metrics.rmse))
+        .context("no model fitted")?;
+    if json {
+        let mut v = serde_json::to_value(&outcome)?;
+        v["calibration"] = calibrated.summary;
+        v["models"] = rows.iter().map(|r| r.json.clone()).collect();
+        v["best_model"] = best.fit.material.model.name().into();
+        v["report"] = report.display().to_string().into();
+        println!("{}", serde_json::to_string_pretty(&v)?);
+    } else {
+        println!(
+            "calibrated: {} of {} samples usable; best model {} (RMSE {:.3e} sr⁻¹, NCC {:.4})",
+            calibrated.usable,
+            calibrated.samples,
+            best.fit.material.model.name(),
+            best.fit.metrics.rmse,
+            best.fit.metrics.ncc
+        );
+        println!("report: {}", report.display());
+    }
+    Ok(())
 }
 
 pub async fn scan(a: ScanArgs) -> Result<()> {
@@ -99,7 +172,8 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
             // The head may come back on another port.
             plan.target = PlanTarget::Port { path: p.clone() };
         }
-        return scan_to_dir(&plan, dir, &a.output, Some(resume_from(dir)?)).await;
+        let (outcome, samples) = scan_to_dir(&plan, dir, &a.output, Some(resume_from(dir)?)).await?;
+        return summarise(&outcome, &samples, a.output.json);
     }
     let target = match (&a.port, a.sim) {
         (Some(p), _) => Target::Port(p.clone()),
@@ -118,7 +192,8 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
     }
     plan.reference_plate = a.reference_plate;
     let out = a.out.context("--out is required")?;
-    scan_to_dir(&plan, &out, &a.output, None).await
+    let (outcome, samples) = scan_to_dir(&plan, &out, &a.output, None).await?;
+    summarise(&outcome, &samples, a.output.json)
 }
 
 /// The first visit position an interrupted scan has not stored.
@@ -146,8 +221,8 @@ fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
 
 /// Runs a plan into `dir`: a new scan, or the rest of one from visit position
 /// `resume`. Connects first, so a head that cannot be reached leaves no files
-/// behind.
-async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: Option<u32>) -> Result<()> {
+/// behind. Returns the counts and the samples file.
+async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: Option<u32>) -> Result<(ScanOutcome, PathBuf)> {
     let json = output.json;
     let (target, det) = (plan.target(), &plan.detector);
     let spec = &ScanSpec {
@@ -231,7 +306,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     record.estimated_s = Some(estimate);
     record.write(dir)?;
     head.close().await;
-    summarise(&outcome, &samples, json)
+    Ok((outcome, samples))
 }
 
 /// The head's plan replayed from the park position under the reference axis

@@ -4,6 +4,7 @@
 //! standard errors, and cross-validation by held-out incidence angles.
 
 pub mod data;
+pub mod file;
 mod global;
 mod local;
 pub mod metrics;

@@ -1,8 +1,10 @@
 //! BRDF data files: ALTA text `.dat` (read and write) and the project's
 //! calibrated sample CSV (read); [`load`] picks the reader by extension.
+//! Fitted models are written for Disney's BRDF Explorer.
 
 pub mod alta;
 pub mod brdf_csv;
+pub mod brdf_explorer;
 
 use crate::fit::Dataset;
 use anyhow::{Context, Result};

@@ -13,3 +13,36 @@ pub fn gonio(args: &[&str]) -> Output {
 pub fn text(o: &Output) -> String {
     format!("{}{}", String::from_utf8_lossy(&o.stdout), String::from_utf8_lossy(&o.stderr))
 }
+
+/// Checks a `report.html` written into `dir`: every link and picture it
+/// names exists beside it, each model has its row with its fit and its BRDF
+/// Explorer shader, and every θi has its pictures. Returns the HTML.
+#[allow(dead_code)] // not every test binary that shares this module writes reports
+pub fn check_report(dir: &std::path::Path, models: &[&str], theta_i: &[&str]) -> String {
+    let html = std::fs::read_to_string(dir.join("report.html")).expect("report.html");
+    let mut links = 0;
+    for attr in ["href=\"", "src=\""] {
+        for (at, _) in html.match_indices(attr) {
+            let rest = &html[at + attr.len()..];
+            let target = &rest[..rest.find('"').unwrap()];
+            let path = dir.join(target);
+            assert!(path.is_file(), "report links {target}, which is missing");
+            assert!(std::fs::metadata(&path).unwrap().len() > 0, "{target} is empty");
+            links += 1;
+        }
+    }
+    for m in models {
+        assert!(html.contains(&format!("<td class=\"l\">{m}</td>")), "row of {m}");
+        assert!(html.contains(&format!("href=\"fits/{m}.brdf\"")) && html.contains(&format!("href=\"fits/{m}.json\"")));
+    }
+    for ti in theta_i {
+        for kind in ["plane", "hemisphere", "residuals"] {
+            assert!(
+                html.contains(&format!("src=\"plots/{kind}-{ti}.png\"")),
+                "{kind} picture of θi {ti}"
+            );
+        }
+    }
+    assert_eq!(links, 2 * models.len() + 2 * 3 * theta_i.len(), "links in the report");
+    html
+}

@@ -1,0 +1,48 @@
+//! Fit files: a fit as the JSON object of the contract (issue #6: model,
+//! parametrization, params, stderr, metrics), and a material read back from
+//! one, for `gonio plot --fit` and `gonio export`.
+
+use super::{Fit, Metrics, Units};
+use crate::brdf::{Material, ModelId, Param};
+use anyhow::{bail, Context, Result};
+use serde_json::{json, Map, Value};
+use std::path::Path;
+
+/// The JSON object of a fit, with the metrics of held-out samples if any.
+pub fn to_json(f: &Fit, units: Units, holdout: Option<&Metrics>) -> Value {
+    let m = &f.material;
+    let names = m.model.param_names();
+    let params: Map<String, Value> = names.iter().zip(&m.params).map(|(n, v)| (n.to_string(), json!(v))).collect();
+    let stderr: Map<String, Value> = names.iter().zip(&f.stderr).map(|(n, v)| (n.to_string(), json!(v))).collect();
+    let parametrization = if m.model.has_retro_cosine() { json!(m.param) } else { Value::Null };
+    let mut v = json!({
+        "model": m.model.name(), "parametrization": parametrization, "params": params, "stderr": stderr,
+        "rmse": f.metrics.rmse, "nrmse": f.metrics.nrmse, "ncc": f.metrics.ncc, "l2": f.metrics.l2,
+        "samples": f.samples, "seconds": f.seconds, "units": units,
+    });
+    if let Some(h) = holdout {
+        v["holdout"] = json!(h);
+    }
+    v
+}
+
+/// Writes a fit's JSON (pretty, one object).
+pub fn write(path: &Path, v: &Value) -> Result<()> {
+    std::fs::write(path, serde_json::to_string_pretty(v)? + "\n").with_context(|| format!("cannot write {}", path.display()))
+}
+
+/// The material of a fit file.
+pub fn read_material(path: &Path) -> Result<Material> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let v: Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
+    let model = ModelId::parse(v["model"].as_str().unwrap_or_default()).with_context(|| format!("{}", path.display()))?;
+    let mut params = Vec::new();
+    for name in model.param_names() {
+        match v["params"][name].as_f64() {
+            Some(x) => params.push(x),
+            None => bail!("{}: parameter `{name}` missing", path.display()),
+        }
+    }
+    let param = if v["parametrization"] == "back" { Param::Back } else { Param::View };
+    Ok(Material { model, params, param })
+}

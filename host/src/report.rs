@@ -1,0 +1,174 @@
+//! `report.html`: what a scan or a data file gave, to read offline in any
+//! browser: the facts of the run, the model comparison table (Spieringhs
+//! Table 6 style: coefficients, RMSE, NRMSE, NCC), every fit as JSON and as a
+//! BRDF Explorer shader, and the pictures with the best fits drawn over the
+//! data. Everything it links is written beside it, by relative path.
+
+use crate::fit::{self, Dataset, Fit, Metrics, Units};
+use crate::formats::brdf_explorer;
+use crate::plot;
+use anyhow::{Context, Result};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+
+/// How many of the best fits are drawn over the data (more curves than this
+/// hide each other).
+const DRAWN: usize = 3;
+
+/// What a report shows.
+pub struct Report<'a> {
+    pub title: String,
+    /// Facts shown above the table: `(what, value)`.
+    pub facts: Vec<(String, String)>,
+    pub data: &'a Dataset,
+    pub fits: &'a [Fit],
+    /// Metrics on held-out samples, one per fit, if the comparison held any out.
+    pub holdout: &'a [Option<Metrics>],
+}
+
+fn escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;")
+}
+
+/// `value ± stderr` of each parameter.
+fn params_cell(f: &Fit) -> String {
+    let names = f.material.model.param_names();
+    names
+        .iter()
+        .zip(&f.material.params)
+        .zip(&f.stderr)
+        .map(|((n, v), e)| match e {
+            Some(e) => format!("{n} = {v:.4e} ± {e:.1e}"),
+            None => format!("{n} = {v:.4e}"),
+        })
+        .collect::<Vec<_>>()
+        .join("<br>")
+}
+
+/// Caption of a picture from its file stem (`plane-30` …, see `plot::render`).
+fn caption(stem: &str) -> String {
+    let (kind, ti) = stem.split_once('-').unwrap_or((stem, ""));
+    let what = match kind {
+        "plane" => "incidence plane, log-polar (data and the best fits; retro and mirror directions marked)",
+        "hemisphere" => "projected hemisphere (θo·cosΔφ, θo·sinΔφ), log f_r of the data",
+        "residuals" => "relative residuals of the best fit",
+        other => other,
+    };
+    format!("θi = {ti}°: {what}")
+}
+
+/// Fits sorted best first (RMSE on the fitted samples).
+fn ranked(fits: &[Fit]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..fits.len()).collect();
+    order.sort_by(|&a, &b| fits[a].metrics.rmse.total_cmp(&fits[b].metrics.rmse));
+    order
+}
+
+/// Writes `dir/report.html` with `dir/fits/` and `dir/plots/`; returns the
+/// report's path.
+pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
+    let fits_dir = dir.join("fits");
+    std::fs::create_dir_all(&fits_dir).with_context(|| format!("creating {}", fits_dir.display()))?;
+    let order = ranked(r.fits);
+    let mut html = String::new();
+    let _ = write!(
+        html,
+        "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>{t}</title>\n<style>\n\
+         body {{ font-family: sans-serif; margin: 2em; max-width: 75em; }}\n\
+         table {{ border-collapse: collapse; }}\n\
+         td, th {{ border: 1px solid #bbb; padding: 0.3em 0.6em; text-align: right; vertical-align: top; }}\n\
+         td.l, th.l {{ text-align: left; }}\n\
+         tr.best {{ background: #eef6ee; }}\n\
+         figure {{ display: inline-block; margin: 0.5em; max-width: 48%; vertical-align: top; }}\n\
+         figure img {{ max-width: 100%; }}\n\
+         </style>\n</head>\n<body>\n<h1>{t}</h1>\n<table>\n",
+        t = escape(&r.title)
+    );
+    for (k, v) in &r.facts {
+        let _ = writeln!(
+            html,
+            "<tr><th class=\"l\">{}</th><td class=\"l\">{}</td></tr>",
+            escape(k),
+            escape(v)
+        );
+    }
+    let _ = writeln!(
+        html,
+        "<tr><th class=\"l\">samples fitted</th><td class=\"l\">{} (residuals in {})</td></tr>\n</table>",
+        r.data.observations.len(),
+        match r.data.units {
+            Units::Fr => "f_r, sr⁻¹",
+            Units::FrCos => "f_r·cosθo, sr⁻¹",
+        }
+    );
+    let holdout = r.holdout.iter().any(Option::is_some);
+    html.push_str("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt).</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th>");
+    if holdout {
+        html.push_str("<th>held-out NRMSE</th><th>held-out NCC</th>");
+    }
+    html.push_str("<th>s</th><th class=\"l\">parameters</th><th class=\"l\">files</th></tr>\n");
+    for (rank, &i) in order.iter().enumerate() {
+        let f = &r.fits[i];
+        let name = f.material.model.name();
+        let json = fits_dir.join(format!("{name}.json"));
+        fit::file::write(
+            &json,
+            &fit::file::to_json(f, r.data.units, r.holdout.get(i).and_then(Option::as_ref)),
+        )?;
+        let brdf = fits_dir.join(format!("{name}.brdf"));
+        let text = brdf_explorer::write(
+            &f.material,
+            &[format!("{}: RMSE {:.4e} sr^-1, NCC {:.5}", r.title, f.metrics.rmse, f.metrics.ncc)],
+        );
+        std::fs::write(&brdf, text).with_context(|| format!("cannot write {}", brdf.display()))?;
+        let m = &f.metrics;
+        let _ = write!(
+            html,
+            "<tr{}><td class=\"l\">{name}</td><td>{}</td><td>{:.4e}</td><td>{:.4e}</td><td>{:.5}</td>",
+            if rank < DRAWN { " class=\"best\"" } else { "" },
+            f.material.params.len(),
+            m.rmse,
+            m.nrmse,
+            m.ncc
+        );
+        if holdout {
+            match r.holdout.get(i).and_then(Option::as_ref) {
+                Some(h) => {
+                    let _ = write!(html, "<td>{:.4e}</td><td>{:.5}</td>", h.nrmse, h.ncc);
+                }
+                None => html.push_str("<td></td><td></td>"),
+            }
+        }
+        let _ = writeln!(
+            html,
+            "<td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\"><a href=\"fits/{name}.json\">JSON</a> · \
+             <a href=\"fits/{name}.brdf\">BRDF Explorer</a></td></tr>",
+            f.seconds,
+            params_cell(f)
+        );
+    }
+    html.push_str("</table>\n");
+    let drawn: Vec<_> = order.iter().take(DRAWN).map(|&i| r.fits[i].material.clone()).collect();
+    let names: Vec<&str> = drawn.iter().map(|m| m.model.name()).collect();
+    let files = plot::render(r.data, &drawn, &dir.join("plots"))?;
+    let _ = writeln!(
+        html,
+        "<h2>Pictures</h2>\n<p>Drawn: {}. Click a picture for its SVG.</p>",
+        escape(&names.join(", "))
+    );
+    for png in files.iter().filter(|p| p.extension().is_some_and(|e| e == "png")) {
+        let stem = png.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
+        let _ = writeln!(
+            html,
+            "<figure><a href=\"plots/{stem}.svg\"><img src=\"plots/{stem}.png\" alt=\"{stem}\"></a><figcaption>{}</figcaption></figure>",
+            escape(&caption(stem))
+        );
+    }
+    let _ = writeln!(html, "<p><small>gonio {}</small></p>\n</body>\n</html>", env!("CARGO_PKG_VERSION"));
+    let path = dir.join("report.html");
+    std::fs::write(&path, html).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path)
+}
