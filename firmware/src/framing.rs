@@ -47,7 +47,12 @@ impl Decoder {
                 FeedResult::Consumed => &[],
                 FeedResult::OverFull(rest) | FeedResult::DeserError(rest) => rest,
                 FeedResult::Success { data, remaining } => {
-                    on_frame(data);
+                    // The accumulator holds an encoded frame, which decodes
+                    // to a little more than MAX_FRAME at most (found by the
+                    // frame fuzzer): such a frame is refused here.
+                    if data.len() <= MAX_FRAME {
+                        on_frame(data);
+                    }
                     remaining
                 }
             };

@@ -1,6 +1,7 @@
 //! The head's side of the protocol: the serve loop, request dispatch, replies
 //! and the scan's event stream.
 
+use crate::check;
 use crate::dispatch::{decode, encode, Command, DecodeError};
 use crate::framing::MAX_FRAME;
 use crate::head::Head;
@@ -50,8 +51,13 @@ impl<B: Board> Head<B> {
         }
     }
 
-    /// Decodes and answers one frame.
-    async fn handle<L: Link>(&mut self, frame: &[u8], link: &mut L) -> Result<(), LinkError> {
+    /// Checks, decodes and answers one frame. A frame that fails its check
+    /// is dropped unanswered: its header may be damaged too, and the host
+    /// recovers a lost request by its timeout.
+    async fn handle<L: Link>(&mut self, sealed: &[u8], link: &mut L) -> Result<(), LinkError> {
+        let Some(frame) = check::open(sealed) else {
+            return Ok(());
+        };
         let (hdr, cmd) = match decode(frame) {
             Ok(x) => x,
             Err(DecodeError::NoHeader) => return Ok(()),
@@ -162,14 +168,16 @@ impl<B: Board> Head<B> {
 
     async fn send_keyed<T: Serialize + ?Sized, L: Link>(&mut self, key: Key, seq: VarSeq, msg: &T, link: &mut L) -> Result<(), LinkError> {
         let mut tx = [0u8; MAX_FRAME];
-        match encode(key, self.key_kind, seq, msg, &mut tx) {
+        let body = MAX_FRAME - check::LEN;
+        let n = match encode(key, self.key_kind, seq, msg, &mut tx[..body]) {
+            Some(n) => n,
+            // Every message fits MAX_FRAME (a test checks the largest);
+            // should one not, the host still learns of it.
+            None => encode(ERROR_KEY, self.key_kind, seq, &WireError::SerFailed, &mut tx[..body]).unwrap_or(0),
+        };
+        match check::seal(&mut tx, n) {
             Some(n) => link.send(&tx[..n]).await,
-            None => {
-                // Every message fits MAX_FRAME (a test checks the largest);
-                // should one not, the host still learns of it.
-                let n = encode(ERROR_KEY, self.key_kind, seq, &WireError::SerFailed, &mut tx).unwrap_or(0);
-                link.send(&tx[..n]).await
-            }
+            None => Ok(()),
         }
     }
 }

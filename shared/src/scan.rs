@@ -38,8 +38,10 @@ impl AngleRange {
             return None;
         }
         // The stop value is included when it lies on the grid (to 1e-4 step).
+        // A step so small that the count saturates is refused, not wrapped
+        // (found by the dispatch fuzzer).
         let steps = ((b - a) / s + 1.0e-4) as u32;
-        Some(steps + 1)
+        steps.checked_add(1)
     }
 
     /// The k-th value.

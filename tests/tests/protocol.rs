@@ -163,7 +163,8 @@ fn largest_messages_fit_the_frame_buffer() {
         periods: u16::MAX,
         flags: SampleFlags(u16::MAX),
     };
-    let mut buf = [0u8; MAX_FRAME];
+    // The frame check takes the last bytes of the buffer.
+    let mut buf = [0u8; MAX_FRAME - gonio_firmware::check::LEN];
     let seq = VarSeq::Seq4(u32::MAX);
     assert!(encode(ScanEventTopic::TOPIC_KEY, VarKeyKind::Key8, seq, &ScanEvent::Sample(s), &mut buf).is_some());
     assert!(encode(MeasureEndpoint::RESP_KEY, VarKeyKind::Key8, seq, &Ok::<_, Fault>(s), &mut buf).is_some());

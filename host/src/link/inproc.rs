@@ -14,14 +14,21 @@ struct Rx(tmpsc::UnboundedReceiver<Vec<u8>>);
 impl WireTx for Tx {
     type Error = WireClosed;
     async fn send(&mut self, data: Vec<u8>) -> Result<(), WireClosed> {
-        self.0.send(data).map_err(|_| WireClosed("simulated head stopped".into()))
+        self.0
+            .send(super::seal(data))
+            .map_err(|_| WireClosed("simulated head stopped".into()))
     }
 }
 
 impl WireRx for Rx {
     type Error = WireClosed;
     async fn receive(&mut self) -> Result<Vec<u8>, WireClosed> {
-        self.0.recv().await.ok_or_else(|| WireClosed("simulated head stopped".into()))
+        loop {
+            let sealed = self.0.recv().await.ok_or_else(|| WireClosed("simulated head stopped".into()))?;
+            if let Some(f) = super::open(sealed) {
+                return Ok(f);
+            }
+        }
     }
 }
 

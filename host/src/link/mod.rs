@@ -51,6 +51,23 @@ impl WireSpawn for Workers {
     }
 }
 
+/// A frame with its check appended (`gonio_firmware::check`), as every wire sends it.
+fn seal(mut frame: Vec<u8>) -> Vec<u8> {
+    let n = frame.len();
+    frame.resize(n + gonio_firmware::check::LEN, 0);
+    // The buffer has room for the check by construction.
+    let _ = gonio_firmware::check::seal(&mut frame, n);
+    frame
+}
+
+/// The frame inside a received one, or `None` when its check fails: the
+/// frame is dropped as if lost (requests time out, scan gaps are re-requested).
+fn open(mut sealed: Vec<u8>) -> Option<Vec<u8>> {
+    let n = gonio_firmware::check::open(&sealed)?.len();
+    sealed.truncate(n);
+    Some(sealed)
+}
+
 /// A wire that has closed.
 #[derive(Debug, thiserror::Error)]
 #[error("link closed: {0}")]

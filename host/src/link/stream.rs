@@ -21,6 +21,7 @@ struct Rx {
 impl WireTx for Tx {
     type Error = WireClosed;
     async fn send(&mut self, data: Vec<u8>) -> Result<(), WireClosed> {
+        let data = super::seal(data);
         let mut out = vec![0u8; data.len() + data.len() / 254 + 2];
         let n = framing::encode(&data, &mut out).ok_or_else(|| WireClosed("frame too long".into()))?;
         self.0.write_all(&out[..n]).await.map_err(|e| WireClosed(e.to_string()))?;
@@ -33,8 +34,11 @@ impl WireRx for Rx {
     async fn receive(&mut self) -> Result<Vec<u8>, WireClosed> {
         let mut buf = [0u8; 1024];
         loop {
-            if let Some(f) = self.frames.pop_front() {
+            if let Some(f) = self.frames.pop_front().and_then(super::open) {
                 return Ok(f);
+            }
+            if !self.frames.is_empty() {
+                continue;
             }
             let n = self.port.read(&mut buf).await.map_err(|e| WireClosed(e.to_string()))?;
             if n == 0 {

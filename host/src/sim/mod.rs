@@ -4,11 +4,13 @@
 //! the firmware's own motion, auto-range and demodulation code.
 
 mod board;
+mod frames;
 mod inproc;
 mod optics;
 mod pty;
 mod world;
 
+pub use frames::FrameHead;
 pub use inproc::spawn_in_process;
 pub use optics::Photodiode;
 pub use pty::serve_pty;
