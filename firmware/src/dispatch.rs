@@ -5,9 +5,9 @@
 
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
-    MoveEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    MoveEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
-use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, SanityConfig, ScanSpec};
+use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, ScanSpec};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::standard_icd::WireError;
 use postcard_rpc::{Endpoint, Key};
@@ -26,6 +26,7 @@ pub enum Command {
     Detection(DetectionSettings),
     Sanity(SanityConfig),
     Calibrate(CalibrateRequest),
+    Safety(SafetySettings),
 }
 
 /// A frame that is not a valid request.
@@ -72,6 +73,8 @@ pub fn decode(frame: &[u8]) -> Result<(VarHeader, Command), DecodeError> {
         body(hdr, rest).map(Command::Sanity)
     } else if is::<CalibrateEndpoint>(k) {
         body(hdr, rest).map(Command::Calibrate)
+    } else if is::<SafetyEndpoint>(k) {
+        body(hdr, rest).map(Command::Safety)
     } else {
         Err(DecodeError::Wire(hdr, WireError::UnknownKey))
     };

@@ -17,8 +17,8 @@ use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
-    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, Reply, Sample,
-    SampleFlags, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status,
+    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, Reply,
+    SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status,
 };
 use postcard_rpc::header::VarKeyKind;
 
@@ -32,7 +32,22 @@ pub struct HeadInfo {
     pub protocol_version: u16,
 }
 
+/// Consecutive scan points that may all be saturated at the lowest gain, or
+/// all below the noise floor, before the head stops the scan (stray light or
+/// a failed amplifier; a dead laser or a blocked beam). A retroreflector's
+/// scan has neither run; a black sample needs the dark watch relaxed.
+pub const SUSPECT_RUN: u32 = 8;
+
+/// Runs of suspicious samples in the current scan.
+#[derive(Debug, Default, Clone, Copy)]
+struct SuspectRuns {
+    saturated: u32,
+    dark: u32,
+}
+
 pub(crate) struct ScanRun {
+    /// Number of the run since power-up (`ScanAccepted::run`).
+    pub(crate) run: u32,
     pub(crate) spec: ScanSpec,
     pub(crate) planner: Planner,
     pub(crate) total: u32,
@@ -59,6 +74,13 @@ pub struct Head<B: Board> {
     samples_flagged: u32,
     samples_remeasured: u32,
     pub(crate) last_fault: Option<Fault>,
+    /// Longest host silence during a scan (µs), 0 for no watch.
+    host_timeout_us: u64,
+    /// When the host was last heard (µs, the head's clock).
+    last_heard_us: u64,
+    suspect: SuspectRuns,
+    /// Scan runs started since power-up.
+    runs: u32,
 }
 
 impl<B: Board> Head<B> {
@@ -79,6 +101,10 @@ impl<B: Board> Head<B> {
             samples_flagged: 0,
             samples_remeasured: 0,
             last_fault: None,
+            host_timeout_us: 0,
+            last_heard_us: 0,
+            suspect: SuspectRuns::default(),
+            runs: 0,
         };
         head.safe_state();
         head
@@ -221,6 +247,15 @@ impl<B: Board> Head<B> {
         let reached = kinematics::forward(&axes);
         let splitter = kinematics::through_splitter(&self.cfg, &axes);
         let mut m = self.measure_checked(&reached, splitter).await?;
+        if m.flags.contains(SampleFlags::OVERRUN) {
+            // A lost ADC block breaks the integration's timing: measure again;
+            // twice in a row is a fault of the conversion chain.
+            m = self.measure_checked(&reached, splitter).await?;
+            if m.flags.contains(SampleFlags::OVERRUN) {
+                self.safe_state();
+                return Err(Fault::AdcOverrun);
+            }
+        }
         if m.flags.contains(SampleFlags::MODEL_MISMATCH) && self.sanity.as_ref().is_some_and(|s| s.config().remeasure) {
             // Measured once more; the second reading stands, marked as such.
             m = self.measure_checked(&reached, splitter).await?;
@@ -297,7 +332,11 @@ impl<B: Board> Head<B> {
         // are, so that the host and a resumed scan replay the same order.
         let mut planner = Planner::new(&spec, motion::PARK);
         while planner.order() < first_order && planner.next(&self.cfg, &spec).is_some() {}
+        self.suspect = SuspectRuns::default();
+        self.last_heard_us = self.hw.clock.now_us();
+        self.runs = self.runs.wrapping_add(1);
         self.scan = Some(ScanRun {
+            run: self.runs,
             spec,
             planner,
             total,
@@ -308,6 +347,7 @@ impl<B: Board> Head<B> {
         Ok(ScanAccepted {
             points: total,
             first_order,
+            run: self.runs,
         })
     }
 
@@ -315,6 +355,7 @@ impl<B: Board> Head<B> {
         if let Some(run) = self.scan.take() {
             self.last_fault = Some(Fault::Aborted);
             self.pending_event = Some(ScanEvent::Stopped {
+                run: run.run,
                 next_order: run.next_order,
                 reason: Fault::Aborted,
             });
@@ -342,6 +383,43 @@ impl<B: Board> Head<B> {
         self.detector.stop(&mut self.hw);
         let _ = self.laser(false);
         self.note(r)
+    }
+
+    /// Sets the host watch; refused (and nothing changed) for an invalid timeout.
+    pub fn configure_safety(&mut self, c: SafetySettings) -> Reply<()> {
+        c.validate()?;
+        self.host_timeout_us = units::seconds_to_us(c.host_timeout_s) as u64;
+        self.last_heard_us = self.hw.clock.now_us();
+        Ok(())
+    }
+
+    /// Notes that a frame came from the host.
+    pub(crate) fn heard_host(&mut self) {
+        self.last_heard_us = self.hw.clock.now_us();
+    }
+
+    /// The run and position of a running scan, if the host has been silent
+    /// longer than its timeout.
+    pub(crate) fn host_silent(&self) -> Option<(u32, u32)> {
+        let run = self.scan.as_ref()?;
+        let silent = self.hw.clock.now_us().saturating_sub(self.last_heard_us);
+        (self.host_timeout_us > 0 && silent > self.host_timeout_us).then_some((run.run, run.next_order))
+    }
+
+    /// Counts runs of saturated and of dark samples in a scan; a run of
+    /// [`SUSPECT_RUN`] stops it.
+    pub(crate) fn watch(&mut self, s: &Sample) -> Result<(), Fault> {
+        let run = |n: &mut u32, hit: bool| {
+            *n = if hit { *n + 1 } else { 0 };
+            *n >= SUSPECT_RUN
+        };
+        if run(&mut self.suspect.saturated, s.flags.contains(SampleFlags::SATURATED)) {
+            return Err(Fault::Saturated);
+        }
+        if run(&mut self.suspect.dark, s.flags.contains(SampleFlags::BELOW_NOISE)) {
+            return Err(Fault::NoSignal);
+        }
+        Ok(())
     }
 
     pub fn load_sanity(&mut self, c: SanityConfig) -> Reply<()> {

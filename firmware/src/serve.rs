@@ -8,8 +8,8 @@ use crate::head::Head;
 use crate::hw::Board;
 use crate::link::{Link, LinkError};
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint, SanityEndpoint,
-    ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint, SafetyEndpoint,
+    SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{Fault, ScanEvent};
@@ -30,7 +30,11 @@ impl<B: Board> Head<B> {
                 Some(link.recv(&mut rx).await)
             };
             let handled = match got {
-                Some(Ok(n)) => self.handle(&rx[..n], link).await,
+                Some(Ok(n)) => {
+                    // Any frame, even a damaged one, shows the host is there.
+                    self.heard_host();
+                    self.handle(&rx[..n], link).await
+                }
                 Some(Err(e)) => Err(e),
                 None => Ok(()),
             };
@@ -100,15 +104,32 @@ impl<B: Board> Head<B> {
                 let resp = self.load_sanity(c);
                 self.reply::<SanityEndpoint, L>(seq, &resp, link).await
             }
+            Command::Safety(c) => {
+                let resp = self.configure_safety(c);
+                self.reply::<SafetyEndpoint, L>(seq, &resp, link).await
+            }
         }
     }
 
-    /// Visits the next point of the running scan and publishes what happened.
+    /// Visits the next point of the running scan and publishes what happened;
+    /// stops the scan instead when the host has gone silent.
     async fn scan_step<L: Link>(&mut self, link: &mut L) -> Result<(), LinkError> {
+        if let Some((run, next_order)) = self.host_silent() {
+            self.scan = None;
+            self.last_fault = Some(Fault::HostSilent);
+            self.safe_state();
+            crate::info!("host silent during a scan; head in safe state");
+            let ev = ScanEvent::Stopped {
+                run,
+                next_order,
+                reason: Fault::HostSilent,
+            };
+            return self.publish::<ScanEventTopic, L>(&ev, link).await;
+        }
         let Some(run) = self.scan.as_mut() else {
             return Ok(());
         };
-        let order = run.next_order;
+        let (order, run_no) = (run.next_order, run.run);
         let point = run
             .planner
             .next(&self.cfg, &run.spec)
@@ -116,6 +137,7 @@ impl<B: Board> Head<B> {
         let ev = match point {
             None => {
                 let ev = ScanEvent::Finished {
+                    run: run_no,
                     measured: run.measured,
                     skipped: run.skipped,
                 };
@@ -123,7 +145,11 @@ impl<B: Board> Head<B> {
                 self.safe_state();
                 ev
             }
-            Some((index, g)) => match self.acquire(Some(g), Some(ScanPosition { index, order })).await {
+            Some((index, g)) => match self.acquire(Some(g), Some(ScanPosition { index, order })).await.and_then(|s| {
+                // A run of suspicious points ends the scan: the sample that
+                // completed it is not sent, and the scan resumes at it.
+                self.watch(&s).map(|()| s)
+            }) {
                 Ok(s) => {
                     self.advance(|r| r.measured += 1);
                     ScanEvent::Sample(s)
@@ -136,7 +162,11 @@ impl<B: Board> Head<B> {
                     self.scan = None;
                     self.last_fault = Some(reason);
                     self.safe_state();
-                    ScanEvent::Stopped { next_order: order, reason }
+                    ScanEvent::Stopped {
+                        run: run_no,
+                        next_order: order,
+                        reason,
+                    }
                 }
             },
         };

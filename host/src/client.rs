@@ -6,11 +6,11 @@ use crate::sim::SimConfig;
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
-    MoveEndpoint, MoveReport, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    MoveEndpoint, MoveReport, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::{
-    AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, Sample, SanityConfig,
-    ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
+    AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, SafetySettings, Sample,
+    SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
 };
 use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
 use postcard_rpc::standard_icd::WireError;
@@ -112,6 +112,11 @@ impl Head {
         fault(call::<SanityEndpoint>(&self.client, &cfg, QUICK).await?).context("sanity model refused")
     }
 
+    /// Sets how long the head tolerates host silence during a scan.
+    pub async fn safety(&self, s: SafetySettings) -> Result<()> {
+        fault(call::<SafetyEndpoint>(&self.client, &s, QUICK).await?).context("safety settings refused")
+    }
+
     pub async fn abort(&self) -> Result<Status> {
         Ok(call::<AbortEndpoint>(&self.client, &(), QUICK).await?)
     }
@@ -140,6 +145,13 @@ impl Head {
             let _ = tokio::task::spawn_blocking(move || t.join()).await;
         }
     }
+}
+
+/// Whether an error means the link to the head is gone (closed, or a
+/// request unanswered), rather than the head refusing something.
+pub fn is_link_loss(e: &anyhow::Error) -> bool {
+    e.chain()
+        .any(|c| matches!(c.downcast_ref::<CallError>(), Some(CallError::Timeout(..) | CallError::Closed(_))))
 }
 
 fn fault<T>(r: gonio_shared::Reply<T>) -> Result<T> {

@@ -16,4 +16,6 @@ pub mod report;
 pub mod run_record;
 pub mod samples_csv;
 pub mod scan;
+pub mod session;
 pub mod sim;
+pub mod usb;

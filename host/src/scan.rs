@@ -1,16 +1,17 @@
 //! Running a scan on a connected head: the request, the event stream with
 //! its continuity check, durable storage of every sample, progress.
 
-use crate::client::Head;
+use crate::client::{is_link_loss, Head};
 use crate::samples_csv::SampleWriter;
+use crate::session::Session;
 use anyhow::{bail, Context, Result};
-use gonio_shared::{Fault, Geometry, ScanEvent, ScanSpec};
+use gonio_shared::{Fault, Geometry, HeadState, ScanEvent, ScanSpec};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
 
-/// Longest silence between two scan events (one move plus one integration).
+/// Longest time the head may stay at one position (one move plus one integration).
 const EVENT_TIMEOUT: Duration = Duration::from_secs(180);
 
 /// What a completed scan did.
@@ -23,6 +24,10 @@ pub struct ScanOutcome {
     pub skipped_by_reason: BTreeMap<String, u32>,
     /// Samples carrying a quality flag other than `through_splitter`.
     pub flagged: u32,
+    /// Events that arrived twice (or late from an earlier run) and were dropped.
+    pub duplicates_dropped: u32,
+    /// Interruptions recovered, by cause.
+    pub recoveries: BTreeMap<String, u32>,
     /// Time the head spent (its clock, s): real time on a real head, simulated time on the simulator.
     pub head_time_s: f64,
     pub wall_time_s: f64,
@@ -60,11 +65,51 @@ enum Stretch {
     Finished,
     /// Paused for the monitor; continue at this visit position.
     Paused(u32),
+    /// Cut short; continue at this visit position once recovered.
+    Interrupted(u32, Interruption),
 }
 
+/// Why a stretch was cut short, and so how the host recovers.
+#[derive(Debug)]
+enum Interruption {
+    /// Events lost, damaged or out of order: the head is asked for the
+    /// rest again (the scan continued from the first position not stored).
+    Gap,
+    /// The link closed or stopped answering: find the head again.
+    LinkLost(String),
+    /// The head stopped for a fault a retry clears (a lost ADC block twice,
+    /// a host heartbeat that came too late).
+    Transient(Fault),
+    /// A move stalled: the stages lost their position; home, then continue.
+    Rehome(Fault),
+}
+
+impl Interruption {
+    fn name(&self) -> String {
+        match self {
+            Interruption::Gap => "events lost or out of order".into(),
+            Interruption::LinkLost(why) => format!("link lost ({why})"),
+            Interruption::Transient(f) | Interruption::Rehome(f) => f.to_string(),
+        }
+    }
+}
+
+/// Recoveries in a row without a new point before the host gives up.
+const MAX_RECOVERIES: u32 = 5;
+/// How long the host waits for an event before asking the head how it is.
+const POLL: Duration = Duration::from_secs(1);
+
 /// Runs `spec` to the end, appending every sample (and every monitor
-/// reading, a row without scan position) to `out`.
-pub async fn run(head: &Head, spec: &ScanSpec, out: &mut SampleWriter, pb: &ProgressBar, monitor: Option<&Monitor>) -> Result<ScanOutcome> {
+/// reading, a row without scan position) to `out`. Lost, damaged,
+/// duplicated or reordered events, a lost link and transient faults are
+/// recovered: no position is stored twice or left out.
+pub async fn run(
+    session: &mut Session,
+    spec: &ScanSpec,
+    out: &mut SampleWriter,
+    pb: &ProgressBar,
+    monitor: Option<&Monitor>,
+) -> Result<ScanOutcome> {
     let t0 = Instant::now();
     let mut outcome = ScanOutcome {
         points: spec.len(),
@@ -72,33 +117,72 @@ pub async fn run(head: &Head, spec: &ScanSpec, out: &mut SampleWriter, pb: &Prog
         skipped: 0,
         skipped_by_reason: BTreeMap::new(),
         flagged: 0,
+        duplicates_dropped: 0,
+        recoveries: BTreeMap::new(),
         head_time_s: 0.0,
         wall_time_s: 0.0,
     };
     let mut clock = HeadClock::default();
     let mut first = spec.first_order;
+    let (mut in_a_row, mut progress) = (0, first);
     pb.set_length((outcome.points - first) as u64);
+    let mut read_monitor_now = true;
     loop {
-        if let Some(m) = monitor {
-            read_monitor(head, m, out, &mut clock).await?;
+        if let (Some(m), true) = (monitor, read_monitor_now) {
+            read_monitor(session.head(), m, out, &mut clock).await?;
         }
         let stop_at = monitor.map(|m| first.saturating_add(m.every.max(1)));
         let stretch = ScanSpec {
             first_order: first,
             ..spec.clone()
         };
-        match run_stretch(head, &stretch, out, pb, &mut outcome, &mut clock, stop_at).await? {
+        match run_stretch(session, &stretch, out, pb, &mut outcome, &mut clock, stop_at).await? {
             Stretch::Finished => break,
-            Stretch::Paused(next) => first = next,
+            Stretch::Paused(next) => {
+                first = next;
+                read_monitor_now = true;
+            }
+            Stretch::Interrupted(next, why) => {
+                if next > progress {
+                    (in_a_row, progress) = (0, next);
+                }
+                in_a_row += 1;
+                if in_a_row > MAX_RECOVERIES {
+                    bail!(
+                        "{}; gave up after {MAX_RECOVERIES} recoveries without progress; resume from position {next}",
+                        why.name()
+                    );
+                }
+                *outcome.recoveries.entry(why.name()).or_default() += 1;
+                pb.suspend(|| note_recovery(&why, next));
+                match why {
+                    Interruption::LinkLost(_) => session.reconnect().await.with_context(|| format!("resume from position {next}"))?,
+                    Interruption::Rehome(_) => {
+                        session
+                            .head()
+                            .home()
+                            .await
+                            .with_context(|| format!("homing after a stalled move; resume from position {next}"))?;
+                    }
+                    Interruption::Gap | Interruption::Transient(_) => {}
+                }
+                first = next;
+                read_monitor_now = false;
+            }
         }
     }
     if let Some(m) = monitor {
-        read_monitor(head, m, out, &mut clock).await?;
+        read_monitor(session.head(), m, out, &mut clock).await?;
     }
     pb.finish_and_clear();
     outcome.head_time_s = clock.span_s();
     outcome.wall_time_s = t0.elapsed().as_secs_f64();
     Ok(outcome)
+}
+
+/// Tells the operator what is being recovered (stderr; quiet runs hide the bar, not this).
+fn note_recovery(why: &Interruption, next: u32) {
+    eprintln!("scan interrupted: {}; continuing from position {next}", why.name());
 }
 
 /// Readings per monitor visit: every sample of the scan is referred to them,
@@ -136,9 +220,10 @@ impl HeadClock {
 }
 
 /// Runs the scan from `spec.first_order`, to the end or, with `stop_at`,
-/// until that visit position has been reached (then aborts it between points).
+/// until that visit position has been reached (then aborts it between
+/// points), or until something interrupts it.
 async fn run_stretch(
-    head: &Head,
+    session: &Session,
     spec: &ScanSpec,
     out: &mut SampleWriter,
     pb: &ProgressBar,
@@ -146,36 +231,86 @@ async fn run_stretch(
     clock: &mut HeadClock,
     stop_at: Option<u32>,
 ) -> Result<Stretch> {
-    let (accepted, mut events) = head.start_scan(spec).await?;
+    let head = session.head();
+    let mut expected = spec.first_order;
+    let lost = |e: anyhow::Error, at: u32| -> Result<Stretch> {
+        if is_link_loss(&e) {
+            Ok(Stretch::Interrupted(at, Interruption::LinkLost(format!("{e:#}"))))
+        } else {
+            Err(e)
+        }
+    };
+    let (accepted, mut events) = match head.start_scan(spec).await {
+        Ok(x) => x,
+        Err(e) => return lost(e, expected),
+    };
     outcome.points = accepted.points;
-    let mut expected = accepted.first_order;
-    let (mut measured, mut skipped) = (0, 0);
     let mut pausing = false;
+    let mut beat = Instant::now();
+    let mut waiting_since = Instant::now();
     loop {
-        let ev = match tokio::time::timeout(EVENT_TIMEOUT, events.recv()).await {
-            Err(_) => bail!(
-                "the head went silent during the scan (no event for {} s); resume from position {expected}",
-                EVENT_TIMEOUT.as_secs()
-            ),
-            Ok(None) => bail!("the link to the head closed during the scan; resume from position {expected}"),
+        let ev = match tokio::time::timeout(POLL, events.recv()).await {
+            Ok(None) => return Ok(Stretch::Interrupted(expected, Interruption::LinkLost("the link closed".into()))),
             Ok(Some(ev)) => ev,
+            Err(_) => {
+                // No event for a while: ask the head where it is (this is
+                // also the heartbeat the head watches for).
+                beat = Instant::now();
+                let st = match head.status().await {
+                    Ok(st) => st,
+                    Err(e) => return lost(e, expected),
+                };
+                match st.state {
+                    HeadState::Scanning { next_order, .. } if next_order <= expected => {
+                        if waiting_since.elapsed() > EVENT_TIMEOUT {
+                            bail!(
+                                "the head has been at position {expected} for {} s; resume from position {expected}",
+                                EVENT_TIMEOUT.as_secs()
+                            );
+                        }
+                        continue;
+                    }
+                    HeadState::Scanning { .. } => {
+                        if let Err(e) = head.abort().await {
+                            return lost(e, expected);
+                        }
+                        return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                    }
+                    HeadState::Idle if expected >= outcome.points => return Ok(Stretch::Finished),
+                    HeadState::Idle => return Ok(Stretch::Interrupted(expected, Interruption::Gap)),
+                }
+            }
         };
+        if beat.elapsed() > session.heartbeat() {
+            beat = Instant::now();
+            if let Err(e) = head.status().await {
+                return lost(e, expected);
+            }
+        }
         let order = match &ev {
             ScanEvent::Sample(s) => s.scan.map(|p| p.order),
             ScanEvent::Skipped { order, .. } => Some(*order),
             ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } => None,
         };
         if let Some(o) = order {
-            if o != expected {
-                bail!("scan events lost: expected position {expected}, got {o}; resume from position {expected}");
+            if o < expected {
+                // Sent twice, or an earlier run's late event: stored already.
+                outcome.duplicates_dropped += 1;
+                continue;
+            }
+            if o > expected {
+                if let Err(e) = head.abort().await {
+                    return lost(e, expected);
+                }
+                return Ok(Stretch::Interrupted(expected, Interruption::Gap));
             }
             expected += 1;
+            waiting_since = Instant::now();
             pb.inc(1);
         }
         match ev {
             ScanEvent::Sample(s) => {
                 out.push(&s)?;
-                measured += 1;
                 outcome.measured += 1;
                 if s.flags.0 & !gonio_shared::SampleFlags::THROUGH_SPLITTER != 0 {
                     outcome.flagged += 1;
@@ -183,29 +318,32 @@ async fn run_stretch(
                 clock.saw(s.timestamp_us);
             }
             ScanEvent::Skipped { reason, .. } => {
-                skipped += 1;
                 outcome.skipped += 1;
                 *outcome.skipped_by_reason.entry(reason.to_string()).or_default() += 1;
             }
-            ScanEvent::Finished {
-                measured: head_measured,
-                skipped: head_skipped,
-            } => {
-                if (head_measured, head_skipped) != (measured, skipped) {
-                    bail!("the head counted {head_measured} measured and {head_skipped} skipped points, the host {measured} and {skipped}");
+            ScanEvent::Finished { run, .. } if run == accepted.run => {
+                if expected < outcome.points {
+                    // The head finished, but events before the end were lost.
+                    return Ok(Stretch::Interrupted(expected, Interruption::Gap));
                 }
                 return Ok(Stretch::Finished);
             }
-            ScanEvent::Stopped { next_order, reason } => {
-                if pausing && reason == Fault::Aborted && next_order == expected {
-                    return Ok(Stretch::Paused(next_order));
-                }
-                bail!("the head stopped the scan: {reason}; resume from position {next_order}")
+            ScanEvent::Stopped { run, reason, .. } if run == accepted.run => {
+                return match reason {
+                    Fault::Aborted if pausing => Ok(Stretch::Paused(expected)),
+                    Fault::AdcOverrun | Fault::HostSilent => Ok(Stretch::Interrupted(expected, Interruption::Transient(reason))),
+                    Fault::StepTimer(_) => Ok(Stretch::Interrupted(expected, Interruption::Rehome(reason))),
+                    _ => bail!("the head stopped the scan: {reason}; resume from position {expected}"),
+                };
             }
+            // The end of an earlier run, arriving late.
+            ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } => {}
         }
         pb.set_message(format!("{} measured, {} unreachable", outcome.measured, outcome.skipped));
         if !pausing && stop_at.is_some_and(|p| expected >= p && expected < outcome.points) {
-            head.abort().await.context("pausing the scan for the laser-drift monitor")?;
+            if let Err(e) = head.abort().await {
+                return lost(e.context("pausing the scan for the laser-drift monitor"), expected);
+            }
             pausing = true;
         }
     }

@@ -52,6 +52,7 @@ pub enum Field {
     ScanStart,
     ModelParameter,
     Tolerance,
+    HostTimeout,
 }
 
 impl Field {
@@ -68,6 +69,7 @@ impl Field {
             Field::ScanStart => "scan start position",
             Field::ModelParameter => "model parameter",
             Field::Tolerance => "sanity tolerance",
+            Field::HostTimeout => "host timeout",
         }
     }
 }
@@ -106,7 +108,8 @@ pub enum Fault {
     StepTimer(Axis),
     /// The ADC stream lost a block (DMA overrun).
     AdcOverrun,
-    /// The detector saturates even at the lowest gain.
+    /// The detector saturates even at the lowest gain (in a scan: at
+    /// consecutive points, stray light or a failed amplifier).
     Saturated,
     /// A GPIO write (DIR, enable, gain select, laser) failed.
     Gpio,
@@ -114,6 +117,11 @@ pub enum Fault {
     NotCalibrated,
     /// The calibration signal is too weak or too noisy to learn from.
     WeakSignal,
+    /// Consecutive scan points all below the noise floor: the laser is dead
+    /// or the beam blocked.
+    NoSignal,
+    /// The host sent nothing within the host timeout during a scan.
+    HostSilent,
 }
 
 impl Fault {
@@ -135,6 +143,8 @@ impl Fault {
             Fault::Gpio => 600,
             Fault::NotCalibrated => 502,
             Fault::WeakSignal => 503,
+            Fault::NoSignal => 504,
+            Fault::HostSilent => 303,
         }
     }
 }
@@ -158,6 +168,8 @@ impl fmt::Display for Fault {
             Fault::Gpio => f.write_str("GPIO write failed"),
             Fault::NotCalibrated => f.write_str("matched reference not calibrated; run calibrate on a strong signal first"),
             Fault::WeakSignal => f.write_str("calibration signal too weak or too noisy"),
+            Fault::NoSignal => f.write_str("no signal at consecutive scan points: laser dead or beam blocked"),
+            Fault::HostSilent => f.write_str("the host went silent during the scan (heartbeat timeout)"),
         }
     }
 }

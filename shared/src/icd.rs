@@ -10,6 +10,7 @@ use crate::detection::{CalibrateRequest, CalibrationReport, DetectionReport, Det
 use crate::fault::Fault;
 use crate::geometry::{AxisAngles, Geometry};
 use crate::identity::Identity;
+use crate::safety::SafetySettings;
 use crate::sample::Sample;
 use crate::sanity::SanityConfig;
 use crate::scan::{ScanAccepted, ScanEvent, ScanSpec};
@@ -61,6 +62,7 @@ pub type ScanReply = Reply<ScanAccepted>;
 pub type DetectionReply = Reply<DetectionReport>;
 pub type SanityReply = Reply<()>;
 pub type CalibrateReply = Reply<CalibrationReport>;
+pub type SafetyReply = Reply<()>;
 
 endpoints! {
     list = ENDPOINT_LIST;
@@ -76,6 +78,7 @@ endpoints! {
     | DetectionEndpoint     | DetectionSettings | DetectionReply          | "gonio/detection"    |
     | SanityEndpoint        | SanityConfig      | SanityReply             | "gonio/sanity"       |
     | CalibrateEndpoint     | CalibrateRequest  | CalibrateReply          | "gonio/calibrate"    |
+    | SafetyEndpoint        | SafetySettings    | SafetyReply             | "gonio/safety"       |
 }
 
 topics! {

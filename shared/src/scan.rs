@@ -156,6 +156,10 @@ impl ScanSpec {
 pub struct ScanAccepted {
     pub points: u32,
     pub first_order: u32,
+    /// Number of this scan run on the head since power-up: its `Finished`
+    /// and `Stopped` events carry it, so a late one of an earlier run is
+    /// told apart.
+    pub run: u32,
 }
 
 /// Streamed on the scan-event topic alongside the samples.
@@ -167,7 +171,7 @@ pub enum ScanEvent {
     /// A point that cannot be reached, and why; nothing moved for it.
     Skipped { index: u32, order: u32, reason: Fault },
     /// Every point from `first_order` on was visited.
-    Finished { measured: u32, skipped: u32 },
+    Finished { run: u32, measured: u32, skipped: u32 },
     /// The scan stopped early; `next_order` resumes it.
-    Stopped { next_order: u32, reason: Fault },
+    Stopped { run: u32, next_order: u32, reason: Fault },
 }

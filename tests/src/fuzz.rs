@@ -3,6 +3,7 @@
 //! `cargo test` runs every committed seed through them on stable Rust
 //! (tests/tests/fuzz_seeds.rs), and `fuzz-seeds` writes those seeds.
 
+use crate::frames::{request, sealed};
 use gonio_firmware::framing::{self, Decoder};
 use gonio_firmware::{check, dispatch};
 use gonio_host::formats::{alta, brdf_csv};
@@ -12,9 +13,6 @@ use gonio_shared::icd::{
     MoveEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
 use gonio_shared::{AngleRange, CalibrateRequest, DetectionSettings, Geometry, SanityConfig, SanityKind, SanityModel, ScanSpec};
-use postcard_rpc::header::{VarKeyKind, VarSeq};
-use postcard_rpc::Endpoint;
-use serde::Serialize;
 
 /// The head's receive path on a byte stream: COBS frames, their check, and
 /// the request decoder; the decoder also sees the raw bytes, since random
@@ -42,14 +40,6 @@ fn frames(data: &[u8]) -> Vec<Vec<u8>> {
         rest = &tail[n..];
     }
     out
-}
-
-/// A frame with its check, as the host sends it.
-fn sealed(mut frame: Vec<u8>) -> Vec<u8> {
-    let n = frame.len();
-    frame.resize(n + check::LEN, 0);
-    let _ = check::seal(&mut frame, n);
-    frame
 }
 
 /// The firmware's command dispatch on the simulated head: the frames (each
@@ -84,16 +74,6 @@ pub fn csv_reader(data: &[u8]) {
     if let Ok(d) = brdf_csv::parse(text) {
         assert!(d.observations.iter().all(|o| o.value.is_finite() && o.theta_i.is_finite()));
     }
-}
-
-fn request<E: Endpoint>(req: &E::Request) -> Vec<u8>
-where
-    E::Request: Serialize,
-{
-    let mut buf = vec![0u8; framing::MAX_FRAME];
-    let n = dispatch::encode(E::REQ_KEY, VarKeyKind::Key8, VarSeq::Seq4(1), req, &mut buf).unwrap_or(0);
-    buf.truncate(n);
-    buf
 }
 
 /// Seed inputs per target: every request once (valid and invalid values), a

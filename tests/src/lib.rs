@@ -5,6 +5,7 @@
 
 pub mod chop_signal;
 pub mod doubles;
+pub mod frames;
 pub mod fuzz;
 pub mod step_log;
 pub mod strategies;

@@ -46,6 +46,7 @@ pub fn field() -> impl Strategy<Value = Field> {
         Just(Field::ScanStart),
         Just(Field::ModelParameter),
         Just(Field::Tolerance),
+        Just(Field::HostTimeout),
     ]
 }
 
@@ -66,6 +67,8 @@ pub fn fault() -> impl Strategy<Value = Fault> {
         Just(Fault::Gpio),
         Just(Fault::NotCalibrated),
         Just(Fault::WeakSignal),
+        Just(Fault::NoSignal),
+        Just(Fault::HostSilent),
     ]
 }
 
@@ -217,8 +220,8 @@ pub fn scan_event() -> impl Strategy<Value = ScanEvent> {
     prop_oneof![
         sample().prop_map(ScanEvent::Sample),
         (any::<u32>(), any::<u32>(), fault()).prop_map(|(index, order, reason)| ScanEvent::Skipped { index, order, reason }),
-        (any::<u32>(), any::<u32>()).prop_map(|(measured, skipped)| ScanEvent::Finished { measured, skipped }),
-        (any::<u32>(), fault()).prop_map(|(next_order, reason)| ScanEvent::Stopped { next_order, reason }),
+        (any::<u32>(), any::<u32>(), any::<u32>()).prop_map(|(run, measured, skipped)| ScanEvent::Finished { run, measured, skipped }),
+        (any::<u32>(), any::<u32>(), fault()).prop_map(|(run, next_order, reason)| ScanEvent::Stopped { run, next_order, reason }),
     ]
 }
 

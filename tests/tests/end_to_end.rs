@@ -8,6 +8,7 @@ use gonio_host::brdf::Directions;
 use gonio_host::client::{Head, Target};
 use gonio_host::samples_csv::{self, SampleWriter};
 use gonio_host::scan;
+use gonio_host::session::{Session, Setup};
 use gonio_host::sim::{serve_pty, SimConfig};
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, Reference, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
 use std::collections::BTreeSet;
@@ -29,18 +30,36 @@ async fn homed(target: &Target) -> Head {
     head
 }
 
+/// A connected, prepared (homed) session, as `gonio scan` opens it.
+async fn session(target: Target) -> Session {
+    let setup = Setup {
+        settings: DetectionSettings::default(),
+        calibrate_at: None,
+        calibration_periods: 0,
+    };
+    let mut s = Session::connect(target, setup, true).await.unwrap();
+    s.prepare().await.unwrap();
+    s
+}
+
 #[tokio::test]
 async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
     let sim = SimConfig::default();
-    let head = homed(&Target::Sim(sim.clone())).await;
+    let mut session = session(Target::Sim(sim.clone())).await;
     let dir = tempfile::tempdir().unwrap();
     let spec = small_grid();
     let mut out = SampleWriter::create(dir.path()).unwrap();
-    let outcome = scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true, "scanning", "points"), None)
-        .await
-        .unwrap();
+    let outcome = scan::run(
+        &mut session,
+        &spec,
+        &mut out,
+        &scan::progress_bar(0, true, "scanning", "points"),
+        None,
+    )
+    .await
+    .unwrap();
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
-    head.close().await;
+    session.close().await;
 
     assert_eq!(outcome.points, spec.len());
     assert_eq!(outcome.measured + outcome.skipped, spec.len());
@@ -142,7 +161,7 @@ async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() 
     assert!(!st.laser_on);
     let next = loop {
         match events.recv().await.unwrap() {
-            ScanEvent::Stopped { next_order, reason } => {
+            ScanEvent::Stopped { next_order, reason, .. } => {
                 assert_eq!(reason, gonio_shared::Fault::Aborted);
                 break next_order;
             }
@@ -179,12 +198,12 @@ async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
     let target = Target::Port(link.to_string_lossy().into_owned());
-    let head = homed(&target).await;
-    assert!(head.identity().simulated);
-    assert_eq!(head.identity().protocol_version, PROTOCOL_VERSION);
+    let mut session = session(target.clone()).await;
+    assert!(session.head().identity().simulated);
+    assert_eq!(session.head().identity().protocol_version, PROTOCOL_VERSION);
     let mut out = SampleWriter::create(dir.path()).unwrap();
     let outcome = scan::run(
-        &head,
+        &mut session,
         &small_grid(),
         &mut out,
         &scan::progress_bar(0, true, "scanning", "points"),
@@ -195,7 +214,7 @@ async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
     assert_eq!(rows.len() as u32, outcome.measured);
     assert_eq!(outcome.measured + outcome.skipped, small_grid().len());
-    head.close().await;
+    session.close().await;
     // A second session on the same head works too.
     let again = Head::connect(&target).await.unwrap();
     assert!(again.status().await.unwrap().homed);

@@ -3,9 +3,10 @@
 //! points) are flagged and measured again, and clean points are not flagged.
 
 use gonio_host::brdf::Directions;
-use gonio_host::client::{Head, Target};
+use gonio_host::client::Target;
 use gonio_host::samples_csv::{self, SampleWriter};
 use gonio_host::scan;
+use gonio_host::session::{Session, Setup};
 use gonio_host::sim::SimConfig;
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, SampleFlags, SanityConfig, ScanSpec};
 use std::collections::BTreeSet;
@@ -29,9 +30,14 @@ async fn dust_is_flagged_and_clean_data_is_not() {
         ..SimConfig::default()
     };
     let material = sim.material.clone();
-    let head = Head::connect(&Target::Sim(sim.clone())).await.unwrap();
-    head.detection(DetectionSettings::default()).await.unwrap();
-    head.home().await.unwrap();
+    let setup = Setup {
+        settings: DetectionSettings::default(),
+        calibrate_at: None,
+        calibration_periods: 0,
+    };
+    let mut session = Session::connect(Target::Sim(sim.clone()), setup, true).await.unwrap();
+    session.prepare().await.unwrap();
+    let head = session.head();
 
     // The instrument constant from one clean point, as a reference plate would give it.
     let at = Geometry::new(30.0, 20.0, 90.0);
@@ -52,12 +58,18 @@ async fn dust_is_flagged_and_clean_data_is_not() {
 
     let dir = tempfile::tempdir().unwrap();
     let mut out = SampleWriter::create(dir.path()).unwrap();
-    scan::run(&head, &spec, &mut out, &scan::progress_bar(0, true, "scanning", "points"), None)
-        .await
-        .unwrap();
+    scan::run(
+        &mut session,
+        &spec,
+        &mut out,
+        &scan::progress_bar(0, true, "scanning", "points"),
+        None,
+    )
+    .await
+    .unwrap();
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
-    let status = head.status().await.unwrap();
-    head.close().await;
+    let status = session.head().status().await.unwrap();
+    session.close().await;
 
     let dusty: BTreeSet<u32> = (0..spec.len())
         .filter(|&i| {

@@ -2,7 +2,7 @@
 
 use crate::brdf::{Material, ModelId};
 use crate::sim::SimConfig;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct SimHeadArgs {
@@ -23,6 +23,13 @@ pub struct SimHeadArgs {
     /// the drift) of an earlier run, e.g. the reference plate's.
     #[arg(long, default_value_t = 0.0)]
     pub clock_start_s: f64,
+    /// Faults for the simulated head to suffer, KIND@N[:ARG],...: on the link
+    /// at its N-th frame (drop, corrupt, duplicate, reorder, delay:MS,
+    /// disconnect), in the hardware from its N-th move (saturated,
+    /// laser-dead, stall, overrun:BLOCKS) or from the start (switch-open:AXIS,
+    /// switch-closed:AXIS).
+    #[arg(long, value_name = "FAULTS")]
+    pub inject: Option<String>,
 }
 
 impl SimHeadArgs {
@@ -46,6 +53,9 @@ impl SimHeadArgs {
             ..SimConfig::default()
         };
         cfg.photodiode.laser_drift = self.laser_drift;
+        if let Some(f) = &self.inject {
+            cfg.faults = crate::sim::faults::Faults::parse(f).context("--inject")?;
+        }
         Ok(cfg)
     }
 }

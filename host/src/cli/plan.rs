@@ -5,6 +5,7 @@ use super::detector::DetectorArgs;
 use crate::brdf::Material;
 use crate::client::Target;
 use crate::scan::Monitor;
+use crate::sim::faults::Faults;
 use crate::sim::SimConfig;
 use anyhow::{Context, Result};
 use gonio_shared::ScanSpec;
@@ -40,12 +41,20 @@ pub struct ScanPlan {
     /// Measure the reference plate before the scan (`reference.csv`).
     #[serde(default)]
     pub reference_plate: bool,
+    /// Faults injected into a simulated head: not part of the plan (a
+    /// resume runs on the repaired head).
+    #[serde(skip)]
+    pub faults: Faults,
 }
 
 const FILE: &str = "scan.json";
 
 impl ScanPlan {
     pub fn new(target: &Target, spec: &ScanSpec, detector: &DetectorArgs) -> Self {
+        let faults = match target {
+            Target::Sim(c) => c.faults.clone(),
+            Target::Port(_) => Faults::default(),
+        };
         let target = match target {
             Target::Sim(c) => PlanTarget::Sim {
                 material: c.material.clone(),
@@ -61,6 +70,7 @@ impl ScanPlan {
             detector: detector.clone(),
             monitor: None,
             reference_plate: false,
+            faults,
         }
     }
 
@@ -76,6 +86,7 @@ impl ScanPlan {
                     material: material.clone(),
                     seed: *seed,
                     clock_start_s: *clock_start_s,
+                    faults: self.faults.clone(),
                     ..SimConfig::default()
                 };
                 c.photodiode.laser_drift = *laser_drift;

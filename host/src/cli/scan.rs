@@ -7,16 +7,17 @@ use super::grid::GridArgs;
 use super::material::SimHeadArgs;
 use super::plan::{PlanTarget, ScanPlan};
 use super::reference;
-use crate::client::{Head, Target};
+use crate::client::Target;
 use crate::run_record::RunRecord;
 use crate::samples_csv::{stored_rows, SampleWriter};
 use crate::scan::{self, Monitor, ScanOutcome};
+use crate::session::{Session, Setup};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::motion::plan::{scan_time, visit_order};
 use gonio_firmware::motion::PARK;
-use gonio_shared::{DetectionReport, DetectionSettings, Reference, ScanSpec};
+use gonio_shared::{DetectionReport, ScanSpec};
 
 /// Length of the detector calibration (s).
 const CALIBRATION_S: f32 = 1.0;
@@ -230,8 +231,13 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         ..plan.spec.clone()
     };
     let (settings, calibrate_at) = det.plan()?;
-    let head = Head::connect(&target).await?;
-    let id = head.identity().clone();
+    let setup = Setup {
+        settings,
+        calibrate_at,
+        calibration_periods: settings.periods_for(CALIBRATION_S),
+    };
+    let mut session = Session::connect(target.clone(), setup, json).await?;
+    let id = session.head().identity().clone();
     if !json {
         eprintln!(
             "head: {} (serial {}, firmware {}, protocol v{}{})",
@@ -246,30 +252,10 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         prepare_dir(dir, output.force)?;
         plan.write(dir)?;
     }
-    // The chop timing is set first: a calibration holds for that timing.
-    head.detection(DetectionSettings {
-        reference: Reference::Square,
-        ..settings
-    })
-    .await?;
-    head.home().await?;
-    let calibration = match calibrate_at {
-        Some(g) => {
-            head.move_to(g).await.context("moving to the calibration geometry")?;
-            let c = head.calibrate(settings.periods_for(CALIBRATION_S)).await?;
-            if !json {
-                eprintln!(
-                    "detector calibrated: phase {:.1}°, {:.3} V at gain {}, SNR {:.0}",
-                    c.phase_deg, c.amplitude_v, c.gain_index, c.snr
-                );
-            }
-            Some(c)
-        }
-        None => None,
-    };
-    let detection = head.detection(settings).await?;
+    session.prepare().await?;
+    let detection = session.detection.context("the head's detection settings")?;
     if plan.reference_plate && resume.is_none() {
-        reference::measure_plate(&head, &target, dir, json).await?;
+        reference::measure_plate(session.head(), &target, dir, json).await?;
     }
     let estimate = estimate_s(spec, &detection);
     if !json {
@@ -291,7 +277,14 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         None => SampleWriter::create(dir)?,
     };
     let pb = scan::progress_bar(spec.len() as u64, json, "scanning", "points");
-    let mut outcome = scan::run(&head, spec, &mut writer, &pb, plan.monitor.as_ref()).await?;
+    let mut outcome = scan::run(&mut session, spec, &mut writer, &pb, plan.monitor.as_ref())
+        .await
+        .with_context(|| {
+            format!(
+                "scan interrupted; every sample so far is on disk: finish it with `gonio scan --resume {}`",
+                dir.display()
+            )
+        })?;
     let samples = writer.finish()?;
     if resume.is_some() {
         // Counts of the whole scan, not only of this session.
@@ -302,10 +295,10 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         Target::Sim(c) => Some(c.material.clone()),
         Target::Port(_) => None,
     };
-    let mut record = RunRecord::new(&id, material, spec, &detection, calibration, outcome.clone());
+    let mut record = RunRecord::new(&id, material, spec, &detection, session.calibration, outcome.clone());
     record.estimated_s = Some(estimate);
     record.write(dir)?;
-    head.close().await;
+    session.close().await;
     Ok((outcome, samples))
 }
 
@@ -338,6 +331,12 @@ fn summarise(o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
     );
     for (reason, n) in &o.skipped_by_reason {
         println!("  {n:5} × {reason}");
+    }
+    for (why, n) in &o.recoveries {
+        println!("  recovered {n} × {why}");
+    }
+    if o.duplicates_dropped > 0 {
+        println!("  {} duplicate events dropped", o.duplicates_dropped);
     }
     println!("samples: {}", samples.display());
     Ok(())

@@ -1,6 +1,7 @@
 //! Virtual peripherals implementing the firmware's hardware traits over the
 //! shared [`World`]. Every future completes at once: time is simulated.
 
+use super::faults::HardwareFault;
 use super::world::World;
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::hw::{AdcStream, Board, ChopTiming, Clock, Hardware, Overrun, QueueFull, StepBlock, StepTimer};
@@ -114,11 +115,16 @@ impl AdcStream for SimAdc {
             out.fill(0);
             return Err(Overrun);
         };
+        let (saturated, dead) = (
+            w.faults.active(w.moves, |f| *f == HardwareFault::AdcSaturated),
+            w.faults.active(w.moves, |f| *f == HardwareFault::LaserDead),
+        );
+        let lost = w.faults.take_overrun(w.moves);
         let dt = timing.ticks_per_sample as f64 / Self::TIMER_HZ as f64;
         let m = out.len();
         let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64;
         let vref = w.cfg.detector.adc_vref as f64;
-        let sig_a = if w.laser {
+        let sig_a = if w.laser && !dead {
             w.photodiode.signal_a(w.target(), &w.cfg, w.angles(), |d| w.defect(d)) * w.photodiode.laser_factor(w.t_s)
         } else {
             0.0
@@ -132,9 +138,16 @@ impl AdcStream for SimAdc {
             self.amp_v += (target - self.amp_v) * alpha;
             let t = *t_s + k as f64 * dt;
             let v = self.amp_v + photodiode.interference_v(t, rng);
-            *o = (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16;
+            *o = if saturated {
+                full as u16
+            } else {
+                (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16
+            };
         }
         *t_s += m as f64 * dt;
+        if lost {
+            return Err(Overrun);
+        }
         Ok(())
     }
 }
@@ -155,6 +168,18 @@ impl StepTimer for SimSteps {
     }
 
     async fn run(&mut self) -> [u32; 3] {
+        let stalled = {
+            let mut w = self.world.borrow_mut();
+            if w.laser {
+                w.moves += 1;
+            }
+            w.faults.take_stall(w.moves)
+        };
+        if stalled {
+            // The timer never finishes: the firmware's watchdog on the move
+            // has to give up on it.
+            std::future::pending::<()>().await;
+        }
         let end = self.exec.run_to_end();
         self.world.borrow_mut().t_s += end as f64 / Self::TICK_HZ as f64;
         self.exec.emitted()

@@ -4,13 +4,14 @@
 //! the firmware's own motion, auto-range and demodulation code.
 
 mod board;
+pub mod faults;
 mod frames;
 mod inproc;
 mod optics;
 mod pty;
 mod world;
 
-pub use frames::FrameHead;
+pub use frames::{FrameHead, Sent};
 pub use inproc::spawn_in_process;
 pub use optics::Photodiode;
 pub use pty::serve_pty;
@@ -41,6 +42,8 @@ pub struct SimConfig {
     pub clock_start_s: f64,
     /// What is on the sample holder: the operator's hand in the simulation.
     pub mount: Mount,
+    /// Faults to suffer on the link and in the hardware.
+    pub faults: faults::Faults,
 }
 
 /// Which target sits on the sample holder. Shared between the host (the
@@ -72,6 +75,7 @@ impl Default for SimConfig {
             dust: Vec::new(),
             clock_start_s: 0.0,
             mount: Mount::default(),
+            faults: faults::Faults::default(),
         }
     }
 }

@@ -42,6 +42,12 @@ pub struct World {
     /// [`DUST_FACTOR`] times the material's value.
     pub dust: Vec<Geometry>,
     pub rng: StdRng,
+    /// Injected faults (shared with the host and later heads).
+    pub faults: super::faults::Faults,
+    /// Moves the step timer has run with the laser on: from one scan point
+    /// to the next (homing and the first approach are not counted), the
+    /// clock of the hardware faults.
+    pub moves: u64,
 }
 
 impl World {
@@ -81,6 +87,8 @@ impl World {
             photodiode: sim.photodiode.clone(),
             dust: sim.dust.clone(),
             rng: StdRng::seed_from_u64(sim.seed),
+            faults: sim.faults.clone(),
+            moves: 0,
         }
     }
 
@@ -97,6 +105,13 @@ impl World {
 
     /// True when the home switch of an axis is pressed.
     pub fn home_pressed(&self, axis: usize) -> bool {
+        use super::faults::HardwareFault::{SwitchStuckClosed, SwitchStuckOpen};
+        if self.faults.active(self.moves, |f| *f == SwitchStuckOpen(axis)) {
+            return false;
+        }
+        if self.faults.active(self.moves, |f| *f == SwitchStuckClosed(axis)) {
+            return true;
+        }
         self.steps[axis] <= units::deg_to_steps(&self.cfg.axes[axis], self.cfg.axes[axis].home_deg)
     }
 

@@ -1,0 +1,157 @@
+//! A session with a head for a scan: connect, prepare it (detection
+//! settings, homing, the detector's calibration, the host watch), and find it
+//! again after the link was lost: the same head (by serial number) on the
+//! same port or, for a real head plugged back in, on whichever port it came
+//! back on; then prepare it again, since it may have been power-cycled.
+
+use crate::client::{Head, Target};
+use anyhow::{bail, Context, Result};
+use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Geometry, Reference, SafetySettings};
+use std::time::{Duration, Instant};
+
+/// How long the host looks for a head that went away.
+const RECONNECT_WINDOW: Duration = Duration::from_secs(60);
+const RECONNECT_PAUSE: Duration = Duration::from_millis(500);
+
+/// Host silence a real head tolerates during a scan; the host polls its
+/// status at a quarter of it. Simulated heads keep their own time and are
+/// not watched (their clock runs a thousand times faster than the host's).
+pub const HOST_TIMEOUT_S: f32 = 20.0;
+
+/// What preparing the head means.
+#[derive(Debug, Clone)]
+pub struct Setup {
+    pub settings: DetectionSettings,
+    /// Where to learn the detection chain (matched reference), if anywhere.
+    pub calibrate_at: Option<Geometry>,
+    pub calibration_periods: u16,
+}
+
+pub struct Session {
+    pub target: Target,
+    setup: Setup,
+    head: Option<Head>,
+    serial: String,
+    quiet: bool,
+    pub detection: Option<DetectionReport>,
+    pub calibration: Option<CalibrationReport>,
+    /// Times the link was found again.
+    pub reconnections: u32,
+}
+
+impl Session {
+    /// Connects (nothing else: a head that cannot be reached leaves no trace).
+    pub async fn connect(target: Target, setup: Setup, quiet: bool) -> Result<Session> {
+        let head = Head::connect(&target).await?;
+        Ok(Session {
+            serial: head.identity().serial.to_string(),
+            target,
+            setup,
+            head: Some(head),
+            quiet,
+            detection: None,
+            calibration: None,
+            reconnections: 0,
+        })
+    }
+
+    pub fn head(&self) -> &Head {
+        // Present from connect on, except inside `reconnect`.
+        self.head.as_ref().expect("a connected head")
+    }
+
+    /// Detection settings, homing, calibration of the detection chain, the
+    /// host watch.
+    pub async fn prepare(&mut self) -> Result<()> {
+        let head = self.head();
+        // The chop timing is set first: a calibration holds for that timing.
+        head.detection(DetectionSettings {
+            reference: Reference::Square,
+            ..self.setup.settings
+        })
+        .await?;
+        head.home().await?;
+        let calibration = match self.setup.calibrate_at {
+            Some(g) => {
+                head.move_to(g).await.context("moving to the calibration geometry")?;
+                let c = head.calibrate(self.setup.calibration_periods).await?;
+                if !self.quiet {
+                    eprintln!(
+                        "detector calibrated: phase {:.1}°, {:.3} V at gain {}, SNR {:.0}",
+                        c.phase_deg, c.amplitude_v, c.gain_index, c.snr
+                    );
+                }
+                Some(c)
+            }
+            None => None,
+        };
+        let detection = head.detection(self.setup.settings).await?;
+        let watch = if head.identity().simulated { 0.0 } else { HOST_TIMEOUT_S };
+        head.safety(SafetySettings { host_timeout_s: watch }).await?;
+        self.detection = Some(detection);
+        if calibration.is_some() {
+            self.calibration = calibration;
+        }
+        Ok(())
+    }
+
+    /// How often the host must show it is there during a scan.
+    pub fn heartbeat(&self) -> Duration {
+        Duration::from_secs_f32(HOST_TIMEOUT_S / 4.0)
+    }
+
+    /// Finds the head again after the link was lost and prepares it.
+    pub async fn reconnect(&mut self) -> Result<()> {
+        if let Some(old) = self.head.take() {
+            old.close().await;
+        }
+        if !self.quiet {
+            eprintln!("link to the head lost; looking for head {} again", self.serial);
+        }
+        let t0 = Instant::now();
+        let mut last_err = None;
+        while t0.elapsed() < RECONNECT_WINDOW {
+            for target in self.candidates() {
+                match Head::connect(&target).await {
+                    Ok(h) if h.identity().serial.as_str() == self.serial => {
+                        self.head = Some(h);
+                        self.reconnections += 1;
+                        self.prepare().await.context("preparing the head again after reconnecting")?;
+                        return Ok(());
+                    }
+                    Ok(h) => {
+                        last_err = Some(anyhow::anyhow!("found head {} instead of {}", h.identity().serial, self.serial));
+                        h.close().await;
+                    }
+                    Err(e) => last_err = Some(e),
+                }
+            }
+            tokio::time::sleep(RECONNECT_PAUSE).await;
+        }
+        match last_err {
+            Some(e) => Err(e.context(format!(
+                "head {} not found again within {} s",
+                self.serial,
+                RECONNECT_WINDOW.as_secs()
+            ))),
+            None => bail!("head {} not found again", self.serial),
+        }
+    }
+
+    /// Where to look for the head: its target, and a real head's current port.
+    fn candidates(&self) -> Vec<Target> {
+        let mut c = vec![self.target.clone()];
+        if let Target::Port(p) = &self.target {
+            if let Some(q) = crate::usb::port_of_serial(&self.serial).filter(|q| q != p) {
+                c.push(Target::Port(q));
+            }
+        }
+        c
+    }
+
+    pub async fn close(mut self) {
+        if let Some(h) = self.head.take() {
+            h.close().await;
+        }
+    }
+}

@@ -1,0 +1,164 @@
+//! Faults the simulated head can be made to suffer (issue #8's fault
+//! matrix, `gonio scan --sim --inject`): on its link to the host, and in its
+//! hardware. The plan is shared (`Arc`) between the host and every head
+//! built from the same `SimConfig`, so a one-off fault fires once even when
+//! the host reconnects to a fresh head, and a test can clear a lasting fault
+//! (the operator's repair) before resuming.
+
+use anyhow::{bail, Context, Result};
+use std::sync::{Arc, Mutex, MutexGuard};
+
+/// A fault of the link, hitting the `at`-th frame the head sends (from 1,
+/// counted over the whole plan).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LinkFault {
+    /// The frame is lost.
+    Drop,
+    /// One byte of the frame is flipped.
+    Corrupt,
+    /// The frame arrives twice.
+    Duplicate,
+    /// The frame arrives after the next one.
+    Reorder,
+    /// The frame arrives this many milliseconds late (the head waits).
+    Delay(u32),
+    /// The cable is pulled: the link closes both ways.
+    Disconnect,
+}
+
+/// A fault of the head's hardware. Moves are counted with the laser on, so
+/// the N-th move is the one to the N+1-th point the laser sees (a scan's
+/// points, a monitor's readings).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum HardwareFault {
+    /// The home switch of an axis never closes (broken wire).
+    SwitchStuckOpen(usize),
+    /// The home switch of an axis is always closed (stuck lever).
+    SwitchStuckClosed(usize),
+    /// From the `at`-th move on, the ADC reads full scale (stray light, a
+    /// failed amplifier).
+    AdcSaturated,
+    /// From the `at`-th move on, the laser emits nothing.
+    LaserDead,
+    /// The `at`-th move never ends (a stalled step timer or driver).
+    Stall,
+    /// After the `at`-th move, this many ADC blocks are lost (DMA overrun).
+    DmaOverrun(u32),
+}
+
+#[derive(Debug, Default)]
+pub struct FaultPlan {
+    /// Link faults by frame number, not yet fired.
+    pub link: Vec<(u64, LinkFault)>,
+    /// Hardware faults by lit move number (switch faults: from the start).
+    pub hardware: Vec<(u64, HardwareFault)>,
+    /// Frames the heads of this plan have sent.
+    pub frames_sent: u64,
+}
+
+/// The shared plan.
+#[derive(Debug, Clone, Default)]
+pub struct Faults(Arc<Mutex<FaultPlan>>);
+
+impl Faults {
+    pub fn plan(&self) -> MutexGuard<'_, FaultPlan> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Removes every hardware fault: the repair before a resume.
+    pub fn repair(&self) {
+        self.plan().hardware.clear();
+    }
+
+    /// Counts a frame the head sends; returns the link fault that hits it.
+    pub fn next_frame(&self) -> Option<LinkFault> {
+        let mut p = self.plan();
+        p.frames_sent += 1;
+        let n = p.frames_sent;
+        let i = p.link.iter().position(|(at, _)| *at == n)?;
+        Some(p.link.remove(i).1)
+    }
+
+    /// Whether a hardware fault is active after `moves` moves.
+    pub fn active(&self, moves: u64, f: impl Fn(&HardwareFault) -> bool) -> bool {
+        self.plan().hardware.iter().any(|(at, h)| moves >= *at && f(h))
+    }
+
+    /// Takes one lost ADC block, if a DMA overrun is due after `moves` moves.
+    pub fn take_overrun(&self, moves: u64) -> bool {
+        let mut p = self.plan();
+        let Some(i) = p
+            .hardware
+            .iter()
+            .position(|(at, h)| moves >= *at && matches!(h, HardwareFault::DmaOverrun(n) if *n > 0))
+        else {
+            return false;
+        };
+        if let (_, HardwareFault::DmaOverrun(n)) = &mut p.hardware[i] {
+            *n -= 1;
+        }
+        true
+    }
+
+    /// Fires a stall due by move `moves`, once.
+    pub fn take_stall(&self, moves: u64) -> bool {
+        let mut p = self.plan();
+        match p.hardware.iter().position(|(at, h)| *at <= moves && *h == HardwareFault::Stall) {
+            Some(i) => {
+                p.hardware.remove(i);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Parses `KIND@N[:ARG],...`: link faults `drop, corrupt, duplicate,
+    /// reorder, delay (ARG ms), disconnect` at frame N; hardware faults
+    /// `switch-open, switch-closed` (ARG axis 0–2, N ignored), `saturated,
+    /// laser-dead, stall, overrun (ARG blocks)` at move N.
+    pub fn parse(spec: &str) -> Result<Faults> {
+        let faults = Faults::default();
+        {
+            let mut p = faults.plan();
+            for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+                let (kind, rest) = item.split_once('@').with_context(|| format!("fault `{item}` is not KIND@N"))?;
+                let (n, arg) = match rest.split_once(':') {
+                    Some((n, a)) => (n, Some(a)),
+                    None => (rest, None),
+                };
+                let n: u64 = n.parse().with_context(|| format!("fault `{item}`: `{n}` is not a count"))?;
+                let arg = |default: u32| -> Result<u32> {
+                    arg.map_or(Ok(default), |a| {
+                        a.parse().with_context(|| format!("fault `{item}`: `{a}` is not a number"))
+                    })
+                };
+                let axis = || -> Result<usize> {
+                    let a = arg(0)? as usize;
+                    if a > 2 {
+                        bail!("fault `{item}`: axis {a} is not 0, 1 or 2");
+                    }
+                    Ok(a)
+                };
+                match kind {
+                    "drop" => p.link.push((n, LinkFault::Drop)),
+                    "corrupt" => p.link.push((n, LinkFault::Corrupt)),
+                    "duplicate" => p.link.push((n, LinkFault::Duplicate)),
+                    "reorder" => p.link.push((n, LinkFault::Reorder)),
+                    "delay" => p.link.push((n, LinkFault::Delay(arg(100)?))),
+                    "disconnect" => p.link.push((n, LinkFault::Disconnect)),
+                    "switch-open" => p.hardware.push((0, HardwareFault::SwitchStuckOpen(axis()?))),
+                    "switch-closed" => p.hardware.push((0, HardwareFault::SwitchStuckClosed(axis()?))),
+                    "saturated" => p.hardware.push((n, HardwareFault::AdcSaturated)),
+                    "laser-dead" => p.hardware.push((n, HardwareFault::LaserDead)),
+                    "stall" => p.hardware.push((n, HardwareFault::Stall)),
+                    "overrun" => p.hardware.push((n, HardwareFault::DmaOverrun(arg(1)?))),
+                    other => bail!(
+                        "unknown fault `{other}`; valid: drop, corrupt, duplicate, reorder, delay, disconnect, \
+                         switch-open, switch-closed, saturated, laser-dead, stall, overrun"
+                    ),
+                }
+            }
+        }
+        Ok(faults)
+    }
+}

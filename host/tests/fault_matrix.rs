@@ -1,0 +1,101 @@
+//! Issue #8, the host's half of the fault matrix (docs/faults.md): every
+//! fault injected into the simulated head (`gonio scan --sim --inject`), run
+//! as a user runs it. Link faults and transient hardware faults are
+//! recovered during the scan; lasting hardware faults end it with the fault
+//! named and the way to resume, and the resumed scan (on the repaired head)
+//! completes. Either way the stored samples are exactly the grid: no
+//! position twice, none missing. The head's half (safe state when each
+//! fault is reported) is tests/tests/fault_matrix.rs.
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+mod common;
+use common::{gonio, text};
+
+const GRID: [&str; 6] = ["--theta-i", "30", "--theta-o", "0:60:6", "--dphi=-180:180:30", "--json"];
+const POINTS: usize = 11 * 13;
+
+/// The scan positions stored in the completed scan, each checked unique.
+fn stored_indices(dir: &Path) -> BTreeSet<u32> {
+    let text = std::fs::read_to_string(dir.join("samples.csv")).expect("a completed scan");
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let col = header.iter().position(|h| *h == "index").unwrap();
+    let idx: Vec<u32> = lines.filter_map(|l| l.split(',').nth(col).unwrap().parse().ok()).collect();
+    let set: BTreeSet<u32> = idx.iter().copied().collect();
+    assert_eq!(set.len(), idx.len(), "a position stored twice");
+    set
+}
+
+fn scan(dir: &Path, inject: &str) -> std::process::Output {
+    let mut args = vec!["scan", "--sim", "--out", dir.to_str().unwrap(), "--inject", inject];
+    args.extend(GRID);
+    gonio(&args)
+}
+
+/// Faults recovered during the scan: how the summary names the recovery.
+#[test]
+fn link_and_transient_faults_are_recovered_without_losing_or_repeating_a_sample() {
+    let all: BTreeSet<u32> = (0..POINTS as u32).collect();
+    for (inject, recovered) in [
+        ("drop@60", Some("events lost or out of order")),
+        ("corrupt@60", Some("events lost or out of order")),
+        ("reorder@60", Some("events lost or out of order")),
+        ("duplicate@60", None),
+        ("delay@60:300", None),
+        // Frames 1–6 answer the setup, 7 the scan request, 8–150 are the
+        // 143 events: 149 the last sample, 150 the end of the scan, whose
+        // loss the host notices by asking the head (no recovery needed).
+        ("drop@149", Some("events lost or out of order")),
+        ("drop@150", None),
+        ("disconnect@60", Some("link lost")),
+        ("stall@30", Some("E402")),
+        ("overrun@30:1", None),
+        ("overrun@30:40", Some("E500")),
+        ("drop@40,duplicate@50,reorder@70,corrupt@90,disconnect@120", Some("link lost")),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let o = scan(dir.path(), inject);
+        assert!(o.status.success(), "{inject}: {}", text(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+        assert_eq!(v["measured"].as_u64(), Some(POINTS as u64), "{inject}: {v}");
+        assert_eq!(stored_indices(dir.path()), all, "{inject}: stored positions");
+        let recoveries = v["recoveries"].as_object().unwrap();
+        match recoveries.keys().find(|k| recovered.is_some_and(|r| k.contains(r))) {
+            Some(_) => {}
+            None if recovered.is_none() => assert!(recoveries.is_empty(), "{inject}: {v}"),
+            None => panic!("{inject}: expected a recovery from {recovered:?}: {v}"),
+        }
+        if inject.starts_with("duplicate") {
+            assert_eq!(v["duplicates_dropped"].as_u64(), Some(1), "{inject}: {v}");
+        }
+    }
+}
+
+/// Lasting faults: the scan ends with the fault named (non-zero exit), the
+/// samples so far are kept, and `--resume` on the repaired head completes it.
+#[test]
+fn lasting_faults_end_the_scan_named_and_resumable() {
+    let all: BTreeSet<u32> = (0..POINTS as u32).collect();
+    for (inject, code) in [
+        ("saturated@30", "E501"),
+        ("laser-dead@30", "E504"),
+        ("switch-open@0:1", "E400"),
+        ("switch-closed@0:0", "E401"),
+        ("stall@30,stall@30,stall@30,stall@30,stall@30,stall@30,stall@30", "E402"),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let o = scan(dir.path(), inject);
+        assert!(!o.status.success(), "{inject}: {}", text(&o));
+        let err = text(&o);
+        assert!(err.contains(code), "{inject}: {err}");
+        assert!(!err.contains("panicked"), "{inject}: {err}");
+        if !inject.starts_with("switch") {
+            assert!(err.contains("gonio scan --resume"), "{inject}: {err}");
+        }
+        let o = gonio(&["scan", "--resume", dir.path().to_str().unwrap(), "--json"]);
+        assert!(o.status.success(), "{inject}, resumed: {}", text(&o));
+        assert_eq!(stored_indices(dir.path()), all, "{inject}: stored positions after resuming");
+    }
+}

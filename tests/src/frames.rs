@@ -1,0 +1,60 @@
+//! Frames as the host sends them to the head and reads them back, for tests
+//! that drive the firmware frame by frame (`gonio_host::sim::FrameHead`):
+//! requests encoded and sealed, the head's scan events and replies decoded.
+
+use gonio_firmware::{check, dispatch, framing};
+use gonio_host::sim::Sent;
+use gonio_shared::icd::ScanEventTopic;
+use gonio_shared::ScanEvent;
+use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
+use postcard_rpc::{Endpoint, Key, Topic};
+use serde::de::DeserializeOwned;
+use serde::Serialize;
+
+/// A request frame (8-byte key), without its check.
+pub fn request<E: Endpoint>(req: &E::Request) -> Vec<u8>
+where
+    E::Request: Serialize,
+{
+    let mut buf = vec![0u8; framing::MAX_FRAME];
+    let n = dispatch::encode(E::REQ_KEY, VarKeyKind::Key8, VarSeq::Seq4(1), req, &mut buf).unwrap_or(0);
+    buf.truncate(n);
+    buf
+}
+
+/// A frame with its check, as the host sends it.
+pub fn sealed(mut frame: Vec<u8>) -> Vec<u8> {
+    let n = frame.len();
+    frame.resize(n + check::LEN, 0);
+    let _ = check::seal(&mut frame, n);
+    frame
+}
+
+/// A sealed request.
+pub fn send<E: Endpoint>(req: &E::Request) -> Vec<u8>
+where
+    E::Request: Serialize,
+{
+    sealed(request::<E>(req))
+}
+
+/// The body of a frame the head sent under `key`, decoded.
+fn body<T: DeserializeOwned>(frame: &[u8], key: Key) -> Option<T> {
+    let (hdr, rest) = VarHeader::take_from_slice(check::open(frame)?)?;
+    (hdr.key == VarKey::Key8(key)).then(|| postcard::from_bytes(rest).ok())?
+}
+
+/// The scan events among the frames the head sent, each with what it sent.
+pub fn scan_events(sent: &[Sent]) -> Vec<(ScanEvent, &Sent)> {
+    sent.iter()
+        .filter_map(|s| body(&s.frame, ScanEventTopic::TOPIC_KEY).map(|e| (e, s)))
+        .collect()
+}
+
+/// The replies to endpoint `E` among the frames the head sent.
+pub fn replies<E: Endpoint>(sent: &[Sent]) -> Vec<E::Response>
+where
+    E::Response: DeserializeOwned,
+{
+    sent.iter().filter_map(|s| body(&s.frame, E::RESP_KEY)).collect()
+}

@@ -1,0 +1,159 @@
+//! Issue #8, the head's half of the fault matrix (docs/faults.md): each
+//! hardware fault, host silence and a pulled cable injected into the
+//! simulated head, driven frame by frame. For each: the fault is reported
+//! with its code, and when it is reported the laser is off and every motor
+//! driver disabled (checked on the virtual pins at the moment the report
+//! leaves). The host's half (recovery, no sample lost or duplicated,
+//! resumption) is host/tests/fault_matrix.rs.
+
+use gonio_host::sim::faults::Faults;
+use gonio_host::sim::{FrameHead, Sent, SimConfig};
+use gonio_shared::icd::{HomeEndpoint, HomeRequest, SafetyEndpoint, ScanEndpoint};
+use gonio_shared::{AngleRange, Axis, Fault, SafetySettings, SampleFlags, ScanEvent, ScanSpec};
+use gonio_tests::frames::{replies, scan_events, send};
+
+/// 143 points at θi = 30°.
+fn spec() -> ScanSpec {
+    ScanSpec {
+        theta_o: AngleRange::new(0.0, 60.0, 6.0),
+        dphi: AngleRange::new(-180.0, 180.0, 30.0),
+        theta_i_deg: heapless::Vec::from_slice(&[30.0]).unwrap(),
+        first_order: 0,
+    }
+}
+
+/// Homes and scans on a head suffering `faults`, the link open and silent.
+fn scan(faults: &str, host_timeout_s: f32) -> (FrameHead, Vec<Sent>) {
+    let cfg = SimConfig {
+        faults: Faults::parse(faults).unwrap(),
+        ..SimConfig::default()
+    };
+    let mut head = FrameHead::new(&cfg);
+    let sent = head.serve_open([
+        send::<SafetyEndpoint>(&SafetySettings { host_timeout_s }),
+        send::<HomeEndpoint>(&HomeRequest::ALL),
+        send::<ScanEndpoint>(&spec()),
+    ]);
+    (head, sent)
+}
+
+/// The scan's stop, checked to leave the head safe, and the samples before it.
+fn stopped(sent: &[Sent]) -> (Fault, u32, usize) {
+    let events = scan_events(sent);
+    let samples = events.iter().filter(|(e, _)| matches!(e, ScanEvent::Sample(_))).count();
+    assert!(
+        events
+            .iter()
+            .any(|(e, s)| matches!(e, ScanEvent::Sample(_)) && s.laser && s.drivers_enabled),
+        "the laser was on and the drivers enabled while scanning"
+    );
+    let (ev, at) = events.last().expect("scan events");
+    let ScanEvent::Stopped { reason, next_order, .. } = ev else {
+        panic!("the scan was not stopped: {ev:?}");
+    };
+    assert!(!at.laser, "{reason}: laser still on when the fault was reported");
+    assert!(!at.drivers_enabled, "{reason}: drivers still enabled when the fault was reported");
+    (*reason, *next_order, samples)
+}
+
+fn finished(sent: &[Sent]) -> Vec<gonio_shared::Sample> {
+    let events = scan_events(sent);
+    let (last, at) = events.last().expect("scan events");
+    assert!(matches!(last, ScanEvent::Finished { measured: 143, .. }), "{last:?}");
+    assert!(!at.laser && !at.drivers_enabled, "safe state at the end of the scan");
+    events
+        .into_iter()
+        .filter_map(|(e, _)| match e {
+            ScanEvent::Sample(s) => Some(s),
+            _ => None,
+        })
+        .collect()
+}
+
+#[test]
+fn a_clean_scan_finishes_in_the_safe_state() {
+    let (_, sent) = scan("", 0.0);
+    assert_eq!(finished(&sent).len(), 143);
+}
+
+#[test]
+fn home_switch_stuck_open_or_closed_is_reported_with_the_head_safe() {
+    for (spec, want) in [
+        ("switch-open@0:1", Fault::HomeSwitchNotFound(Axis::Cradle)),
+        ("switch-closed@0:2", Fault::HomeSwitchStuck(Axis::Arm)),
+    ] {
+        let (head, sent) = scan(spec, 0.0);
+        let home = replies::<HomeEndpoint>(&sent);
+        assert_eq!(home, vec![Err(want)], "{spec}");
+        // The scan is refused unhomed: nothing moves, the laser stays dark.
+        assert_eq!(replies::<ScanEndpoint>(&sent), vec![Err(Fault::NotHomed)], "{spec}");
+        let w = head.world();
+        assert!(!w.laser && w.enable_n.iter().all(|&off| off), "{spec}: safe state");
+        assert!(scan_events(&sent).is_empty(), "{spec}: no scan ran");
+    }
+}
+
+#[test]
+fn a_saturated_adc_stops_the_scan_after_a_run_of_saturated_points() {
+    let (reason, next, samples) = stopped(&scan("saturated@30", 0.0).1);
+    assert_eq!(reason, Fault::Saturated);
+    // Points 30..37 saturate; the eighth stops the scan and is measured again on resume.
+    assert_eq!(next as usize, 30 + gonio_firmware::head::SUSPECT_RUN as usize - 1);
+    assert_eq!(samples, next as usize);
+}
+
+#[test]
+fn a_dead_laser_stops_the_scan_after_a_run_of_dark_points() {
+    let (reason, next, _) = stopped(&scan("laser-dead@30", 0.0).1);
+    assert_eq!(reason, Fault::NoSignal);
+    assert_eq!(next as usize, 30 + gonio_firmware::head::SUSPECT_RUN as usize - 1);
+}
+
+#[test]
+fn a_stalled_move_stops_the_scan() {
+    let (reason, next, samples) = stopped(&scan("stall@30", 0.0).1);
+    assert!(matches!(reason, Fault::StepTimer(_)), "{reason}");
+    assert_eq!((next, samples), (30, 30));
+}
+
+#[test]
+fn one_lost_adc_block_is_measured_again_and_a_lasting_overrun_stops_the_scan() {
+    let samples = finished(&scan("overrun@30:1", 0.0).1);
+    assert!(samples.iter().all(|s| !s.flags.contains(SampleFlags::OVERRUN)));
+    let (reason, next, _) = stopped(&scan("overrun@30:40", 0.0).1);
+    assert_eq!((reason, next), (Fault::AdcOverrun, 30));
+}
+
+/// The host sends nothing after starting the scan: with a 5 s watch the head
+/// stops within the first few points; without one it scans to the end.
+#[test]
+fn host_silence_stops_the_scan_when_watched() {
+    let (reason, next, _) = stopped(&scan("", 5.0).1);
+    assert_eq!(reason, Fault::HostSilent);
+    assert!((1..20).contains(&next), "stopped at {next}");
+    assert_eq!(finished(&scan("", 0.0).1).len(), 143);
+}
+
+/// The cable is pulled mid-scan: the head leaves the laser off and the
+/// drivers disabled.
+#[test]
+fn a_pulled_cable_leaves_the_head_safe() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    let sent = head.serve_cut([send::<HomeEndpoint>(&HomeRequest::ALL), send::<ScanEndpoint>(&spec())], 40);
+    let (last, at) = scan_events(&sent).pop().unwrap();
+    assert!(matches!(last, ScanEvent::Sample(_)) && at.laser, "the cable was pulled mid-scan");
+    let w = head.world();
+    assert!(!w.laser && w.enable_n.iter().all(|&off| off));
+}
+
+/// Safety settings are validated like every command.
+#[test]
+fn invalid_host_timeouts_are_refused() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    let frames: Vec<_> = [f32::NAN, f32::INFINITY, -1.0, 0.5, 4000.0, 20.0]
+        .map(|t| send::<SafetyEndpoint>(&SafetySettings { host_timeout_s: t }))
+        .into();
+    let r = replies::<SafetyEndpoint>(&head.serve(frames));
+    let bad = Err(Fault::InvalidValue(gonio_shared::Field::HostTimeout));
+    assert_eq!(r, vec![bad, bad, bad, bad, bad, Ok(())]);
+}
