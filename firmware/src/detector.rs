@@ -252,13 +252,20 @@ impl Detector {
         }
     }
 
-    /// Learns the phase of the electronics and the matched waveform on the
-    /// signal at the current position, which must be strong and steady.
-    pub async fn calibrate<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, periods: u16) -> Result<CalibrationReport, Fault> {
+    /// Refuses a calibration length out of range; called before the laser
+    /// is switched on for it.
+    pub fn check_calibration(&self, periods: u16) -> Result<(), Fault> {
         let chop_s = 1.0 / self.chop_hz as f32;
         if periods < CALIBRATION_MIN_PERIODS || periods as f32 * chop_s > DetectionSettings::INTEGRATION_MAX_S * 6.0 {
             return Err(Fault::InvalidValue(Field::Periods));
         }
+        Ok(())
+    }
+
+    /// Learns the phase of the electronics and the matched waveform on the
+    /// signal at the current position, which must be strong and steady.
+    pub async fn calibrate<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, periods: u16) -> Result<CalibrationReport, Fault> {
+        self.check_calibration(periods)?;
         let m = self.samples_per_period();
         let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];

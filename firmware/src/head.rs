@@ -376,6 +376,8 @@ impl<B: Board> Head<B> {
         if self.scan.is_some() {
             return Err(Fault::Busy);
         }
+        // Refused before the laser goes on (found by the validation property test).
+        self.detector.check_calibration(req.periods)?;
         let r = match self.laser(true) {
             Ok(()) => self.detector.calibrate(&mut self.hw, &self.cfg, req.periods).await,
             Err(f) => Err(f),

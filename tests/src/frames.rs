@@ -58,3 +58,13 @@ where
 {
     sent.iter().filter_map(|s| body(&s.frame, E::RESP_KEY)).collect()
 }
+
+/// The fault of a refused command's reply (`Reply<T>` is `Err(Fault)`),
+/// `None` for an accepted one or a frame that is no reply.
+pub fn refusal(sent: &Sent) -> Option<gonio_shared::Fault> {
+    let (_, body) = VarHeader::take_from_slice(check::open(&sent.frame)?)?;
+    match body.split_first()? {
+        (1, fault) => postcard::from_bytes(fault).ok(),
+        _ => None,
+    }
+}

@@ -67,7 +67,12 @@ impl SimPin {
             Role::Dir(i) => w.dir_positive[i] = high,
             Role::EnableN(i) => w.enable_n[i] = high,
             Role::Gain(b) => w.gain_bits[b] = high,
-            Role::Laser => w.laser = high,
+            Role::Laser => {
+                if high && !w.laser {
+                    w.laser_ons += 1;
+                }
+                w.laser = high;
+            }
         }
     }
 }

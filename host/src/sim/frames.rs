@@ -20,6 +20,9 @@ pub struct Sent {
     pub frame: Vec<u8>,
     pub laser: bool,
     pub drivers_enabled: bool,
+    /// Stage positions (microsteps) and times the laser was switched on so far.
+    pub steps: [i32; 3],
+    pub laser_ons: u64,
 }
 
 struct Batch {
@@ -61,6 +64,8 @@ impl Link for Batch {
             frame: frame.to_vec(),
             laser: w.laser,
             drivers_enabled: w.enable_n.iter().any(|&off| !off),
+            steps: w.steps,
+            laser_ons: w.laser_ons,
         });
         Ok(())
     }

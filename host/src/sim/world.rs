@@ -48,6 +48,8 @@ pub struct World {
     /// to the next (homing and the first approach are not counted), the
     /// clock of the hardware faults.
     pub moves: u64,
+    /// Times the laser was switched on.
+    pub laser_ons: u64,
 }
 
 impl World {
@@ -89,6 +91,7 @@ impl World {
             rng: StdRng::seed_from_u64(sim.seed),
             faults: sim.faults.clone(),
             moves: 0,
+            laser_ons: 0,
         }
     }
 
