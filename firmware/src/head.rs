@@ -110,6 +110,11 @@ impl<B: Board> Head<B> {
         head
     }
 
+    /// Reports why the head last restarted (a watchdog reset), in the status.
+    pub fn restarted_by(&mut self, f: Fault) {
+        self.last_fault = Some(f);
+    }
+
     /// Laser off, conversions stopped, drivers disabled, step queues emptied.
     /// Pin errors are ignored here: there is nothing safer left to do.
     pub fn safe_state(&mut self) {

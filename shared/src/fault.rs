@@ -122,6 +122,9 @@ pub enum Fault {
     NoSignal,
     /// The host sent nothing within the host timeout during a scan.
     HostSilent,
+    /// The head restarted because its independent watchdog fired (hung
+    /// firmware); it came up in the safe state.
+    WatchdogReset,
 }
 
 impl Fault {
@@ -145,6 +148,7 @@ impl Fault {
             Fault::WeakSignal => 503,
             Fault::NoSignal => 504,
             Fault::HostSilent => 303,
+            Fault::WatchdogReset => 304,
         }
     }
 }
@@ -170,6 +174,7 @@ impl fmt::Display for Fault {
             Fault::WeakSignal => f.write_str("calibration signal too weak or too noisy"),
             Fault::NoSignal => f.write_str("no signal at consecutive scan points: laser dead or beam blocked"),
             Fault::HostSilent => f.write_str("the host went silent during the scan (heartbeat timeout)"),
+            Fault::WatchdogReset => f.write_str("the head was restarted by its watchdog (hung firmware); it came up safe"),
         }
     }
 }

@@ -10,9 +10,11 @@ use gonio_host::formats::{alta, brdf_csv};
 use gonio_host::sim::{FrameHead, SimConfig};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
-    MoveEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    MoveEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
-use gonio_shared::{AngleRange, CalibrateRequest, DetectionSettings, Geometry, SanityConfig, SanityKind, SanityModel, ScanSpec};
+use gonio_shared::{
+    AngleRange, CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, SanityKind, SanityModel, ScanSpec,
+};
 
 /// The head's receive path on a byte stream: COBS frames, their check, and
 /// the request decoder; the decoder also sees the raw bytes, since random
@@ -110,6 +112,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         ("detection", request::<DetectionEndpoint>(&DetectionSettings::default())),
         ("sanity", request::<SanityEndpoint>(&sanity)),
         ("calibrate", request::<CalibrateEndpoint>(&CalibrateRequest { periods: 23 })),
+        ("safety", request::<SafetyEndpoint>(&SafetySettings { host_timeout_s: 5.0 })),
     ];
     let mut out = Vec::new();
     for (name, f) in &requests {

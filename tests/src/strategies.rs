@@ -69,6 +69,7 @@ pub fn fault() -> impl Strategy<Value = Fault> {
         Just(Fault::WeakSignal),
         Just(Fault::NoSignal),
         Just(Fault::HostSilent),
+        Just(Fault::WatchdogReset),
     ]
 }
 

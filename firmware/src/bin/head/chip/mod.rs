@@ -4,6 +4,7 @@ mod adc_stream;
 mod board;
 mod step_timer;
 mod usb_link;
+mod watchdog;
 
 use adc_stream::TimedAdc;
 use embassy_executor::Spawner;
@@ -69,6 +70,10 @@ fn clocks() -> Config {
 async fn main(spawner: Spawner) {
     let p = embassy_stm32::init(clocks());
     defmt::info!("gonio head {} starting", env!("CARGO_PKG_VERSION"));
+    // Read before anything else can hang: the pins come up safe (board.rs),
+    // the watchdog then guards the rest.
+    let restarted_by_watchdog = watchdog::reset_cause();
+    watchdog::start(&spawner, p.IWDG);
     let pins = board::Pins::new(
         p.PA1, p.PA6, p.PB0, p.PB1, p.PB2, p.PC0, p.PC1, p.PC2, p.PC3, p.PC4, p.PC5, p.PC6, p.PC7, p.PC8, p.PC9, p.PC10, p.PC11,
     );
@@ -93,6 +98,9 @@ async fn main(spawner: Spawner) {
         protocol_version: gonio_shared::PROTOCOL_VERSION,
     };
     let mut head = Head::new(gonio_firmware::board::REFERENCE, hw, info);
+    if restarted_by_watchdog {
+        head.restarted_by(gonio_shared::Fault::WatchdogReset);
+    }
     loop {
         // Serve until the host goes away (the head is then in its safe
         // state), then wait for the next connection.

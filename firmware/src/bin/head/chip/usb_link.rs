@@ -70,6 +70,29 @@ impl Link for UsbLink {
     }
 }
 
+/// Bus events that end a session: a bus reset, a suspend (the host slept or
+/// the cable is half out), losing the configuration. The core sees the link
+/// close and goes to its safe state.
+struct BusWatch;
+
+impl embassy_usb::Handler for BusWatch {
+    fn reset(&mut self) {
+        DISCONNECTED.signal(());
+    }
+
+    fn suspended(&mut self, suspended: bool) {
+        if suspended {
+            DISCONNECTED.signal(());
+        }
+    }
+
+    fn configured(&mut self, configured: bool) {
+        if !configured {
+            DISCONNECTED.signal(());
+        }
+    }
+}
+
 #[embassy_executor::task]
 async fn usb_device(mut dev: UsbDevice<'static, UsbDriver>) -> ! {
     dev.run().await
@@ -122,6 +145,7 @@ pub fn start(spawner: &Spawner, usb: Peri<'static, USB_OTG_FS>, dp: Peri<'static
     static BOS_DESC: StaticCell<[u8; 256]> = StaticCell::new();
     static CONTROL: StaticCell<[u8; 64]> = StaticCell::new();
     static STATE: StaticCell<State> = StaticCell::new();
+    static BUS_WATCH: StaticCell<BusWatch> = StaticCell::new();
 
     let mut cfg = embassy_stm32::usb::Config::default();
     cfg.vbus_detection = false;
@@ -142,6 +166,7 @@ pub fn start(spawner: &Spawner, usb: Peri<'static, USB_OTG_FS>, dp: Peri<'static
         &mut [],
         CONTROL.init([0; 64]),
     );
+    builder.handler(BUS_WATCH.init(BusWatch));
     let class = CdcAcmClass::new(&mut builder, STATE.init(State::new()), PACKET);
     let (tx, rx) = class.split();
     spawner.must_spawn(usb_device(builder.build()));
