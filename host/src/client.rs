@@ -30,10 +30,13 @@ pub enum Target {
     Port(String),
 }
 
-/// Timeouts: quick requests, and the ones that move the stages.
+/// Timeouts: quick requests, and the ones that move the stages. A lost
+/// request is found much sooner than these (see [`watched`]).
 const QUICK: Duration = Duration::from_secs(5);
 const HOMING: Duration = Duration::from_secs(300);
 const MOTION: Duration = Duration::from_secs(120);
+/// How long a request may go unanswered before the host sends a probe.
+const PROBE_AFTER: Duration = Duration::from_secs(1);
 
 pub struct Head {
     client: HostClient<WireError>,
@@ -87,38 +90,39 @@ impl Head {
     }
 
     pub async fn home(&self) -> Result<AxisAngles> {
-        fault(call::<HomeEndpoint>(&self.client, &HomeRequest::ALL, HOMING).await?).context("homing failed")
+        fault(watched::<HomeEndpoint>(&self.client, &HomeRequest::ALL, HOMING).await?).context("homing failed")
     }
 
     pub async fn move_to(&self, g: Geometry) -> Result<MoveReport> {
-        fault(call::<MoveEndpoint>(&self.client, &g, MOTION).await?).context("move refused")
+        fault(watched::<MoveEndpoint>(&self.client, &g, MOTION).await?).context("move refused")
     }
 
     pub async fn measure(&self, at: Option<Geometry>) -> Result<Sample> {
-        fault(call::<MeasureEndpoint>(&self.client, &MeasureRequest { at }, MOTION).await?).context("measurement failed")
+        fault(watched::<MeasureEndpoint>(&self.client, &MeasureRequest { at }, MOTION).await?).context("measurement failed")
     }
 
     pub async fn detection(&self, s: DetectionSettings) -> Result<DetectionReport> {
-        fault(call::<DetectionEndpoint>(&self.client, &s, QUICK).await?).context("detection settings refused")
+        fault(watched::<DetectionEndpoint>(&self.client, &s, QUICK).await?).context("detection settings refused")
     }
 
     /// Learns the detection chain on the signal at the current position.
     pub async fn calibrate(&self, periods: u16) -> Result<CalibrationReport> {
-        fault(call::<CalibrateEndpoint>(&self.client, &CalibrateRequest { periods }, MOTION).await?).context("detector calibration failed")
+        fault(watched::<CalibrateEndpoint>(&self.client, &CalibrateRequest { periods }, MOTION).await?)
+            .context("detector calibration failed")
     }
 
     /// Loads the model, scale and tolerance band the head checks samples against.
     pub async fn sanity(&self, cfg: SanityConfig) -> Result<()> {
-        fault(call::<SanityEndpoint>(&self.client, &cfg, QUICK).await?).context("sanity model refused")
+        fault(watched::<SanityEndpoint>(&self.client, &cfg, QUICK).await?).context("sanity model refused")
     }
 
     /// Sets how long the head tolerates host silence during a scan.
     pub async fn safety(&self, s: SafetySettings) -> Result<()> {
-        fault(call::<SafetyEndpoint>(&self.client, &s, QUICK).await?).context("safety settings refused")
+        fault(watched::<SafetyEndpoint>(&self.client, &s, QUICK).await?).context("safety settings refused")
     }
 
     pub async fn abort(&self) -> Result<Status> {
-        Ok(call::<AbortEndpoint>(&self.client, &(), QUICK).await?)
+        Ok(watched::<AbortEndpoint>(&self.client, &(), QUICK).await?)
     }
 
     /// Starts a scan; its events arrive on the returned subscription, which is
@@ -131,7 +135,7 @@ impl Head {
             .map_err(|e| anyhow!("cannot subscribe to scan events: {e:?}"))?;
         // A scan continued from a later position (resume, drift monitor) has
         // the head replay its plan up to there first: seconds, not a quick reply.
-        let accepted = fault(call::<ScanEndpoint>(&self.client, spec, MOTION).await?).context("scan refused")?;
+        let accepted = fault(watched::<ScanEndpoint>(&self.client, spec, MOTION).await?).context("scan refused")?;
         Ok((accepted, sub))
     }
 
@@ -150,8 +154,12 @@ impl Head {
 /// Whether an error means the link to the head is gone (closed, or a
 /// request unanswered), rather than the head refusing something.
 pub fn is_link_loss(e: &anyhow::Error) -> bool {
-    e.chain()
-        .any(|c| matches!(c.downcast_ref::<CallError>(), Some(CallError::Timeout(..) | CallError::Closed(_))))
+    e.chain().any(|c| {
+        matches!(
+            c.downcast_ref::<CallError>(),
+            Some(CallError::Timeout(..) | CallError::Closed(_) | CallError::Lost(_))
+        )
+    })
 }
 
 fn fault<T>(r: gonio_shared::Reply<T>) -> Result<T> {
@@ -169,6 +177,8 @@ pub enum CallError {
     Wire(&'static str, WireError),
     #[error("{0}: the link to the head closed")]
     Closed(&'static str),
+    #[error("{0}: the request or its answer was lost (the head answered a later request first)")]
+    Lost(&'static str),
     #[error("{0}: undecodable answer: {1}")]
     BadAnswer(&'static str, String),
 }
@@ -185,5 +195,38 @@ where
         Ok(Err(HostErr::Wire(e))) => Err(CallError::Wire(E::PATH, e)),
         Ok(Err(HostErr::Closed)) => Err(CallError::Closed(E::PATH)),
         Ok(Err(e)) => Err(CallError::BadAnswer(E::PATH, e.to_string())),
+    }
+}
+
+/// A request watched for loss. Once it has gone unanswered for
+/// [`PROBE_AFTER`], one status request follows it. The head answers requests
+/// one at a time in the order they arrive (the firmware's serve loop), so
+/// the probe's answer can only come first if the request, or its answer, was
+/// lost on the link: that is reported at once as [`CallError::Lost`] instead
+/// of after the request's full timeout (minutes for homing). A probe that
+/// gets no answer changes nothing: the request's own timeout stands.
+async fn watched<E: Endpoint>(client: &HostClient<WireError>, req: &E::Request, timeout: Duration) -> Result<E::Response, CallError>
+where
+    E::Request: Serialize + Schema,
+    E::Response: DeserializeOwned + Schema,
+{
+    let answer = call::<E>(client, req, timeout);
+    tokio::pin!(answer);
+    tokio::select! {
+        biased;
+        r = &mut answer => return r,
+        () = tokio::time::sleep(PROBE_AFTER) => {}
+    }
+    let probe = call::<StatusEndpoint>(client, &(), timeout);
+    tokio::pin!(probe);
+    // Biased: when both answers have come in, the request's is taken (it
+    // was delivered first).
+    tokio::select! {
+        biased;
+        r = &mut answer => r,
+        p = &mut probe => match p {
+            Ok(_) => Err(CallError::Lost(E::PATH)),
+            Err(_) => answer.await,
+        },
     }
 }

@@ -124,12 +124,17 @@ pub async fn run(
     };
     let mut clock = HeadClock::default();
     let mut first = spec.first_order;
-    let (mut in_a_row, mut progress) = (0, first);
+    let mut streak = Streak {
+        in_a_row: 0,
+        progress: first,
+    };
     pb.set_length((outcome.points - first) as u64);
     let mut read_monitor_now = true;
     loop {
         if let (Some(m), true) = (monitor, read_monitor_now) {
-            read_monitor(session.head(), m, out, &mut clock).await?;
+            if !visit_monitor(session, m, out, &mut clock, first, &mut streak, &mut outcome, pb).await? {
+                continue;
+            }
         }
         let stop_at = monitor.map(|m| first.saturating_add(m.every.max(1)));
         let stretch = ScanSpec {
@@ -143,36 +148,14 @@ pub async fn run(
                 read_monitor_now = true;
             }
             Stretch::Interrupted(next, why) => {
-                if next > progress {
-                    (in_a_row, progress) = (0, next);
-                }
-                in_a_row += 1;
-                if in_a_row > MAX_RECOVERIES {
-                    bail!(
-                        "{}; gave up after {MAX_RECOVERIES} recoveries without progress; resume from position {next}",
-                        why.name()
-                    );
-                }
-                *outcome.recoveries.entry(why.name()).or_default() += 1;
-                pb.suspend(|| note_recovery(&why, next));
-                match why {
-                    Interruption::LinkLost(_) => session.reconnect().await.with_context(|| format!("resume from position {next}"))?,
-                    Interruption::Rehome(_) => {
-                        session
-                            .head()
-                            .home()
-                            .await
-                            .with_context(|| format!("homing after a stalled move; resume from position {next}"))?;
-                    }
-                    Interruption::Gap | Interruption::Transient(_) => {}
-                }
+                recover(session, why, next, &mut streak, &mut outcome, pb).await?;
                 first = next;
                 read_monitor_now = false;
             }
         }
     }
     if let Some(m) = monitor {
-        read_monitor(session.head(), m, out, &mut clock).await?;
+        while !visit_monitor(session, m, out, &mut clock, outcome.points, &mut streak, &mut outcome, pb).await? {}
     }
     pb.finish_and_clear();
     outcome.head_time_s = clock.span_s();
@@ -180,9 +163,74 @@ pub async fn run(
     Ok(outcome)
 }
 
+/// Recoveries in a row without a new point, counted to give up.
+struct Streak {
+    in_a_row: u32,
+    /// The furthest position reached.
+    progress: u32,
+}
+
+/// Recovers from an interruption before position `next`: reconnects, or
+/// homes, or (events lost, a transient fault) nothing but continuing.
+async fn recover(
+    session: &mut Session,
+    why: Interruption,
+    next: u32,
+    streak: &mut Streak,
+    outcome: &mut ScanOutcome,
+    pb: &ProgressBar,
+) -> Result<()> {
+    if next > streak.progress {
+        (streak.in_a_row, streak.progress) = (0, next);
+    }
+    streak.in_a_row += 1;
+    if streak.in_a_row > MAX_RECOVERIES {
+        bail!(
+            "{}; gave up after {MAX_RECOVERIES} recoveries without progress; resume from position {next}",
+            why.name()
+        );
+    }
+    *outcome.recoveries.entry(why.name()).or_default() += 1;
+    pb.suspend(|| note_recovery(&why, next));
+    match why {
+        Interruption::LinkLost(_) => session.reconnect().await.with_context(|| format!("resume from position {next}")),
+        Interruption::Rehome(_) => session
+            .head()
+            .home()
+            .await
+            .map(drop)
+            .with_context(|| format!("homing after a stalled move; resume from position {next}")),
+        Interruption::Gap | Interruption::Transient(_) => Ok(()),
+    }
+}
+
 /// Tells the operator what is being recovered (stderr; quiet runs hide the bar, not this).
 fn note_recovery(why: &Interruption, next: u32) {
     eprintln!("scan interrupted: {}; continuing from position {next}", why.name());
+}
+
+/// One visit to the monitor; a lost link is recovered (reconnected) and
+/// reported as `false`: the visit is to be made again.
+#[allow(clippy::too_many_arguments)]
+async fn visit_monitor(
+    session: &mut Session,
+    m: &Monitor,
+    out: &mut SampleWriter,
+    clock: &mut HeadClock,
+    next: u32,
+    streak: &mut Streak,
+    outcome: &mut ScanOutcome,
+    pb: &ProgressBar,
+) -> Result<bool> {
+    match read_monitor(session.head(), m, out, clock).await {
+        Ok(()) => Ok(true),
+        Err(e) if is_link_loss(&e) => {
+            let why = Interruption::LinkLost(format!("{e:#}"));
+            recover(session, why, next, streak, outcome, pb).await?;
+            Ok(false)
+        }
+        Err(e) => Err(e),
+    }
 }
 
 /// Readings per monitor visit: every sample of the scan is referred to them,

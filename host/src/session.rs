@@ -4,7 +4,7 @@
 //! same port or, for a real head plugged back in, on whichever port it came
 //! back on; then prepare it again, since it may have been power-cycled.
 
-use crate::client::{Head, Target};
+use crate::client::{is_link_loss, Head, Target};
 use anyhow::{bail, Context, Result};
 use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Geometry, Reference, SafetySettings};
 use std::time::{Duration, Instant};
@@ -62,7 +62,7 @@ impl Session {
 
     /// Detection settings, homing, calibration of the detection chain, the
     /// host watch.
-    pub async fn prepare(&mut self) -> Result<()> {
+    async fn prepare(&mut self) -> Result<()> {
         let head = self.head();
         // The chop timing is set first: a calibration holds for that timing.
         head.detection(DetectionSettings {
@@ -100,7 +100,22 @@ impl Session {
         Duration::from_secs_f32(HOST_TIMEOUT_S / 4.0)
     }
 
-    /// Finds the head again after the link was lost and prepares it.
+    /// Prepares the head for a scan; a request lost on the way (no answer,
+    /// the link closed) costs a reconnection, not the scan.
+    pub async fn start(&mut self) -> Result<()> {
+        match self.prepare().await {
+            Err(e) if is_link_loss(&e) => {
+                if !self.quiet {
+                    eprintln!("preparing the head: {e:#}");
+                }
+                self.reconnect().await
+            }
+            r => r,
+        }
+    }
+
+    /// Finds the head again after the link was lost and prepares it; a link
+    /// lost again while preparing is one more try within the window.
     pub async fn reconnect(&mut self) -> Result<()> {
         if let Some(old) = self.head.take() {
             old.close().await;
@@ -116,8 +131,16 @@ impl Session {
                     Ok(h) if h.identity().serial.as_str() == self.serial => {
                         self.head = Some(h);
                         self.reconnections += 1;
-                        self.prepare().await.context("preparing the head again after reconnecting")?;
-                        return Ok(());
+                        match self.prepare().await {
+                            Ok(()) => return Ok(()),
+                            Err(e) if is_link_loss(&e) => {
+                                last_err = Some(e);
+                                if let Some(h) = self.head.take() {
+                                    h.close().await;
+                                }
+                            }
+                            Err(e) => return Err(e.context("preparing the head again after reconnecting")),
+                        }
                     }
                     Ok(h) => {
                         last_err = Some(anyhow::anyhow!("found head {} instead of {}", h.identity().serial, self.serial));

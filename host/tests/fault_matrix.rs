@@ -34,26 +34,55 @@ fn scan(dir: &Path, inject: &str) -> std::process::Output {
     gonio(&args)
 }
 
-/// Faults recovered during the scan: how the summary names the recovery.
+/// What the scan summary says was recovered.
+#[derive(Debug, Clone, Copy)]
+enum Recovery {
+    /// Nothing needed recovering.
+    None,
+    /// A recovery whose name contains this.
+    Named(&'static str),
+    /// A race decides: a late request may be answered before the host's
+    /// probe (nothing to recover) or after it (taken as lost, reconnected).
+    NoneOr(&'static str),
+}
+use Recovery::{Named, NoneOr};
+
+/// Faults recovered during the scan (or while preparing the head for it):
+/// how the summary names the recovery.
 #[test]
 fn link_and_transient_faults_are_recovered_without_losing_or_repeating_a_sample() {
     let all: BTreeSet<u32> = (0..POINTS as u32).collect();
     for (inject, recovered) in [
-        ("drop@60", Some("events lost or out of order")),
-        ("corrupt@60", Some("events lost or out of order")),
-        ("reorder@60", Some("events lost or out of order")),
-        ("duplicate@60", None),
-        ("delay@60:300", None),
-        // Frames 1–6 answer the setup, 7 the scan request, 8–150 are the
-        // 143 events: 149 the last sample, 150 the end of the scan, whose
-        // loss the host notices by asking the head (no recovery needed).
-        ("drop@149", Some("events lost or out of order")),
-        ("drop@150", None),
-        ("disconnect@60", Some("link lost")),
-        ("stall@30", Some("E402")),
-        ("overrun@30:1", None),
-        ("overrun@30:40", Some("E500")),
-        ("drop@40,duplicate@50,reorder@70,corrupt@90,disconnect@120", Some("link lost")),
+        ("drop@60", Named("events lost or out of order")),
+        ("corrupt@60", Named("events lost or out of order")),
+        ("reorder@60", Named("events lost or out of order")),
+        ("duplicate@60", Recovery::None),
+        ("delay@60:300", Recovery::None),
+        // Frames 1–5 answer the setup, 6 the scan request, 7–149 are the
+        // 143 points' events (149 the last sample), 150 the end of the
+        // scan, whose loss the host notices by asking the head (no recovery
+        // needed).
+        ("drop@149", Named("events lost or out of order")),
+        ("drop@150", Recovery::None),
+        ("disconnect@60", Named("link lost")),
+        ("stall@30", Named("E402")),
+        ("overrun@30:1", Recovery::None),
+        ("overrun@30:40", Named("E500")),
+        ("drop@40,duplicate@50,reorder@70,corrupt@90,disconnect@120", Named("link lost")),
+        // The host's requests: 1 identify, 2 detection settings, 3 homing,
+        // 4 detection settings, 5 safety settings, 6 the scan. A lost
+        // request (or answer) is found by the probe that follows an
+        // unanswered request, at once instead of after the request's timeout.
+        ("drop@6", Named("was lost")),
+        ("req-drop@6", Named("was lost")),
+        ("req-corrupt@6", Named("was lost")),
+        ("req-reorder@6", NoneOr("was lost")),
+        ("req-duplicate@6", Recovery::None),
+        ("req-delay@6:300", Recovery::None),
+        ("req-disconnect@6", Named("link lost")),
+        // Lost while preparing the head (homing): found again before the scan starts.
+        ("req-drop@3", Named("while preparing the head")),
+        ("req-duplicate@3", Recovery::None),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let o = scan(dir.path(), inject);
@@ -62,11 +91,13 @@ fn link_and_transient_faults_are_recovered_without_losing_or_repeating_a_sample(
         assert_eq!(v["measured"].as_u64(), Some(POINTS as u64), "{inject}: {v}");
         assert_eq!(stored_indices(dir.path()), all, "{inject}: stored positions");
         let recoveries = v["recoveries"].as_object().unwrap();
-        match recoveries.keys().find(|k| recovered.is_some_and(|r| k.contains(r))) {
-            Some(_) => {}
-            None if recovered.is_none() => assert!(recoveries.is_empty(), "{inject}: {v}"),
-            None => panic!("{inject}: expected a recovery from {recovered:?}: {v}"),
-        }
+        let named = |r: &str| recoveries.keys().any(|k| k.contains(r));
+        let as_expected = match recovered {
+            Recovery::None => recoveries.is_empty(),
+            Named(r) => named(r),
+            NoneOr(r) => recoveries.is_empty() || named(r),
+        };
+        assert!(as_expected, "{inject}: expected {recovered:?}: {v}");
         if inject.starts_with("duplicate") {
             assert_eq!(v["duplicates_dropped"].as_u64(), Some(1), "{inject}: {v}");
         }

@@ -38,7 +38,7 @@ async fn session(target: Target) -> Session {
         calibration_periods: 0,
     };
     let mut s = Session::connect(target, setup, true).await.unwrap();
-    s.prepare().await.unwrap();
+    s.start().await.unwrap();
     s
 }
 

@@ -8,8 +8,8 @@
 
 use gonio_host::sim::faults::Faults;
 use gonio_host::sim::{FrameHead, Sent, SimConfig};
-use gonio_shared::icd::{HomeEndpoint, HomeRequest, SafetyEndpoint, ScanEndpoint};
-use gonio_shared::{AngleRange, Axis, Fault, SafetySettings, SampleFlags, ScanEvent, ScanSpec};
+use gonio_shared::icd::{HomeEndpoint, HomeRequest, MoveEndpoint, SafetyEndpoint, ScanEndpoint};
+use gonio_shared::{AngleRange, Axis, Fault, Geometry, SafetySettings, SampleFlags, ScanEvent, ScanSpec};
 use gonio_tests::frames::{replies, scan_events, send};
 
 /// 143 points at θi = 30°.
@@ -144,6 +144,37 @@ fn a_pulled_cable_leaves_the_head_safe() {
     assert!(matches!(last, ScanEvent::Sample(_)) && at.laser, "the cable was pulled mid-scan");
     let w = head.world();
     assert!(!w.laser && w.enable_n.iter().all(|&off| off));
+}
+
+/// A request damaged on the way (each single bit flipped in turn, and the
+/// frame cut short) is dropped unanswered and does nothing; the host finds
+/// it lost (its probe is answered first) and reconnects. The same request
+/// undamaged moves the stages.
+#[test]
+fn a_damaged_request_is_dropped_unanswered_and_moves_nothing() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    assert_eq!(
+        replies::<HomeEndpoint>(&head.serve([send::<HomeEndpoint>(&HomeRequest::ALL)])).len(),
+        1
+    );
+    let homed = head.world().steps;
+    let good = send::<MoveEndpoint>(&Geometry::new(40.0, 30.0, 90.0));
+    let mut damaged: Vec<Vec<u8>> = (0..good.len() * 8)
+        .map(|bit| {
+            let mut f = good.clone();
+            f[bit / 8] ^= 1 << (bit % 8);
+            f
+        })
+        .collect();
+    damaged.extend((1..good.len()).map(|n| good[..n].to_vec()));
+    let sent = head.serve(damaged);
+    assert!(sent.is_empty(), "the head answered a damaged request: {} frames", sent.len());
+    let w = head.world();
+    assert_eq!(w.steps, homed, "a damaged request moved the stages");
+    assert!(!w.laser && w.laser_ons == 0, "a damaged request switched the laser on");
+    drop(w);
+    assert_eq!(replies::<MoveEndpoint>(&head.serve([good])).len(), 1);
+    assert_ne!(head.world().steps, homed, "the undamaged request moves the stages");
 }
 
 /// Safety settings are validated like every command.

@@ -36,7 +36,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
         calibration_periods: 0,
     };
     let mut session = Session::connect(Target::Sim(sim.clone()), setup, true).await.unwrap();
-    session.prepare().await.unwrap();
+    session.start().await.unwrap();
     let head = session.head();
 
     // The instrument constant from one clean point, as a reference plate would give it.

@@ -252,7 +252,8 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         prepare_dir(dir, output.force)?;
         plan.write(dir)?;
     }
-    session.prepare().await?;
+    session.start().await?;
+    let reconnected_before_scan = session.reconnections;
     let detection = session.detection.context("the head's detection settings")?;
     if plan.reference_plate && resume.is_none() {
         reference::measure_plate(session.head(), &target, dir, json).await?;
@@ -285,6 +286,11 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
                 dir.display()
             )
         })?;
+    if reconnected_before_scan > 0 {
+        outcome
+            .recoveries
+            .insert("link lost while preparing the head".into(), reconnected_before_scan);
+    }
     let samples = writer.finish()?;
     if resume.is_some() {
         // Counts of the whole scan, not only of this session.

@@ -8,8 +8,8 @@
 use anyhow::{bail, Context, Result};
 use std::sync::{Arc, Mutex, MutexGuard};
 
-/// A fault of the link, hitting the `at`-th frame the head sends (from 1,
-/// counted over the whole plan).
+/// A fault of the link, hitting the `at`-th frame the head sends or (a
+/// request fault) receives, from 1, counted over the whole plan.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LinkFault {
     /// The frame is lost.
@@ -46,14 +46,25 @@ pub enum HardwareFault {
     DmaOverrun(u32),
 }
 
+/// Which way a faulty frame travels.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Direction {
+    /// From the head: replies and scan events.
+    ToHost,
+    /// From the host: requests.
+    ToHead,
+}
+
 #[derive(Debug, Default)]
 pub struct FaultPlan {
-    /// Link faults by frame number, not yet fired.
-    pub link: Vec<(u64, LinkFault)>,
+    /// Link faults by direction and frame number, not yet fired.
+    pub link: Vec<(Direction, u64, LinkFault)>,
     /// Hardware faults by lit move number (switch faults: from the start).
     pub hardware: Vec<(u64, HardwareFault)>,
     /// Frames the heads of this plan have sent.
     pub frames_sent: u64,
+    /// Frames the heads of this plan have received.
+    pub frames_received: u64,
 }
 
 /// The shared plan.
@@ -70,13 +81,17 @@ impl Faults {
         self.plan().hardware.clear();
     }
 
-    /// Counts a frame the head sends; returns the link fault that hits it.
-    pub fn next_frame(&self) -> Option<LinkFault> {
+    /// Counts a frame travelling `way`; returns the link fault that hits it.
+    pub fn next_frame(&self, way: Direction) -> Option<LinkFault> {
         let mut p = self.plan();
-        p.frames_sent += 1;
-        let n = p.frames_sent;
-        let i = p.link.iter().position(|(at, _)| *at == n)?;
-        Some(p.link.remove(i).1)
+        let count = match way {
+            Direction::ToHost => &mut p.frames_sent,
+            Direction::ToHead => &mut p.frames_received,
+        };
+        *count += 1;
+        let n = *count;
+        let i = p.link.iter().position(|(w, at, _)| *w == way && *at == n)?;
+        Some(p.link.remove(i).2)
     }
 
     /// Whether a hardware fault is active after `moves` moves.
@@ -113,7 +128,8 @@ impl Faults {
     }
 
     /// Parses `KIND@N[:ARG],...`: link faults `drop, corrupt, duplicate,
-    /// reorder, delay (ARG ms), disconnect` at frame N; hardware faults
+    /// reorder, delay (ARG ms), disconnect` at the N-th frame the head sends,
+    /// the same with a `req-` prefix at the N-th request it receives; hardware faults
     /// `switch-open, switch-closed` (ARG axis 0–2, N ignored), `saturated,
     /// laser-dead, stall, overrun (ARG blocks)` at move N.
     pub fn parse(spec: &str) -> Result<Faults> {
@@ -139,13 +155,24 @@ impl Faults {
                     }
                     Ok(a)
                 };
+                let (way, link_kind) = match kind.strip_prefix("req-") {
+                    Some(k) => (Direction::ToHead, k),
+                    None => (Direction::ToHost, kind),
+                };
+                let link = match link_kind {
+                    "drop" => Some(LinkFault::Drop),
+                    "corrupt" => Some(LinkFault::Corrupt),
+                    "duplicate" => Some(LinkFault::Duplicate),
+                    "reorder" => Some(LinkFault::Reorder),
+                    "delay" => Some(LinkFault::Delay(arg(100)?)),
+                    "disconnect" => Some(LinkFault::Disconnect),
+                    _ => None,
+                };
+                if let Some(f) = link {
+                    p.link.push((way, n, f));
+                    continue;
+                }
                 match kind {
-                    "drop" => p.link.push((n, LinkFault::Drop)),
-                    "corrupt" => p.link.push((n, LinkFault::Corrupt)),
-                    "duplicate" => p.link.push((n, LinkFault::Duplicate)),
-                    "reorder" => p.link.push((n, LinkFault::Reorder)),
-                    "delay" => p.link.push((n, LinkFault::Delay(arg(100)?))),
-                    "disconnect" => p.link.push((n, LinkFault::Disconnect)),
                     "switch-open" => p.hardware.push((0, HardwareFault::SwitchStuckOpen(axis()?))),
                     "switch-closed" => p.hardware.push((0, HardwareFault::SwitchStuckClosed(axis()?))),
                     "saturated" => p.hardware.push((n, HardwareFault::AdcSaturated)),
@@ -153,8 +180,8 @@ impl Faults {
                     "stall" => p.hardware.push((n, HardwareFault::Stall)),
                     "overrun" => p.hardware.push((n, HardwareFault::DmaOverrun(arg(1)?))),
                     other => bail!(
-                        "unknown fault `{other}`; valid: drop, corrupt, duplicate, reorder, delay, disconnect, \
-                         switch-open, switch-closed, saturated, laser-dead, stall, overrun"
+                        "unknown fault `{other}`; valid: drop, corrupt, duplicate, reorder, delay, disconnect \
+                         (each also with a req- prefix), switch-open, switch-closed, saturated, laser-dead, stall, overrun"
                     ),
                 }
             }

@@ -2,30 +2,17 @@
 //! `gonio demo` and the end-to-end tests use. Frames cross the channels in
 //! exactly the bytes the USB link would carry.
 
-use super::faults::{Faults, LinkFault};
+use super::faulty_link::FaultyLink;
 use super::{build, SimConfig};
 use gonio_firmware::link::{Link, LinkError};
 use std::sync::mpsc;
 use std::thread::JoinHandle;
 use tokio::sync::mpsc as tmpsc;
 
-/// The head's end of the channels, with the link faults of the plan.
+/// The head's end of the channels.
 struct ChannelLink {
     rx: mpsc::Receiver<Vec<u8>>,
-    tx: Option<tmpsc::UnboundedSender<Vec<u8>>>,
-    faults: Faults,
-    /// A frame held back to arrive after the next one.
-    held: Option<Vec<u8>>,
-}
-
-impl ChannelLink {
-    fn put(&self, frame: Vec<u8>) -> Result<(), LinkError> {
-        self.tx
-            .as_ref()
-            .ok_or(LinkError::Closed)?
-            .send(frame)
-            .map_err(|_| LinkError::Closed)
-    }
+    tx: tmpsc::UnboundedSender<Vec<u8>>,
 }
 
 fn take(frame: Vec<u8>, buf: &mut [u8]) -> usize {
@@ -51,31 +38,7 @@ impl Link for ChannelLink {
     }
 
     async fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
-        let mut frame = frame.to_vec();
-        match self.faults.next_frame() {
-            None => {}
-            Some(LinkFault::Drop) => return Ok(()),
-            Some(LinkFault::Corrupt) => {
-                let i = frame.len() / 2;
-                frame[i] ^= 0x10;
-            }
-            Some(LinkFault::Duplicate) => self.put(frame.clone())?,
-            Some(LinkFault::Reorder) => {
-                self.held = Some(frame);
-                return Ok(());
-            }
-            Some(LinkFault::Delay(ms)) => std::thread::sleep(std::time::Duration::from_millis(ms as u64)),
-            Some(LinkFault::Disconnect) => {
-                // The host's end sees the channel close.
-                self.tx = None;
-                return Err(LinkError::Closed);
-            }
-        }
-        self.put(frame)?;
-        match self.held.take() {
-            Some(late) => self.put(late),
-            None => Ok(()),
-        }
+        self.tx.send(frame.to_vec()).map_err(|_| LinkError::Closed)
     }
 }
 
@@ -95,12 +58,9 @@ pub fn spawn_in_process(cfg: SimConfig) -> InProcessLink {
         .name("sim-head".into())
         .spawn(move || {
             let (mut head, _world) = build(&cfg);
-            let mut link = ChannelLink {
-                rx,
-                tx: Some(tx),
-                faults: cfg.faults.clone(),
-                held: None,
-            };
+            // The host's end sees the channels close when this thread ends:
+            // when the host has gone, or the plan cut the link.
+            let mut link = FaultyLink::new(ChannelLink { rx, tx }, cfg.faults.clone());
             futures::executor::block_on(head.serve(&mut link));
         })
         .expect("spawning the simulated head's thread");

@@ -5,6 +5,7 @@
 
 mod board;
 pub mod faults;
+mod faulty_link;
 mod frames;
 mod inproc;
 mod optics;

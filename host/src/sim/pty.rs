@@ -2,6 +2,7 @@
 //! on a byte stream, exactly as the real head's USB CDC-ACM port, so that
 //! `gonio scan --port PATH` cannot tell the two apart except by identity.
 
+use super::faulty_link::FaultyLink;
 use super::{build, SimConfig};
 use anyhow::{Context, Result};
 use gonio_firmware::framing::{self, Decoder, MAX_ENCODED};
@@ -114,11 +115,13 @@ pub fn serve_pty(cfg: SimConfig, link: &Path, on_ready: impl FnOnce(&Path)) -> R
     let flags = fcntl(&pty.master, FcntlArg::F_GETFL).context("reading descriptor flags")?;
     fcntl(&pty.master, FcntlArg::F_SETFL(OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK)).context("setting non-blocking mode")?;
     let (mut head, _world) = build(&cfg);
-    let mut l = PtyLink {
+    // A cut link (fault plan) leaves the head silent until the host's next request.
+    let pty_link = PtyLink {
         master: File::from(pty.master),
         decoder: Decoder::new(),
         frames: VecDeque::new(),
     };
+    let mut l = FaultyLink::new(pty_link, cfg.faults.clone());
     loop {
         futures::executor::block_on(head.serve(&mut l));
     }

@@ -21,6 +21,21 @@ use embassy_stm32::Peri;
 
 pub const NAME: &str = "gonio head STM32F405RG rev A";
 
+/// Puts the pins of the table above into the safe state (laser off, STEP
+/// low, drivers disabled) by writing the GPIO set/reset registers directly.
+/// For the fault handler only: it runs when the owners of the pins can no
+/// longer be trusted, and a BSRR write is atomic whatever they were doing.
+pub fn force_safe_state() {
+    use embassy_stm32::pac::{GPIOB, GPIOC};
+    GPIOB.bsrr().write(|w| w.set_br(0, true));
+    GPIOC.bsrr().write(|w| {
+        for axis in 0..3 {
+            w.set_br(4 * axis, true);
+            w.set_bs(4 * axis + 2, true);
+        }
+    });
+}
+
 pub struct Pins {
     pub photodiode: Peri<'static, PA1>,
     pub chop: Peri<'static, PA6>,

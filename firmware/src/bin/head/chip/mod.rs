@@ -2,6 +2,7 @@
 
 mod adc_stream;
 mod board;
+mod fault;
 mod step_timer;
 mod usb_link;
 mod watchdog;

@@ -1,0 +1,120 @@
+//! The link faults of a fault plan, applied to any link of the simulated
+//! head (in-process channels, pseudo-terminal): frames the head sends and
+//! requests it receives are dropped, corrupted, duplicated, reordered or
+//! delayed, or the link is cut, at the frame numbers of the plan.
+
+use super::faults::{Direction, Faults, LinkFault};
+use gonio_firmware::link::{Link, LinkError};
+use std::collections::VecDeque;
+
+pub struct FaultyLink<L> {
+    inner: L,
+    faults: Faults,
+    /// A frame to the host held back to go after the next one.
+    held: Option<Vec<u8>>,
+    /// Requests that arrived, faults applied, for the head to read.
+    inbox: VecDeque<Vec<u8>>,
+    /// A request held back to arrive after the next one.
+    held_request: Option<Vec<u8>>,
+}
+
+impl<L: Link> FaultyLink<L> {
+    pub fn new(inner: L, faults: Faults) -> Self {
+        FaultyLink {
+            inner,
+            faults,
+            held: None,
+            inbox: VecDeque::new(),
+            held_request: None,
+        }
+    }
+
+    /// A request meets the plan; what survives goes into the inbox. A cut
+    /// link reports itself closed once (the head goes to its safe state and
+    /// stops serving it).
+    fn arrive(&mut self, mut frame: Vec<u8>) -> Result<(), LinkError> {
+        match self.faults.next_frame(Direction::ToHead) {
+            None => {}
+            Some(LinkFault::Drop) => return Ok(()),
+            Some(LinkFault::Corrupt) => corrupt(&mut frame),
+            Some(LinkFault::Duplicate) => self.inbox.push_back(frame.clone()),
+            Some(LinkFault::Reorder) => {
+                self.held_request = Some(frame);
+                return Ok(());
+            }
+            Some(LinkFault::Delay(ms)) => delay(ms),
+            Some(LinkFault::Disconnect) => return Err(LinkError::Closed),
+        }
+        self.inbox.push_back(frame);
+        self.inbox.extend(self.held_request.take());
+        Ok(())
+    }
+
+    fn pop(&mut self, buf: &mut [u8]) -> Option<usize> {
+        let f = self.inbox.pop_front()?;
+        let n = f.len().min(buf.len());
+        buf[..n].copy_from_slice(&f[..n]);
+        Some(n)
+    }
+}
+
+/// Flips one bit in the middle of a frame: its check no longer holds.
+fn corrupt(frame: &mut [u8]) {
+    let i = frame.len() / 2;
+    if let Some(b) = frame.get_mut(i) {
+        *b ^= 0x10;
+    }
+}
+
+/// A late frame: the simulated head waits, as a stalled USB transfer would hold it.
+fn delay(ms: u32) {
+    std::thread::sleep(std::time::Duration::from_millis(ms as u64));
+}
+
+impl<L: Link> Link for FaultyLink<L> {
+    async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
+        loop {
+            if let Some(n) = self.pop(buf) {
+                return Ok(n);
+            }
+            let n = self.inner.recv(buf).await?;
+            self.arrive(buf[..n].to_vec())?;
+        }
+    }
+
+    fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
+        loop {
+            if let Some(n) = self.pop(buf) {
+                return Some(Ok(n));
+            }
+            let arrived = match self.inner.try_recv(buf)? {
+                Ok(n) => self.arrive(buf[..n].to_vec()),
+                Err(e) => Err(e),
+            };
+            if let Err(e) = arrived {
+                return Some(Err(e));
+            }
+        }
+    }
+
+    async fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        let mut frame = frame.to_vec();
+        match self.faults.next_frame(Direction::ToHost) {
+            None => {}
+            Some(LinkFault::Drop) => return Ok(()),
+            Some(LinkFault::Corrupt) => corrupt(&mut frame),
+            Some(LinkFault::Duplicate) => self.inner.send(&frame).await?,
+            Some(LinkFault::Reorder) => {
+                self.held = Some(frame);
+                return Ok(());
+            }
+            Some(LinkFault::Delay(ms)) => delay(ms),
+            Some(LinkFault::Disconnect) => return Err(LinkError::Closed),
+        }
+        self.inner.send(&frame).await?;
+        match self.held.take() {
+            Some(late) => self.inner.send(&late).await,
+            None => Ok(()),
+        }
+    }
+}
