@@ -60,10 +60,14 @@ impl Session {
         self.head.as_ref().expect("a connected head")
     }
 
-    /// Detection settings, homing, calibration of the detection chain, the
-    /// host watch.
+    /// Stops whatever the head was doing, then detection settings, homing,
+    /// calibration of the detection chain, the host watch.
     async fn prepare(&mut self) -> Result<()> {
         let head = self.head();
+        // A head found again may still be running the scan whose answer was
+        // lost (its events then went nowhere): stop it first, or every
+        // setting below would be refused as busy.
+        head.abort().await?;
         // The chop timing is set first: a calibration holds for that timing.
         head.detection(DetectionSettings {
             reference: Reference::Square,

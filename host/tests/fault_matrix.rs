@@ -58,31 +58,32 @@ fn link_and_transient_faults_are_recovered_without_losing_or_repeating_a_sample(
         ("reorder@60", Named("events lost or out of order")),
         ("duplicate@60", Recovery::None),
         ("delay@60:300", Recovery::None),
-        // Frames 1–5 answer the setup, 6 the scan request, 7–149 are the
-        // 143 points' events (149 the last sample), 150 the end of the
+        // Frames 1–6 answer the setup, 7 the scan request, 8–150 are the
+        // 143 points' events (150 the last sample), 151 the end of the
         // scan, whose loss the host notices by asking the head (no recovery
         // needed).
-        ("drop@149", Named("events lost or out of order")),
-        ("drop@150", Recovery::None),
+        ("drop@150", Named("events lost or out of order")),
+        ("drop@151", Recovery::None),
         ("disconnect@60", Named("link lost")),
         ("stall@30", Named("E402")),
         ("overrun@30:1", Recovery::None),
         ("overrun@30:40", Named("E500")),
         ("drop@40,duplicate@50,reorder@70,corrupt@90,disconnect@120", Named("link lost")),
-        // The host's requests: 1 identify, 2 detection settings, 3 homing,
-        // 4 detection settings, 5 safety settings, 6 the scan. A lost
+        // The host's requests: 1 identify, 2 abort (whatever the head was
+        // doing), 3 detection settings, 4 homing, 5 detection settings,
+        // 6 safety settings, 7 the scan. A lost
         // request (or answer) is found by the probe that follows an
         // unanswered request, at once instead of after the request's timeout.
-        ("drop@6", Named("was lost")),
-        ("req-drop@6", Named("was lost")),
-        ("req-corrupt@6", Named("was lost")),
-        ("req-reorder@6", NoneOr("was lost")),
-        ("req-duplicate@6", Recovery::None),
-        ("req-delay@6:300", Recovery::None),
-        ("req-disconnect@6", Named("link lost")),
+        ("drop@7", Named("was lost")),
+        ("req-drop@7", Named("was lost")),
+        ("req-corrupt@7", Named("was lost")),
+        ("req-reorder@7", NoneOr("was lost")),
+        ("req-duplicate@7", Recovery::None),
+        ("req-delay@7:300", Recovery::None),
+        ("req-disconnect@7", Named("link lost")),
         // Lost while preparing the head (homing): found again before the scan starts.
-        ("req-drop@3", Named("while preparing the head")),
-        ("req-duplicate@3", Recovery::None),
+        ("req-drop@4", Named("while preparing the head")),
+        ("req-duplicate@4", Recovery::None),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let o = scan(dir.path(), inject);

@@ -1,12 +1,13 @@
 //! Shared pieces of the test suites and benchmarks: proptest strategies for
 //! every message type, hardware doubles for driving the firmware core without
-//! the simulator, the host model of the step-timer interrupt, and the chopped
-//! signal of the lock-in benchmark.
+//! the simulator, one scan read back, the host model of the step-timer
+//! interrupt, and the chopped signal of the lock-in benchmark.
 
 pub mod chop_signal;
 pub mod doubles;
 pub mod frames;
 pub mod fuzz;
+pub mod scanning;
 pub mod step_log;
 pub mod strategies;
 pub mod synthetic;

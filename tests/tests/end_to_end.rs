@@ -6,11 +6,10 @@ use gonio_firmware::board::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_host::brdf::Directions;
 use gonio_host::client::{Head, Target};
-use gonio_host::samples_csv::{self, SampleWriter};
-use gonio_host::scan;
 use gonio_host::session::{Session, Setup};
 use gonio_host::sim::{serve_pty, SimConfig};
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, Reference, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
+use gonio_tests::scanning::scan_and_read;
 use std::collections::BTreeSet;
 use std::time::Duration;
 
@@ -48,17 +47,7 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
     let mut session = session(Target::Sim(sim.clone())).await;
     let dir = tempfile::tempdir().unwrap();
     let spec = small_grid();
-    let mut out = SampleWriter::create(dir.path()).unwrap();
-    let outcome = scan::run(
-        &mut session,
-        &spec,
-        &mut out,
-        &scan::progress_bar(0, true, "scanning", "points"),
-        None,
-    )
-    .await
-    .unwrap();
-    let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
+    let (outcome, rows) = scan_and_read(&mut session, &spec, dir.path()).await;
     session.close().await;
 
     assert_eq!(outcome.points, spec.len());
@@ -185,33 +174,28 @@ async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() 
     head.close().await;
 }
 
-#[tokio::test]
-async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
-    let dir = tempfile::tempdir().unwrap();
-    let link = dir.path().join("head");
+/// A simulated head serving on a pseudo-terminal in `dir`, as `gonio sim` runs it.
+async fn pty_head(cfg: SimConfig, dir: &std::path::Path) -> Target {
+    let link = dir.join("head");
     let serve_at = link.clone();
-    std::thread::spawn(move || serve_pty(SimConfig::default(), &serve_at, |_| {}));
+    std::thread::spawn(move || serve_pty(cfg, &serve_at, |_| {}));
     for _ in 0..200 {
         if link.exists() {
             break;
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
-    let target = Target::Port(link.to_string_lossy().into_owned());
+    Target::Port(link.to_string_lossy().into_owned())
+}
+
+#[tokio::test]
+async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let target = pty_head(SimConfig::default(), dir.path()).await;
     let mut session = session(target.clone()).await;
     assert!(session.head().identity().simulated);
     assert_eq!(session.head().identity().protocol_version, PROTOCOL_VERSION);
-    let mut out = SampleWriter::create(dir.path()).unwrap();
-    let outcome = scan::run(
-        &mut session,
-        &small_grid(),
-        &mut out,
-        &scan::progress_bar(0, true, "scanning", "points"),
-        None,
-    )
-    .await
-    .unwrap();
-    let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
+    let (outcome, rows) = scan_and_read(&mut session, &small_grid(), dir.path()).await;
     assert_eq!(rows.len() as u32, outcome.measured);
     assert_eq!(outcome.measured + outcome.skipped, small_grid().len());
     session.close().await;
@@ -219,4 +203,32 @@ async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
     let again = Head::connect(&target).await.unwrap();
     assert!(again.status().await.unwrap().homed);
     again.close().await;
+}
+
+/// Over a port, as with a real head: the answer to the scan request is lost
+/// (the head scans on, its events go nowhere), then a later request is lost
+/// too. Each time the host finds the head again on its port, stops what it
+/// was doing, prepares it and continues: every position stored once.
+#[tokio::test]
+async fn lost_answers_and_requests_over_a_port_are_recovered_by_reconnecting() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = SimConfig {
+        faults: gonio_host::sim::faults::Faults::parse("drop@7,req-drop@15").unwrap(),
+        ..SimConfig::default()
+    };
+    let mut session = session(pty_head(cfg, dir.path()).await).await;
+    let (outcome, rows) = scan_and_read(&mut session, &small_grid(), dir.path()).await;
+    let stored: BTreeSet<u32> = rows.iter().filter_map(|r| r.index).collect();
+    assert_eq!(stored.len(), rows.len(), "a position stored twice");
+    assert_eq!(stored.len() as u32, outcome.measured);
+    assert_eq!(outcome.measured + outcome.skipped, small_grid().len());
+    let lost: u32 = outcome
+        .recoveries
+        .iter()
+        .filter(|(k, _)| k.contains("was lost"))
+        .map(|(_, n)| n)
+        .sum();
+    assert_eq!(lost, 2, "{:?}", outcome.recoveries);
+    assert_eq!(session.reconnections, 2);
+    session.close().await;
 }

@@ -4,11 +4,10 @@
 
 use gonio_host::brdf::Directions;
 use gonio_host::client::Target;
-use gonio_host::samples_csv::{self, SampleWriter};
-use gonio_host::scan;
 use gonio_host::session::{Session, Setup};
 use gonio_host::sim::SimConfig;
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, SampleFlags, SanityConfig, ScanSpec};
+use gonio_tests::scanning::scan_and_read;
 use std::collections::BTreeSet;
 
 #[tokio::test]
@@ -57,17 +56,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
     .unwrap();
 
     let dir = tempfile::tempdir().unwrap();
-    let mut out = SampleWriter::create(dir.path()).unwrap();
-    scan::run(
-        &mut session,
-        &spec,
-        &mut out,
-        &scan::progress_bar(0, true, "scanning", "points"),
-        None,
-    )
-    .await
-    .unwrap();
-    let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
+    let (_, rows) = scan_and_read(&mut session, &spec, dir.path()).await;
     let status = session.head().status().await.unwrap();
     session.close().await;
 
