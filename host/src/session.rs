@@ -121,9 +121,7 @@ impl Session {
     /// Finds the head again after the link was lost and prepares it; a link
     /// lost again while preparing is one more try within the window.
     pub async fn reconnect(&mut self) -> Result<()> {
-        if let Some(old) = self.head.take() {
-            old.close().await;
-        }
+        self.let_go().await;
         if !self.quiet {
             eprintln!("link to the head lost; looking for head {} again", self.serial);
         }
@@ -139,9 +137,7 @@ impl Session {
                             Ok(()) => return Ok(()),
                             Err(e) if is_link_loss(&e) => {
                                 last_err = Some(e);
-                                if let Some(h) = self.head.take() {
-                                    h.close().await;
-                                }
+                                self.let_go().await;
                             }
                             Err(e) => return Err(e.context("preparing the head again after reconnecting")),
                         }
@@ -177,6 +173,11 @@ impl Session {
     }
 
     pub async fn close(mut self) {
+        self.let_go().await;
+    }
+
+    /// Closes the link to the head, if there is one.
+    async fn let_go(&mut self) {
         if let Some(h) = self.head.take() {
             h.close().await;
         }

@@ -71,9 +71,9 @@ fn link_and_transient_faults_are_recovered_without_losing_or_repeating_a_sample(
         ("drop@40,duplicate@50,reorder@70,corrupt@90,disconnect@120", Named("link lost")),
         // The host's requests: 1 identify, 2 abort (whatever the head was
         // doing), 3 detection settings, 4 homing, 5 detection settings,
-        // 6 safety settings, 7 the scan. A lost
-        // request (or answer) is found by the probe that follows an
-        // unanswered request, at once instead of after the request's timeout.
+        // 6 safety settings, 7 the scan. A lost request (or answer) is found
+        // by the probe that follows an unanswered request, at once instead
+        // of after the request's timeout.
         ("drop@7", Named("was lost")),
         ("req-drop@7", Named("was lost")),
         ("req-corrupt@7", Named("was lost")),

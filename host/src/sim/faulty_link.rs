@@ -11,7 +11,7 @@ pub struct FaultyLink<L> {
     inner: L,
     faults: Faults,
     /// A frame to the host held back to go after the next one.
-    held: Option<Vec<u8>>,
+    held_reply: Option<Vec<u8>>,
     /// Requests that arrived, faults applied, for the head to read.
     inbox: VecDeque<Vec<u8>>,
     /// A request held back to arrive after the next one.
@@ -23,7 +23,7 @@ impl<L: Link> FaultyLink<L> {
         FaultyLink {
             inner,
             faults,
-            held: None,
+            held_reply: None,
             inbox: VecDeque::new(),
             held_request: None,
         }
@@ -32,21 +32,10 @@ impl<L: Link> FaultyLink<L> {
     /// A request meets the plan; what survives goes into the inbox. A cut
     /// link reports itself closed once (the head goes to its safe state and
     /// stops serving it).
-    fn arrive(&mut self, mut frame: Vec<u8>) -> Result<(), LinkError> {
-        match self.faults.next_frame(Direction::ToHead) {
-            None => {}
-            Some(LinkFault::Drop) => return Ok(()),
-            Some(LinkFault::Corrupt) => corrupt(&mut frame),
-            Some(LinkFault::Duplicate) => self.inbox.push_back(frame.clone()),
-            Some(LinkFault::Reorder) => {
-                self.held_request = Some(frame);
-                return Ok(());
-            }
-            Some(LinkFault::Delay(ms)) => delay(ms),
-            Some(LinkFault::Disconnect) => return Err(LinkError::Closed),
-        }
-        self.inbox.push_back(frame);
-        self.inbox.extend(self.held_request.take());
+    fn arrive(&mut self, frame: Vec<u8>) -> Result<(), LinkError> {
+        let fault = self.faults.next_frame(Direction::ToHead);
+        let delivered = meet(fault, frame, &mut self.held_request)?;
+        self.inbox.extend(delivered);
         Ok(())
     }
 
@@ -56,6 +45,28 @@ impl<L: Link> FaultyLink<L> {
         buf[..n].copy_from_slice(&f[..n]);
         Some(n)
     }
+}
+
+/// A frame meets its fault, either way along the link: the frames that go
+/// on, in order (none, the frame, twice, or followed by the one `held` back
+/// for reordering), or the link cut.
+fn meet(fault: Option<LinkFault>, mut frame: Vec<u8>, held: &mut Option<Vec<u8>>) -> Result<Vec<Vec<u8>>, LinkError> {
+    let mut delivered = Vec::new();
+    match fault {
+        None => {}
+        Some(LinkFault::Drop) => return Ok(delivered),
+        Some(LinkFault::Corrupt) => corrupt(&mut frame),
+        Some(LinkFault::Duplicate) => delivered.push(frame.clone()),
+        Some(LinkFault::Reorder) => {
+            *held = Some(frame);
+            return Ok(delivered);
+        }
+        Some(LinkFault::Delay(ms)) => delay(ms),
+        Some(LinkFault::Disconnect) => return Err(LinkError::Closed),
+    }
+    delivered.push(frame);
+    delivered.extend(held.take());
+    Ok(delivered)
 }
 
 /// Flips one bit in the middle of a frame: its check no longer holds.
@@ -98,23 +109,10 @@ impl<L: Link> Link for FaultyLink<L> {
     }
 
     async fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
-        let mut frame = frame.to_vec();
-        match self.faults.next_frame(Direction::ToHost) {
-            None => {}
-            Some(LinkFault::Drop) => return Ok(()),
-            Some(LinkFault::Corrupt) => corrupt(&mut frame),
-            Some(LinkFault::Duplicate) => self.inner.send(&frame).await?,
-            Some(LinkFault::Reorder) => {
-                self.held = Some(frame);
-                return Ok(());
-            }
-            Some(LinkFault::Delay(ms)) => delay(ms),
-            Some(LinkFault::Disconnect) => return Err(LinkError::Closed),
+        let fault = self.faults.next_frame(Direction::ToHost);
+        for f in meet(fault, frame.to_vec(), &mut self.held_reply)? {
+            self.inner.send(&f).await?;
         }
-        self.inner.send(&frame).await?;
-        match self.held.take() {
-            Some(late) => self.inner.send(&late).await,
-            None => Ok(()),
-        }
+        Ok(())
     }
 }
