@@ -39,10 +39,15 @@ pub enum DecodeError {
     Wire(VarHeader, WireError),
 }
 
+/// Whether the frame key `got` is `key` at the width the host chose.
+pub fn key_is(key: Key, got: &VarKey) -> bool {
+    let mut k = VarKey::Key8(key);
+    k.shrink_to(got.kind());
+    k == *got
+}
+
 fn is<E: Endpoint>(key: &VarKey) -> bool {
-    let mut k = VarKey::Key8(E::REQ_KEY);
-    k.shrink_to(key.kind());
-    k == *key
+    key_is(E::REQ_KEY, key)
 }
 
 fn body<'a, T: Deserialize<'a>>(hdr: VarHeader, bytes: &'a [u8]) -> Result<T, DecodeError> {

@@ -213,7 +213,10 @@ async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
 async fn lost_answers_and_requests_over_a_port_are_recovered_by_reconnecting() {
     let dir = tempfile::tempdir().unwrap();
     let cfg = SimConfig {
-        faults: gonio_host::sim::faults::Faults::parse("drop@7,req-drop@15").unwrap(),
+        // Requests 1–6 prepare the head, 7 starts the scan (its answer, frame
+        // 7, is lost); the probe is status traffic, not counted; 8–13 prepare
+        // the head found again and 14, its scan request, is lost.
+        faults: gonio_host::sim::faults::Faults::parse("drop@7,req-drop@14").unwrap(),
         ..SimConfig::default()
     };
     let mut session = session(pty_head(cfg, dir.path()).await).await;

@@ -24,11 +24,12 @@ pub struct SimHeadArgs {
     #[arg(long, default_value_t = 0.0)]
     pub clock_start_s: f64,
     /// Faults for the simulated head to suffer, KIND@N[:ARG],...: on the link
-    /// at the N-th frame it sends (drop, corrupt, duplicate, reorder, delay:MS,
-    /// disconnect) or, with a req- prefix, the N-th request it receives
-    /// (req-drop, req-duplicate, ...); in the hardware from its N-th move (saturated,
-    /// laser-dead, stall, overrun:BLOCKS) or from the start (switch-open:AXIS,
-    /// switch-closed:AXIS).
+    /// at the N-th frame it sends (drop, corrupt, duplicate, reorder,
+    /// delay:MS, disconnect) or, with a req- prefix, the N-th request it
+    /// receives (req-drop, req-duplicate, ...), status requests and answers
+    /// not counted; in the hardware from its N-th move (saturated,
+    /// laser-dead, stall, overrun:BLOCKS) or from the start
+    /// (switch-open:AXIS, switch-closed:AXIS).
     #[arg(long, value_name = "FAULTS")]
     pub inject: Option<String>,
 }

@@ -129,9 +129,10 @@ impl Faults {
 
     /// Parses `KIND@N[:ARG],...`: link faults `drop, corrupt, duplicate,
     /// reorder, delay (ARG ms), disconnect` at the N-th frame the head sends,
-    /// the same with a `req-` prefix at the N-th request it receives; hardware faults
-    /// `switch-open, switch-closed` (ARG axis 0–2, N ignored), `saturated,
-    /// laser-dead, stall, overrun (ARG blocks)` at move N.
+    /// the same with a `req-` prefix at the N-th request it receives (status
+    /// traffic not counted, see `faulty_link`); hardware faults `switch-open,
+    /// switch-closed` (ARG axis 0–2, N ignored), `saturated, laser-dead,
+    /// stall, overrun (ARG blocks)` at move N.
     pub fn parse(spec: &str) -> Result<Faults> {
         let faults = Faults::default();
         {
