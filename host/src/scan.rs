@@ -111,28 +111,31 @@ pub async fn run(
     monitor: Option<&Monitor>,
 ) -> Result<ScanOutcome> {
     let t0 = Instant::now();
-    let mut outcome = ScanOutcome {
-        points: spec.len(),
-        measured: 0,
-        skipped: 0,
-        skipped_by_reason: BTreeMap::new(),
-        flagged: 0,
-        duplicates_dropped: 0,
-        recoveries: BTreeMap::new(),
-        head_time_s: 0.0,
-        wall_time_s: 0.0,
-    };
-    let mut clock = HeadClock::default();
     let mut first = spec.first_order;
-    let mut streak = Streak {
-        in_a_row: 0,
+    let mut run = ScanRun {
+        session,
+        out,
+        pb,
+        outcome: ScanOutcome {
+            points: spec.len(),
+            measured: 0,
+            skipped: 0,
+            skipped_by_reason: BTreeMap::new(),
+            flagged: 0,
+            duplicates_dropped: 0,
+            recoveries: BTreeMap::new(),
+            head_time_s: 0.0,
+            wall_time_s: 0.0,
+        },
+        clock: HeadClock::default(),
+        recoveries_in_a_row: 0,
         progress: first,
     };
-    pb.set_length((outcome.points - first) as u64);
+    pb.set_length((run.outcome.points - first) as u64);
     let mut read_monitor_now = true;
     loop {
         if let (Some(m), true) = (monitor, read_monitor_now) {
-            if !visit_monitor(session, m, out, &mut clock, first, &mut streak, &mut outcome, pb).await? {
+            if !run.visit_monitor(m, first).await? {
                 continue;
             }
         }
@@ -141,96 +144,216 @@ pub async fn run(
             first_order: first,
             ..spec.clone()
         };
-        match run_stretch(session, &stretch, out, pb, &mut outcome, &mut clock, stop_at).await? {
+        match run.stretch(&stretch, stop_at).await? {
             Stretch::Finished => break,
             Stretch::Paused(next) => {
                 first = next;
                 read_monitor_now = true;
             }
             Stretch::Interrupted(next, why) => {
-                recover(session, why, next, &mut streak, &mut outcome, pb).await?;
+                run.recover(why, next).await?;
                 first = next;
                 read_monitor_now = false;
             }
         }
     }
     if let Some(m) = monitor {
-        while !visit_monitor(session, m, out, &mut clock, outcome.points, &mut streak, &mut outcome, pb).await? {}
+        while !run.visit_monitor(m, run.outcome.points).await? {}
     }
     pb.finish_and_clear();
-    outcome.head_time_s = clock.span_s();
+    let mut outcome = run.outcome;
+    outcome.head_time_s = run.clock.span_s();
     outcome.wall_time_s = t0.elapsed().as_secs_f64();
     Ok(outcome)
 }
 
-/// Recoveries in a row without a new point, counted to give up.
-struct Streak {
-    in_a_row: u32,
+/// What every stretch, monitor visit and recovery of one scan shares.
+struct ScanRun<'a> {
+    session: &'a mut Session,
+    out: &'a mut SampleWriter,
+    pb: &'a ProgressBar,
+    outcome: ScanOutcome,
+    clock: HeadClock,
+    /// Recoveries without a new point since, counted to give up.
+    recoveries_in_a_row: u32,
     /// The furthest position reached.
     progress: u32,
 }
 
-/// Recovers from an interruption before position `next`: reconnects, or
-/// homes, or (events lost, a transient fault) nothing but continuing.
-async fn recover(
-    session: &mut Session,
-    why: Interruption,
-    next: u32,
-    streak: &mut Streak,
-    outcome: &mut ScanOutcome,
-    pb: &ProgressBar,
-) -> Result<()> {
-    if next > streak.progress {
-        (streak.in_a_row, streak.progress) = (0, next);
+impl ScanRun<'_> {
+    /// Recovers from an interruption before position `next`: reconnects, or
+    /// homes, or (events lost, a transient fault) nothing but continuing.
+    async fn recover(&mut self, why: Interruption, next: u32) -> Result<()> {
+        if next > self.progress {
+            (self.recoveries_in_a_row, self.progress) = (0, next);
+        }
+        self.recoveries_in_a_row += 1;
+        if self.recoveries_in_a_row > MAX_RECOVERIES {
+            bail!(
+                "{}; gave up after {MAX_RECOVERIES} recoveries without progress; resume from position {next}",
+                why.name()
+            );
+        }
+        *self.outcome.recoveries.entry(why.name()).or_default() += 1;
+        self.pb.suspend(|| note_recovery(&why, next));
+        match why {
+            Interruption::LinkLost(_) => self
+                .session
+                .reconnect()
+                .await
+                .with_context(|| format!("resume from position {next}")),
+            Interruption::Rehome(_) => self
+                .session
+                .head()
+                .home()
+                .await
+                .map(drop)
+                .with_context(|| format!("homing after a stalled move; resume from position {next}")),
+            Interruption::Gap | Interruption::Transient(_) => Ok(()),
+        }
     }
-    streak.in_a_row += 1;
-    if streak.in_a_row > MAX_RECOVERIES {
-        bail!(
-            "{}; gave up after {MAX_RECOVERIES} recoveries without progress; resume from position {next}",
-            why.name()
-        );
+
+    /// One visit to the monitor before position `next`; a lost link is
+    /// recovered (reconnected) and reported as `false`: the visit is to be
+    /// made again.
+    async fn visit_monitor(&mut self, m: &Monitor, next: u32) -> Result<bool> {
+        match read_monitor(self.session.head(), m, self.out, &mut self.clock).await {
+            Ok(()) => Ok(true),
+            Err(e) if is_link_loss(&e) => {
+                self.recover(Interruption::LinkLost(format!("{e:#}")), next).await?;
+                Ok(false)
+            }
+            Err(e) => Err(e),
+        }
     }
-    *outcome.recoveries.entry(why.name()).or_default() += 1;
-    pb.suspend(|| note_recovery(&why, next));
-    match why {
-        Interruption::LinkLost(_) => session.reconnect().await.with_context(|| format!("resume from position {next}")),
-        Interruption::Rehome(_) => session
-            .head()
-            .home()
-            .await
-            .map(drop)
-            .with_context(|| format!("homing after a stalled move; resume from position {next}")),
-        Interruption::Gap | Interruption::Transient(_) => Ok(()),
+
+    /// Runs the scan from `spec.first_order`, to the end or, with `stop_at`,
+    /// until that visit position has been reached (then aborts it between
+    /// points), or until something interrupts it.
+    async fn stretch(&mut self, spec: &ScanSpec, stop_at: Option<u32>) -> Result<Stretch> {
+        let head = self.session.head();
+        let (out, pb, outcome, clock) = (&mut *self.out, self.pb, &mut self.outcome, &mut self.clock);
+        let mut expected = spec.first_order;
+        let lost = |e: anyhow::Error, at: u32| -> Result<Stretch> {
+            if is_link_loss(&e) {
+                Ok(Stretch::Interrupted(at, Interruption::LinkLost(format!("{e:#}"))))
+            } else {
+                Err(e)
+            }
+        };
+        let (accepted, mut events) = match head.start_scan(spec).await {
+            Ok(x) => x,
+            Err(e) => return lost(e, expected),
+        };
+        outcome.points = accepted.points;
+        let mut pausing = false;
+        let mut beat = Instant::now();
+        let mut waiting_since = Instant::now();
+        loop {
+            let ev = match tokio::time::timeout(POLL, events.recv()).await {
+                Ok(None) => return Ok(Stretch::Interrupted(expected, Interruption::LinkLost("the link closed".into()))),
+                Ok(Some(ev)) => ev,
+                Err(_) => {
+                    // No event for a while: ask the head where it is (this is
+                    // also the heartbeat the head watches for).
+                    beat = Instant::now();
+                    let st = match head.status().await {
+                        Ok(st) => st,
+                        Err(e) => return lost(e, expected),
+                    };
+                    match st.state {
+                        HeadState::Scanning { next_order, .. } if next_order <= expected => {
+                            if waiting_since.elapsed() > EVENT_TIMEOUT {
+                                bail!(
+                                    "the head has been at position {expected} for {} s; resume from position {expected}",
+                                    EVENT_TIMEOUT.as_secs()
+                                );
+                            }
+                            continue;
+                        }
+                        HeadState::Scanning { .. } => {
+                            if let Err(e) = head.abort().await {
+                                return lost(e, expected);
+                            }
+                            return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                        }
+                        HeadState::Idle if expected >= outcome.points => return Ok(Stretch::Finished),
+                        HeadState::Idle => return Ok(Stretch::Interrupted(expected, Interruption::Gap)),
+                    }
+                }
+            };
+            if beat.elapsed() > self.session.heartbeat() {
+                beat = Instant::now();
+                if let Err(e) = head.status().await {
+                    return lost(e, expected);
+                }
+            }
+            let order = match &ev {
+                ScanEvent::Sample(s) => s.scan.map(|p| p.order),
+                ScanEvent::Skipped { order, .. } => Some(*order),
+                ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } => None,
+            };
+            if let Some(o) = order {
+                if o < expected {
+                    // Sent twice, or an earlier run's late event: stored already.
+                    outcome.duplicates_dropped += 1;
+                    continue;
+                }
+                if o > expected {
+                    if let Err(e) = head.abort().await {
+                        return lost(e, expected);
+                    }
+                    return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                }
+                expected += 1;
+                waiting_since = Instant::now();
+                pb.inc(1);
+            }
+            match ev {
+                ScanEvent::Sample(s) => {
+                    out.push(&s)?;
+                    outcome.measured += 1;
+                    if s.flags.0 & !gonio_shared::SampleFlags::THROUGH_SPLITTER != 0 {
+                        outcome.flagged += 1;
+                    }
+                    clock.saw(s.timestamp_us);
+                }
+                ScanEvent::Skipped { reason, .. } => {
+                    outcome.skipped += 1;
+                    *outcome.skipped_by_reason.entry(reason.to_string()).or_default() += 1;
+                }
+                ScanEvent::Finished { run, .. } if run == accepted.run => {
+                    if expected < outcome.points {
+                        // The head finished, but events before the end were lost.
+                        return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                    }
+                    return Ok(Stretch::Finished);
+                }
+                ScanEvent::Stopped { run, reason, .. } if run == accepted.run => {
+                    return match reason {
+                        Fault::Aborted if pausing => Ok(Stretch::Paused(expected)),
+                        Fault::AdcOverrun | Fault::HostSilent => Ok(Stretch::Interrupted(expected, Interruption::Transient(reason))),
+                        Fault::StepTimer(_) => Ok(Stretch::Interrupted(expected, Interruption::Rehome(reason))),
+                        _ => bail!("the head stopped the scan: {reason}; resume from position {expected}"),
+                    };
+                }
+                // The end of an earlier run, arriving late.
+                ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } => {}
+            }
+            pb.set_message(format!("{} measured, {} unreachable", outcome.measured, outcome.skipped));
+            if !pausing && stop_at.is_some_and(|p| expected >= p && expected < outcome.points) {
+                if let Err(e) = head.abort().await {
+                    return lost(e.context("pausing the scan for the laser-drift monitor"), expected);
+                }
+                pausing = true;
+            }
+        }
     }
 }
 
 /// Tells the operator what is being recovered (stderr; quiet runs hide the bar, not this).
 fn note_recovery(why: &Interruption, next: u32) {
     eprintln!("scan interrupted: {}; continuing from position {next}", why.name());
-}
-
-/// One visit to the monitor; a lost link is recovered (reconnected) and
-/// reported as `false`: the visit is to be made again.
-#[allow(clippy::too_many_arguments)]
-async fn visit_monitor(
-    session: &mut Session,
-    m: &Monitor,
-    out: &mut SampleWriter,
-    clock: &mut HeadClock,
-    next: u32,
-    streak: &mut Streak,
-    outcome: &mut ScanOutcome,
-    pb: &ProgressBar,
-) -> Result<bool> {
-    match read_monitor(session.head(), m, out, clock).await {
-        Ok(()) => Ok(true),
-        Err(e) if is_link_loss(&e) => {
-            let why = Interruption::LinkLost(format!("{e:#}"));
-            recover(session, why, next, streak, outcome, pb).await?;
-            Ok(false)
-        }
-        Err(e) => Err(e),
-    }
 }
 
 /// Readings per monitor visit: every sample of the scan is referred to them,
@@ -264,135 +387,5 @@ impl HeadClock {
 
     fn span_s(&self) -> f64 {
         self.last.saturating_sub(self.first.unwrap_or(self.last)) as f64 * 1e-6
-    }
-}
-
-/// Runs the scan from `spec.first_order`, to the end or, with `stop_at`,
-/// until that visit position has been reached (then aborts it between
-/// points), or until something interrupts it.
-async fn run_stretch(
-    session: &Session,
-    spec: &ScanSpec,
-    out: &mut SampleWriter,
-    pb: &ProgressBar,
-    outcome: &mut ScanOutcome,
-    clock: &mut HeadClock,
-    stop_at: Option<u32>,
-) -> Result<Stretch> {
-    let head = session.head();
-    let mut expected = spec.first_order;
-    let lost = |e: anyhow::Error, at: u32| -> Result<Stretch> {
-        if is_link_loss(&e) {
-            Ok(Stretch::Interrupted(at, Interruption::LinkLost(format!("{e:#}"))))
-        } else {
-            Err(e)
-        }
-    };
-    let (accepted, mut events) = match head.start_scan(spec).await {
-        Ok(x) => x,
-        Err(e) => return lost(e, expected),
-    };
-    outcome.points = accepted.points;
-    let mut pausing = false;
-    let mut beat = Instant::now();
-    let mut waiting_since = Instant::now();
-    loop {
-        let ev = match tokio::time::timeout(POLL, events.recv()).await {
-            Ok(None) => return Ok(Stretch::Interrupted(expected, Interruption::LinkLost("the link closed".into()))),
-            Ok(Some(ev)) => ev,
-            Err(_) => {
-                // No event for a while: ask the head where it is (this is
-                // also the heartbeat the head watches for).
-                beat = Instant::now();
-                let st = match head.status().await {
-                    Ok(st) => st,
-                    Err(e) => return lost(e, expected),
-                };
-                match st.state {
-                    HeadState::Scanning { next_order, .. } if next_order <= expected => {
-                        if waiting_since.elapsed() > EVENT_TIMEOUT {
-                            bail!(
-                                "the head has been at position {expected} for {} s; resume from position {expected}",
-                                EVENT_TIMEOUT.as_secs()
-                            );
-                        }
-                        continue;
-                    }
-                    HeadState::Scanning { .. } => {
-                        if let Err(e) = head.abort().await {
-                            return lost(e, expected);
-                        }
-                        return Ok(Stretch::Interrupted(expected, Interruption::Gap));
-                    }
-                    HeadState::Idle if expected >= outcome.points => return Ok(Stretch::Finished),
-                    HeadState::Idle => return Ok(Stretch::Interrupted(expected, Interruption::Gap)),
-                }
-            }
-        };
-        if beat.elapsed() > session.heartbeat() {
-            beat = Instant::now();
-            if let Err(e) = head.status().await {
-                return lost(e, expected);
-            }
-        }
-        let order = match &ev {
-            ScanEvent::Sample(s) => s.scan.map(|p| p.order),
-            ScanEvent::Skipped { order, .. } => Some(*order),
-            ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } => None,
-        };
-        if let Some(o) = order {
-            if o < expected {
-                // Sent twice, or an earlier run's late event: stored already.
-                outcome.duplicates_dropped += 1;
-                continue;
-            }
-            if o > expected {
-                if let Err(e) = head.abort().await {
-                    return lost(e, expected);
-                }
-                return Ok(Stretch::Interrupted(expected, Interruption::Gap));
-            }
-            expected += 1;
-            waiting_since = Instant::now();
-            pb.inc(1);
-        }
-        match ev {
-            ScanEvent::Sample(s) => {
-                out.push(&s)?;
-                outcome.measured += 1;
-                if s.flags.0 & !gonio_shared::SampleFlags::THROUGH_SPLITTER != 0 {
-                    outcome.flagged += 1;
-                }
-                clock.saw(s.timestamp_us);
-            }
-            ScanEvent::Skipped { reason, .. } => {
-                outcome.skipped += 1;
-                *outcome.skipped_by_reason.entry(reason.to_string()).or_default() += 1;
-            }
-            ScanEvent::Finished { run, .. } if run == accepted.run => {
-                if expected < outcome.points {
-                    // The head finished, but events before the end were lost.
-                    return Ok(Stretch::Interrupted(expected, Interruption::Gap));
-                }
-                return Ok(Stretch::Finished);
-            }
-            ScanEvent::Stopped { run, reason, .. } if run == accepted.run => {
-                return match reason {
-                    Fault::Aborted if pausing => Ok(Stretch::Paused(expected)),
-                    Fault::AdcOverrun | Fault::HostSilent => Ok(Stretch::Interrupted(expected, Interruption::Transient(reason))),
-                    Fault::StepTimer(_) => Ok(Stretch::Interrupted(expected, Interruption::Rehome(reason))),
-                    _ => bail!("the head stopped the scan: {reason}; resume from position {expected}"),
-                };
-            }
-            // The end of an earlier run, arriving late.
-            ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } => {}
-        }
-        pb.set_message(format!("{} measured, {} unreachable", outcome.measured, outcome.skipped));
-        if !pausing && stop_at.is_some_and(|p| expected >= p && expected < outcome.points) {
-            if let Err(e) = head.abort().await {
-                return lost(e.context("pausing the scan for the laser-drift monitor"), expected);
-            }
-            pausing = true;
-        }
     }
 }
