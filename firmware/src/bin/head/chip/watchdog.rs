@@ -1,11 +1,11 @@
 //! The independent watchdog (IWDG, its own 32 kHz clock): a task pets it
 //! every 250 ms, so it fires only if the executor stops running tasks — a
 //! busy loop, a panic or a fault (fault.rs has made the pins safe and
-//! waits for it). The chip then restarts, and restarting means the safe state: the pins come
-//! up with the laser off and the drivers disabled before anything else runs,
-//! and the head reports the watchdog reset in its status. Futures that never
-//! complete are the core's business: every move and measurement it awaits
-//! has its own deadline.
+//! waits for it). The chip then restarts, and restarting means the safe
+//! state: the pins come up with the laser off and the drivers disabled
+//! before anything else runs, and the head reports the watchdog reset in its
+//! status. Futures that never complete are the core's business: every move
+//! and measurement it awaits has its own deadline.
 
 use embassy_executor::Spawner;
 use embassy_stm32::peripherals::IWDG;
