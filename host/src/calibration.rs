@@ -13,10 +13,15 @@
 //!   drift curve is extended back to that instant by a straight line through
 //!   its first readings: swapping the plate and homing again take minutes,
 //!   over which the laser drifts too.
-//! - Every value carries its standard uncertainty: the sample's own noise,
-//!   `K`'s and `T`'s from the spread over the plate, and the monitor's.
+//! - Every value carries its uncertainty budget (`crate::uncertainty`):
+//!   the sample's own noise, the plate's certificate, `K`'s and `T`'s spread
+//!   over the plate, the monitor's, the gain ranges, stray light, and the
+//!   stage angles' errors times the local slope of the BRDF (from a smooth
+//!   model fitted to the same data: only its slope is used).
 
+use crate::brdf::{Directions, Material};
 use crate::samples_csv::Row;
+use crate::uncertainty::{Components, HeadUncertainty, K_COVERAGE};
 use anyhow::{bail, Result};
 use gonio_shared::SampleFlags;
 use serde::{Deserialize, Serialize};
@@ -165,6 +170,9 @@ impl Drift {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Calibration {
     pub rho_ref: f64,
+    /// Standard uncertainty of `rho_ref` (the plate's certificate).
+    #[serde(default)]
+    pub rho_ref_u: f64,
     /// `K`: photocurrent per unit `f_r·cosθo` at the reference laser power (A·sr).
     pub scale_a_sr: f64,
     pub scale_rel_sd: f64,
@@ -194,9 +202,12 @@ impl Calibration {
     /// From the plate's samples and the monitor readings taken with it (none
     /// for the few points of `gonio scan --reference-plate`). `splitter` is
     /// used only when no plate sample was taken through the splitter.
-    pub fn from_plate(plate: &[Row], monitor: &[Row], rho_ref: f64, splitter: Option<f64>) -> Result<Calibration> {
+    pub fn from_plate(plate: &[Row], monitor: &[Row], rho_ref: f64, rho_ref_u: f64, splitter: Option<f64>) -> Result<Calibration> {
         if !(rho_ref > 0.0 && rho_ref <= 1.0) {
             bail!("ρ_ref = {rho_ref} must be in (0, 1]");
+        }
+        if !(rho_ref_u >= 0.0 && rho_ref_u < rho_ref) {
+            bail!("the uncertainty of ρ_ref ({rho_ref_u}) must be in [0, ρ_ref)");
         }
         let drift = Drift::from_monitor(monitor, None);
         let f_ref = rho_ref / PI;
@@ -223,6 +234,7 @@ impl Calibration {
         };
         Ok(Calibration {
             rho_ref,
+            rho_ref_u,
             scale_a_sr: scale,
             scale_rel_sd: (scale_rel_sd * scale_rel_sd + drift.rel_sd * drift.rel_sd).sqrt(),
             splitter,
@@ -234,11 +246,11 @@ impl Calibration {
         })
     }
 
-    /// Calibrated rows of a sample run (scan positions only), in its order.
-    /// Its monitor is referred to the plate's last reading when the two
-    /// share a clock (the sample run starts after it); otherwise to its own
-    /// first reading.
-    pub fn apply(&self, rows: &[Row]) -> (Vec<CalibratedRow>, Drift) {
+    /// Calibrated rows of a sample run (scan positions only), in its order,
+    /// each with its uncertainty budget. Its monitor is referred to the
+    /// plate's last reading when the two share a clock (the sample run starts
+    /// after it); otherwise to its own first reading.
+    pub fn apply(&self, rows: &[Row], budget: &Budget) -> (Vec<CalibratedRow>, Drift) {
         let first_sample = rows.iter().map(|r| r.timestamp_s).fold(f64::INFINITY, f64::min);
         let anchor = match self.reference_time_s {
             Some(t) if t <= first_sample => Some(t),
@@ -246,6 +258,7 @@ impl Calibration {
         };
         let monitor: Vec<Row> = rows.iter().filter(|r| r.index.is_none()).cloned().collect();
         let drift = Drift::from_monitor(&monitor, anchor);
+        let head = &budget.head;
         let out = rows
             .iter()
             .filter(|r| r.index.is_some())
@@ -254,21 +267,117 @@ impl Calibration {
                 let t = if through_splitter(r) { self.splitter } else { 1.0 };
                 let fr_cos = current_a(r) / (d * self.scale_a_sr * t);
                 let fr = fr_cos / cos_o(r);
+                let f = fr.abs();
                 let noise = r.noise_v as f64 / r.amplitude_v.abs().max(f32::MIN_POSITIVE) as f64;
                 let split = if through_splitter(r) { self.splitter_rel_sd } else { 0.0 };
-                let rel = (noise * noise + self.scale_rel_sd.powi(2) + split * split + drift.rel_sd.powi(2)).sqrt();
+                let u = Components {
+                    noise: f * noise,
+                    rho_ref: f * self.rho_ref_u / self.rho_ref,
+                    scale: f * self.scale_rel_sd,
+                    splitter: f * split,
+                    drift: f * drift.rel_sd,
+                    gain: f * head.gain_ratio_rel(),
+                    angle: budget.slope.as_ref().map_or(0.0, |m| angle_u(m, head, r)),
+                    stray: head.stray_u_a() / (d * self.scale_a_sr * t * cos_o(r)),
+                };
                 CalibratedRow {
                     raw: r.clone(),
                     laser_power: d,
                     usable: usable(r),
                     brdf_sr: fr,
-                    brdf_sigma_sr: fr.abs() * rel,
+                    brdf_sigma_sr: u.combined(),
                     brdf_cos_sr: fr_cos,
+                    budget: u,
                 }
             })
             .collect();
         (out, drift)
     }
+}
+
+/// What a calibration states about the head beyond the plate: its type-B
+/// uncertainties, and the smooth model whose slope turns angle errors into
+/// BRDF errors (none: no angle component).
+#[derive(Debug, Clone, Default)]
+pub struct Budget {
+    pub head: HeadUncertainty,
+    pub slope: Option<Material>,
+}
+
+/// Step of the central differences of the angle component (degrees): well
+/// inside the narrowest lobe the models reach, well above f64 rounding.
+const SLOPE_STEP_DEG: f64 = 1e-3;
+
+/// `sqrt(Σ_axes (∂f/∂a · u_a)²)`: each stage's angle error through the
+/// head's lab-frame geometry (`Directions::from_stage`) into the model's
+/// BRDF, at the stage angles the row reports.
+fn angle_u(model: &Material, head: &HeadUncertainty, r: &Row) -> f64 {
+    let at = [r.omega_deg as f64, r.tau_deg as f64, r.psi_deg as f64];
+    let f = |a: [f64; 3]| Directions::from_stage(a).map(|d| model.eval(&d));
+    (0..3)
+        .map(|axis| {
+            let moved = |s: f64| {
+                let mut a = at;
+                a[axis] += s * SLOPE_STEP_DEG;
+                f(a)
+            };
+            let slope = match (moved(1.0), moved(-1.0), f(at)) {
+                (Some(p), Some(m), _) => (p - m) / (2.0 * SLOPE_STEP_DEG),
+                (Some(p), None, Some(c)) => (p - c) / SLOPE_STEP_DEG,
+                (None, Some(m), Some(c)) => (c - m) / SLOPE_STEP_DEG,
+                _ => 0.0,
+            };
+            (slope * head.axis_deg(axis)).powi(2)
+        })
+        .sum::<f64>()
+        .sqrt()
+}
+
+/// The budget of one incidence angle: the median of each component
+/// relative to the value, over its usable samples, largest first.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct IncidenceBudget {
+    pub theta_i_deg: f64,
+    pub samples: usize,
+    /// `(component, median relative standard uncertainty)`, largest first.
+    pub components: Vec<(String, f64)>,
+    /// Median relative combined standard uncertainty.
+    pub combined: f64,
+}
+
+/// Per incidence angle (rounded to 0.1°), what the budget is made of.
+pub fn budget_by_incidence(rows: &[CalibratedRow]) -> Vec<IncidenceBudget> {
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v.get(v.len() / 2).copied().unwrap_or(0.0)
+    };
+    let mut angles: Vec<f64> = rows
+        .iter()
+        .map(|r| (r.raw.target_theta_i_deg as f64 * 10.0).round() / 10.0)
+        .collect();
+    angles.sort_by(f64::total_cmp);
+    angles.dedup();
+    angles
+        .into_iter()
+        .filter_map(|ti| {
+            let at: Vec<&CalibratedRow> = rows
+                .iter()
+                .filter(|r| r.usable && r.brdf_sr != 0.0 && ((r.raw.target_theta_i_deg as f64 * 10.0).round() / 10.0) == ti)
+                .collect();
+            if at.is_empty() {
+                return None;
+            }
+            let rel = |k: usize| median(at.iter().map(|r| r.budget.values()[k] / r.brdf_sr.abs()).collect());
+            let mut components: Vec<(String, f64)> = Components::NAMES.iter().enumerate().map(|(k, n)| (n.to_string(), rel(k))).collect();
+            components.sort_by(|a, b| b.1.total_cmp(&a.1));
+            Some(IncidenceBudget {
+                theta_i_deg: ti,
+                samples: at.len(),
+                components,
+                combined: median(at.iter().map(|r| r.brdf_sigma_sr / r.brdf_sr.abs()).collect()),
+            })
+        })
+        .collect()
 }
 
 /// A raw row with its calibrated value beside it (`calibrated.csv`).
@@ -280,12 +389,16 @@ pub struct CalibratedRow {
     /// False where a flag says the value is not a measurement (saturated, overrun, phase off, below noise).
     pub usable: bool,
     pub brdf_sr: f64,
+    /// Combined standard uncertainty of `brdf_sr`.
     pub brdf_sigma_sr: f64,
     pub brdf_cos_sr: f64,
+    /// The components `brdf_sigma_sr` combines.
+    pub budget: Components,
 }
 
 /// Writes `calibrated.csv`: the raw columns of `samples.csv`, then
-/// `laser_power, usable, brdf_sr, brdf_sigma_sr, brdf_cos_sr`.
+/// `laser_power, usable, brdf_sr, brdf_sigma_sr, brdf_cos_sr`, the k = 2
+/// interval `brdf_lo_sr, brdf_hi_sr`, and each budget component `u_NAME_sr`.
 pub fn write_csv(path: &std::path::Path, rows: &[CalibratedRow]) -> Result<()> {
     use anyhow::Context;
     use std::io::Write;
@@ -301,19 +414,28 @@ pub fn write_csv(path: &std::path::Path, rows: &[CalibratedRow]) -> Result<()> {
     if let Some(first) = rows.first() {
         let text = raw_line(&first.raw, true)?;
         let header = text.lines().next().unwrap_or_default();
-        writeln!(out, "{header},laser_power,usable,brdf_sr,brdf_sigma_sr,brdf_cos_sr")?;
+        let components: Vec<String> = Components::NAMES.iter().map(|n| format!("u_{n}_sr")).collect();
+        writeln!(
+            out,
+            "{header},laser_power,usable,brdf_sr,brdf_sigma_sr,brdf_cos_sr,brdf_lo_sr,brdf_hi_sr,{}",
+            components.join(",")
+        )?;
     }
     for r in rows {
         let line = raw_line(&r.raw, false)?;
+        let u: Vec<String> = r.budget.values().iter().map(f64::to_string).collect();
         writeln!(
             out,
-            "{},{},{},{},{},{}",
+            "{},{},{},{},{},{},{},{},{}",
             line.trim_end(),
             r.laser_power,
             r.usable,
             r.brdf_sr,
             r.brdf_sigma_sr,
-            r.brdf_cos_sr
+            r.brdf_cos_sr,
+            r.brdf_sr - K_COVERAGE * r.brdf_sigma_sr,
+            r.brdf_sr + K_COVERAGE * r.brdf_sigma_sr,
+            u.join(",")
         )?;
     }
     out.flush().with_context(|| format!("writing {}", path.display()))

@@ -4,9 +4,12 @@
 //! BRDF Explorer shader, and the pictures with the best fits drawn over the
 //! data. Everything it links is written beside it, by relative path.
 
+use crate::calibration::IncidenceBudget;
+use crate::coefficients::{self, Kind, Source};
 use crate::fit::{self, Dataset, Fit, Metrics, Units};
 use crate::formats::brdf_explorer;
 use crate::plot;
+use crate::uncertainty::HeadUncertainty;
 use anyhow::{Context, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -24,6 +27,87 @@ pub struct Report<'a> {
     pub fits: &'a [Fit],
     /// Metrics on held-out samples, one per fit, if the comparison held any out.
     pub holdout: &'a [Option<Metrics>],
+    /// The calibration's budget per incidence angle, when the data were calibrated here.
+    pub budget: &'a [IncidenceBudget],
+}
+
+/// R_A (ASTM E810 set, ε = 0: the BRDF is isotropic) and R_L (EN 1436) of
+/// the best fit, with the fit's uncertainty and the calibration's common one.
+fn coefficients_section(best: &Fit) -> Result<String> {
+    let source = Source::Model {
+        material: best.material.clone(),
+        covariance: best.covariance.clone(),
+        common_rel_u: best.common_rel_u.unwrap_or(0.0),
+        // Data calibrated by this head's plate: its stage zeros too.
+        zero_u_deg: best.common_rel_u.map(|_| HeadUncertainty::default().shared_zeros_deg()),
+    };
+    let values = coefficients::compute(&source, &coefficients::report_requests())?;
+    let mut html = format!(
+        "<h2>Coefficients of retroreflection</h2>\n<p>From the best fit ({}), averaged over the instruments' source and \
+         receiver apertures, ± the standard uncertainty (k = 1: the fit's covariance{}). Spectral values at the laser's \
+         wavelength ({} nm), <b>not photometric</b>. Definitions: docs/retroreflection.md.</p>\n<table>\n\
+         <tr><th class=\"l\">R_A (cd·lx⁻¹·m⁻²)</th>",
+        best.material.model.name(),
+        if best.common_rel_u.is_some() {
+            ", the calibration's common scale and the stage zeros"
+        } else {
+            ""
+        },
+        coefficients::WAVELENGTH_NM
+    );
+    for a in coefficients::ASTM_ALPHAS {
+        let _ = write!(html, "<th>α = {a}°</th>");
+    }
+    html.push_str("</tr>\n");
+    for b in coefficients::ASTM_BETAS {
+        let _ = write!(html, "<tr><th class=\"l\">β = {b}°</th>");
+        for c in values
+            .iter()
+            .filter(|c| c.request.kind == Kind::Ra && c.request.geometry.beta1_deg == b)
+        {
+            let _ = write!(html, "<td>{:.4e} ± {:.1e}</td>", c.estimate.value, c.estimate.u);
+        }
+        html.push_str("</tr>\n");
+    }
+    html.push_str("</table>\n");
+    if let Some(rl) = values.iter().find(|c| c.request.kind == Kind::Rl) {
+        let _ = writeln!(
+            html,
+            "<p>R_L at the 30 m geometry (EN 1436: entrance {}°, observation {}°): {:.4e} ± {:.1e} mcd·m⁻²·lx⁻¹.</p>",
+            coefficients::EN1436_ENTRANCE_DEG,
+            coefficients::EN1436_OBSERVATION_DEG,
+            rl.estimate.value,
+            rl.estimate.u
+        );
+    }
+    Ok(html)
+}
+
+/// The largest components of the calibration's budget per incidence angle.
+fn budget_section(budget: &[IncidenceBudget]) -> String {
+    let mut html = String::from(
+        "<h2>Uncertainty budget</h2>\n<p>Median over the usable samples of each incidence angle, relative to the value \
+         (k = 1); every sample's components are in calibrated.csv.</p>\n<table>\n\
+         <tr><th>θi</th><th>samples</th><th>combined</th><th class=\"l\">largest components</th></tr>\n",
+    );
+    for b in budget {
+        let top: Vec<String> = b
+            .components
+            .iter()
+            .take(4)
+            .map(|(n, u)| format!("{n} {:.3} %", 100.0 * u))
+            .collect();
+        let _ = writeln!(
+            html,
+            "<tr><td>{}°</td><td>{}</td><td>{:.3} %</td><td class=\"l\">{}</td></tr>",
+            b.theta_i_deg,
+            b.samples,
+            100.0 * b.combined,
+            escape(&top.join(", "))
+        );
+    }
+    html.push_str("</table>\n");
+    html
 }
 
 fn escape(s: &str) -> String {
@@ -151,6 +235,12 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         );
     }
     html.push_str("</table>\n");
+    if let Some(&best) = order.first() {
+        html.push_str(&coefficients_section(&r.fits[best])?);
+    }
+    if !r.budget.is_empty() {
+        html.push_str(&budget_section(r.budget));
+    }
     let drawn: Vec<_> = order.iter().take(DRAWN).map(|&i| r.fits[i].material.clone()).collect();
     let names: Vec<&str> = drawn.iter().map(|m| m.model.name()).collect();
     let files = plot::render(r.data, &drawn, &dir.join("plots"))?;

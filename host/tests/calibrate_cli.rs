@@ -3,7 +3,7 @@
 //! the calibrated BRDF against the virtual material's truth.
 
 use gonio_host::brdf::{Directions, Material};
-use gonio_host::calibration::Calibration;
+use gonio_host::calibration::{Budget, Calibration};
 use gonio_host::samples_csv::{self, Row};
 use std::path::Path;
 mod common;
@@ -24,7 +24,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Median |calibrated/truth − 1| over the usable samples of a calibration.
 fn median_error(cal: &Calibration, rows: &[Row]) -> f64 {
-    let (out, _) = cal.apply(rows);
+    let (out, _) = cal.apply(rows, &Budget::default());
     median(
         out.iter()
             .filter(|c| c.usable)
@@ -68,15 +68,16 @@ fn calibrated_brdf_matches_the_truth_with_the_laser_drifting() {
     let errors: Vec<f64> = rows.iter().map(|(r, f, _)| (f / truth(r) - 1.0).abs()).collect();
     let med = median(errors);
     assert!(med < 0.01, "median |error| {med}");
-    // The stated uncertainty covers the error for most samples (sharp lobes
-    // add pointing error, which is not in it).
-    let covered = rows.iter().filter(|(r, f, s)| (f - truth(r)).abs() <= 3.0 * s).count();
-    assert!(covered as f64 > 0.7 * rows.len() as f64, "{covered} of {} within 3σ", rows.len());
+    // The budget's k = 2 interval covers the truth for most samples (this
+    // head is perfect and its plate exactly as certified, so more than the
+    // nominal 95 %; coverage-bench checks it on imperfect heads).
+    let covered = rows.iter().filter(|(r, f, s)| (f - truth(r)).abs() <= 2.0 * s).count();
+    assert!(covered as f64 > 0.95 * rows.len() as f64, "{covered} of {} within 2σ", rows.len());
 
     // Without the monitor the same data are off by the drift.
     let all = samples_csv::read(&out.join("samples.csv")).unwrap();
     let plate = samples_csv::read(&out.join("reference.csv")).unwrap();
-    let cal = Calibration::from_plate(&plate, &[], 0.99, None).unwrap();
+    let cal = Calibration::from_plate(&plate, &[], 0.99, 0.005, None).unwrap();
     let no_monitor: Vec<Row> = all.iter().filter(|r| r.index.is_some()).cloned().collect();
     assert!(
         median_error(&cal, &no_monitor) > 0.015,

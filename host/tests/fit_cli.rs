@@ -31,6 +31,7 @@ fn dataset(m: &Material, units: Units) -> Dataset {
         units,
         observations,
         metadata: vec!["material: synthetic".into()],
+        common_rel_u: None,
     }
 }
 
@@ -70,6 +71,12 @@ fn fit_json_has_the_contract_fields_and_recovers_the_material() {
     assert_eq!(v["samples"], 3240);
     let names: Vec<&String> = v["params"].as_object().unwrap().keys().collect();
     assert_eq!(names, ["kd", "n", "k1", "k2", "k3", "k4"]);
+    // The covariance (for `gonio coefficients`): its diagonal is the stderr squared.
+    for (i, name) in names.iter().enumerate() {
+        let var = v["covariance"][i][i].as_f64().unwrap();
+        let se = v["stderr"][name.as_str()].as_f64().unwrap();
+        assert!((var.sqrt() / se - 1.0).abs() < 1e-12, "{name}: {var} vs {se}²");
+    }
     for (name, want) in ["kd", "n", "k1", "k2", "k3", "k4"].iter().zip(tape().params) {
         let got = v["params"][name].as_f64().unwrap();
         assert!((got - want).abs() <= 1e-6 * want.abs(), "{name}: {got} vs {want}");

@@ -70,5 +70,6 @@ pub fn samples(material: &Material, n: usize, noise: f64, seed: u64) -> Dataset 
         units: Units::Fr,
         observations,
         metadata: Vec::new(),
+        common_rel_u: None,
     }
 }

@@ -13,6 +13,15 @@ pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+fn normalize(a: [f64; 3]) -> [f64; 3] {
+    let n = dot(a, a).sqrt();
+    [a[0] / n, a[1] / n, a[2] / n]
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
 /// `(a + b)/‖a + b‖`, or the normal when the sum vanishes.
 fn unit_sum(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     let s = [a[0] + b[0], a[1] + b[1], a[2] + b[2]];
@@ -45,6 +54,34 @@ impl Directions {
 
     pub fn from_degrees(theta_i: f64, theta_o: f64, dphi: f64) -> Self {
         Self::from_angles(theta_i.to_radians(), theta_o.to_radians(), dphi.to_radians())
+    }
+
+    /// The light and view of the head at stage angles `(ω, τ, ψ)` in degrees
+    /// (`head.md`, kinematics), in the sample frame (`z = n`, `x` along the
+    /// light's projection), computed from the lab-frame vectors: independent
+    /// of the firmware's inverse kinematics. `None` when the light or the
+    /// detector is behind the sample.
+    pub fn from_stage(angles_deg: [f64; 3]) -> Option<Self> {
+        let [om, ta, ps] = angles_deg.map(f64::to_radians);
+        let n = [ta.cos() * om.cos(), ta.cos() * om.sin(), ta.sin()];
+        let l_lab = [1.0, 0.0, 0.0];
+        let d_lab = [ps.cos(), ps.sin(), 0.0];
+        let (cl, cd) = (dot(n, l_lab), dot(n, d_lab));
+        if cl <= 0.0 || cd <= 0.0 {
+            return None;
+        }
+        let proj = [l_lab[0] - cl * n[0], l_lab[1] - cl * n[1], l_lab[2] - cl * n[2]];
+        let x = if dot(proj, proj) > 1e-24 {
+            normalize(proj)
+        } else {
+            normalize(cross(n, [0.0, 0.0, 1.0]))
+        };
+        let y = cross(n, x);
+        let to_sample = |w: [f64; 3]| [dot(w, x), dot(w, y), dot(w, n)];
+        Some(Directions {
+            l: to_sample(l_lab),
+            v: to_sample(d_lab),
+        })
     }
 
     /// `cos θi`.

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 pub struct ConvertArgs {
     /// Input: ALTA text (.dat) or calibrated sample CSV (.csv).
     pub input: PathBuf,
-    /// Output ALTA file (ISOTROPIC_TL_TV_PROJ_DPHI, #VS 0).
+    /// Output ALTA file (ISOTROPIC_TL_TV_PROJ_DPHI; #VS 2 with k = 2 intervals when every value has an uncertainty, else #VS 0).
     pub output: PathBuf,
     /// Output units (default: the input's).
     #[arg(long, value_enum)]

@@ -225,7 +225,14 @@ pub fn compare(d: &Domain, o: &FitOptions) -> Result<Vec<Outcome>> {
 }
 
 /// Writes `dir/report.html` of a comparison.
-pub fn report(dir: &Path, title: String, facts: Vec<(String, String)>, d: &Domain, rows: &[Outcome]) -> Result<PathBuf> {
+pub fn report(
+    dir: &Path,
+    title: String,
+    facts: Vec<(String, String)>,
+    d: &Domain,
+    rows: &[Outcome],
+    budget: &[crate::calibration::IncidenceBudget],
+) -> Result<PathBuf> {
     let fits: Vec<Fit> = rows.iter().map(|r| r.fit.clone()).collect();
     let holdout: Vec<_> = rows.iter().map(|r| r.holdout).collect();
     crate::report::write(
@@ -236,6 +243,7 @@ pub fn report(dir: &Path, title: String, facts: Vec<(String, String)>, d: &Domai
             data: &d.train,
             fits: &fits,
             holdout: &holdout,
+            budget,
         },
     )
 }
@@ -246,7 +254,7 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
     if let Some(dir) = &a.report {
         let mut facts = vec![("data".to_string(), a.file.display().to_string())];
         facts.extend(d.train.metadata.iter().map(|m| ("metadata".to_string(), m.clone())));
-        let path = report(dir, format!("Model comparison: {}", a.file.display()), facts, &d, &rows)?;
+        let path = report(dir, format!("Model comparison: {}", a.file.display()), facts, &d, &rows, &[])?;
         if !a.options.json {
             eprintln!("report: {}", path.display());
         }

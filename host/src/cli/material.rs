@@ -1,7 +1,8 @@
 //! Options shared by the commands that start a simulated head.
 
 use crate::brdf::{Material, ModelId};
-use crate::sim::SimConfig;
+use crate::sim::{Imperfections, SimConfig, PLATE_RHO_U};
+use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Context, Result};
 
 #[derive(Debug, Clone, clap::Args)]
@@ -32,6 +33,11 @@ pub struct SimHeadArgs {
     /// (switch-open:AXIS, switch-closed:AXIS).
     #[arg(long, value_name = "FAULTS")]
     pub inject: Option<String>,
+    /// Give the simulated head the imperfections its uncertainty budget
+    /// states (stage zeros, backlash, gain ranges, stray light) and a plate
+    /// off its certificate, drawn from --seed.
+    #[arg(long)]
+    pub imperfect: bool,
 }
 
 impl SimHeadArgs {
@@ -55,6 +61,9 @@ impl SimHeadArgs {
             ..SimConfig::default()
         };
         cfg.photodiode.laser_drift = self.laser_drift;
+        if self.imperfect {
+            cfg.imperfections = Box::new(Imperfections::draw(self.seed, &HeadUncertainty::default(), PLATE_RHO_U));
+        }
         if let Some(f) = &self.inject {
             cfg.faults = crate::sim::faults::Faults::parse(f).context("--inject")?;
         }

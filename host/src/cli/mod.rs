@@ -1,18 +1,19 @@
 //! Command-line interface. Angles on the command line are in degrees.
 
-mod calibrate;
+pub mod calibrate;
+mod coefficients;
 mod convert;
 mod detector;
 mod devices;
 mod export;
-mod fit;
+pub mod fit;
 mod grid;
 mod material;
 mod model_eval;
 mod plan;
 mod plot;
 mod reference;
-mod scan;
+pub mod scan;
 mod sim;
 
 use anyhow::{Context, Result};
@@ -41,6 +42,8 @@ pub enum Command {
     Sim(sim::SimArgs),
     /// Turn a scan into BRDF values with a reference-plate scan, correcting laser drift.
     Calibrate(calibrate::CalibrateArgs),
+    /// Coefficients of retroreflection R_A and R_L (CIE 54.2, ASTM E810, EN 1436) with uncertainties.
+    Coefficients(coefficients::CoefficientsArgs),
     /// Fit one model to a data file (ALTA .dat or calibrated CSV), no starting point needed.
     Fit(fit::FitArgs),
     /// Fit every model to a data file and compare them (RMSE, NRMSE, NCC).
@@ -69,6 +72,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Devices(a) => devices::devices(a),
         Command::Sim(a) => sim::sim(a),
         Command::Calibrate(a) => calibrate::calibrate_cmd(a),
+        Command::Coefficients(a) => coefficients::coefficients_cmd(a),
         Command::Fit(a) => fit::fit_cmd(a),
         Command::Compare(a) => fit::compare_cmd(a),
         Command::Convert(a) => convert::convert_cmd(a),

@@ -6,7 +6,7 @@ use crate::brdf::Material;
 use crate::client::Target;
 use crate::scan::Monitor;
 use crate::sim::faults::Faults;
-use crate::sim::SimConfig;
+use crate::sim::{Imperfections, SimConfig};
 use anyhow::{Context, Result};
 use gonio_shared::ScanSpec;
 use serde::{Deserialize, Serialize};
@@ -23,6 +23,8 @@ pub enum PlanTarget {
         laser_drift: f64,
         #[serde(default)]
         clock_start_s: f64,
+        #[serde(default)]
+        imperfections: Imperfections,
     },
     Port {
         path: String,
@@ -61,6 +63,7 @@ impl ScanPlan {
                 seed: c.seed,
                 laser_drift: c.photodiode.laser_drift,
                 clock_start_s: c.clock_start_s,
+                imperfections: (*c.imperfections).clone(),
             },
             Target::Port(p) => PlanTarget::Port { path: p.clone() },
         };
@@ -81,12 +84,14 @@ impl ScanPlan {
                 seed,
                 laser_drift,
                 clock_start_s,
+                imperfections,
             } => {
                 let mut c = SimConfig {
                     material: material.clone(),
                     seed: *seed,
                     clock_start_s: *clock_start_s,
                     faults: self.faults.clone(),
+                    imperfections: Box::new(imperfections.clone()),
                     ..SimConfig::default()
                 };
                 c.photodiode.laser_drift = *laser_drift;

@@ -95,20 +95,12 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ..SimConfig::default()
     };
     let truth = sim.material.clone();
-    let mut plan = ScanPlan::new(&Target::Sim(sim), &ScanSpec::belcour(), &DetectorArgs::demo());
-    plan.reference_plate = true;
-    let (outcome, samples) = scan_to_dir(&plan, &a.out, &a.output, None).await?;
+    let (outcome, samples) = demo_scan(sim, &a.out, &a.output).await?;
     let json = a.output.json;
     if !json {
         summarise(&outcome, &samples, false)?;
     }
-    let calibrated = calibrate::calibrate(&calibrate::CalibrateArgs {
-        scan: a.out.clone(),
-        reference: None,
-        rho_ref: crate::sim::PLATE_RHO,
-        splitter: None,
-        json,
-    })?;
+    let calibrated = calibrate::calibrate(&calibrate::CalibrateArgs::for_scan(a.out.clone(), json))?;
     let options = FitOptions {
         json,
         ..FitOptions::default()
@@ -140,7 +132,15 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ),
         ("data".to_string(), calibrated.csv.display().to_string()),
     ];
-    let report = fit::report(&a.out, "gonio demo: simulated retroreflective tape".into(), facts, &domain, &rows)?;
+    let budget = crate::calibration::budget_by_incidence(&calibrated.rows);
+    let report = fit::report(
+        &a.out,
+        "gonio demo: simulated retroreflective tape".into(),
+        facts,
+        &domain,
+        &rows,
+        &budget,
+    )?;
     let best = rows
         .iter()
         .min_by(|x, y| x.fit.metrics.rmse.total_cmp(&y.fit.metrics.rmse))
@@ -156,7 +156,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         println!(
             "calibrated: {} of {} samples usable; best model {} (RMSE {:.3e} sr⁻¹, NCC {:.4})",
             calibrated.usable,
-            calibrated.samples,
+            calibrated.rows.len(),
             best.fit.material.model.name(),
             best.fit.metrics.rmse,
             best.fit.metrics.ncc
@@ -164,6 +164,15 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         println!("report: {}", report.display());
     }
     Ok(())
+}
+
+/// The demo's scan of a simulated head into `dir`: the reference plate,
+/// then the Belcour grid (quiet with `output.json`). Returns the outcome and
+/// the samples file.
+pub async fn demo_scan(sim: SimConfig, dir: &Path, output: &OutputArgs) -> Result<(ScanOutcome, PathBuf)> {
+    let mut plan = ScanPlan::new(&Target::Sim(sim), &ScanSpec::belcour(), &DetectorArgs::demo());
+    plan.reference_plate = true;
+    scan_to_dir(&plan, dir, output, None).await
 }
 
 pub async fn scan(a: ScanArgs) -> Result<()> {

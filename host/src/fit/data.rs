@@ -56,6 +56,10 @@ pub struct Dataset {
     pub observations: Vec<Observation>,
     /// Header lines of the source kept as metadata (ALTA comments, …).
     pub metadata: Vec<String>,
+    /// Relative standard uncertainty shared by every value (the reference
+    /// plate's certificate and scale, from `calibrated.csv`): a fit's
+    /// covariance cannot see it, so what is derived from a fit adds it.
+    pub common_rel_u: Option<f64>,
 }
 
 /// Whether `theta` (rad) is one of `list` (degrees), within 0.05°.

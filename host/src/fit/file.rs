@@ -20,10 +20,51 @@ pub fn to_json(f: &Fit, units: Units, holdout: Option<&Metrics>) -> Value {
         "rmse": f.metrics.rmse, "nrmse": f.metrics.nrmse, "ncc": f.metrics.ncc, "l2": f.metrics.l2,
         "samples": f.samples, "seconds": f.seconds, "units": units,
     });
+    if let Some(c) = &f.covariance {
+        let rows: Vec<Vec<f64>> = (0..c.nrows()).map(|i| c.row(i).iter().copied().collect()).collect();
+        v["covariance"] = json!(rows);
+    }
+    if let Some(u) = f.common_rel_u {
+        v["common_rel_u"] = json!(u);
+    }
     if let Some(h) = holdout {
         v["holdout"] = json!(h);
     }
     v
+}
+
+/// A fit read back: the material, and what its uncertainty needs.
+#[derive(Debug, Clone)]
+pub struct FitFile {
+    pub material: Material,
+    /// Covariance of the parameters, `models.md` order (`None` if the file has none).
+    pub covariance: Option<nalgebra::DMatrix<f64>>,
+    /// The data's common relative uncertainty, if the fit recorded one.
+    pub common_rel_u: Option<f64>,
+}
+
+/// Reads a fit file whole.
+pub fn read(path: &Path) -> Result<FitFile> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let v: Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
+    let material = material_of(&v).with_context(|| format!("{}", path.display()))?;
+    let n = material.params.len();
+    let covariance = match &v["covariance"] {
+        Value::Null => None,
+        c => {
+            let rows: Vec<Vec<f64>> = serde_json::from_value(c.clone())
+                .with_context(|| format!("{}: `covariance` is not a matrix of numbers", path.display()))?;
+            if rows.len() != n || rows.iter().any(|r| r.len() != n) {
+                bail!("{}: `covariance` must be {n} × {n}", path.display());
+            }
+            Some(nalgebra::DMatrix::from_fn(n, n, |i, k| rows[i][k]))
+        }
+    };
+    Ok(FitFile {
+        material,
+        covariance,
+        common_rel_u: v["common_rel_u"].as_f64(),
+    })
 }
 
 /// Writes a fit's JSON (pretty, one object).
@@ -33,14 +74,16 @@ pub fn write(path: &Path, v: &Value) -> Result<()> {
 
 /// The material of a fit file.
 pub fn read_material(path: &Path) -> Result<Material> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let v: Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
-    let model = ModelId::parse(v["model"].as_str().unwrap_or_default()).with_context(|| format!("{}", path.display()))?;
+    read(path).map(|f| f.material)
+}
+
+fn material_of(v: &Value) -> Result<Material> {
+    let model = ModelId::parse(v["model"].as_str().unwrap_or_default())?;
     let mut params = Vec::new();
     for name in model.param_names() {
         match v["params"][name].as_f64() {
             Some(x) => params.push(x),
-            None => bail!("{}: parameter `{name}` missing", path.display()),
+            None => bail!("parameter `{name}` missing"),
         }
     }
     let param = if v["parametrization"] == "back" { Param::Back } else { Param::View };

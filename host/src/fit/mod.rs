@@ -74,6 +74,13 @@ pub struct Fit {
     pub seconds: f64,
     /// Weighted sum of squared residuals at the optimum.
     pub cost: f64,
+    /// Covariance of the parameters (every parameter, in `models.md` order;
+    /// rows and columns of fixed ones are zero); `None` where the normal
+    /// matrix is singular.
+    pub covariance: Option<DMatrix<f64>>,
+    /// The data's relative uncertainty shared by every sample, which the
+    /// covariance cannot hold (`Dataset::common_rel_u`).
+    pub common_rel_u: Option<f64>,
 }
 
 /// Builds the least-squares problem of a data set.
@@ -133,11 +140,19 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         params: problem.full(&x),
         param: spec.param,
     };
-    let stderr = standard_errors(&problem, &x);
+    let covariance = covariance(&problem, &x);
+    let stderr = (0..material.params.len())
+        .map(|i| {
+            let v = covariance.as_ref()?[(i, i)];
+            (problem.free.contains(&i) && v.is_finite() && v >= 0.0).then(|| v.sqrt())
+        })
+        .collect();
     let cost = problem.cost(&x);
     Ok(Fit {
         metrics: evaluate(&material, data),
         stderr,
+        covariance,
+        common_rel_u: data.common_rel_u,
         samples: data.observations.len(),
         seconds: t0.elapsed().as_secs_f64(),
         cost,
@@ -173,24 +188,21 @@ pub fn evaluate(material: &Material, data: &Dataset) -> Metrics {
     Metrics::new(&measured, &model)
 }
 
-/// `sqrt(diag(s²(JᵀJ)⁻¹))` with `s² = Σr²/(N − p)`, `J` the weighted
-/// Jacobian in the parameters themselves (not the transformed ones).
-fn standard_errors(problem: &Problem, x: &[f64]) -> Vec<Option<f64>> {
+/// `s²(JᵀJ)⁻¹` with `s² = Σr²/(N − p)`, `J` the weighted Jacobian in the
+/// parameters themselves (not the transformed ones), spread over every
+/// parameter (fixed ones zero). Standard errors are the roots of its diagonal.
+fn covariance(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
     let n = problem.template.len();
     let (r, j) = problem.residuals_and_jacobian(x);
-    let dof = r.len().saturating_sub(x.len());
-    let mut out = vec![None; n];
-    if dof == 0 {
-        return out;
-    }
+    let dof = r.len().checked_sub(x.len()).filter(|d| *d > 0)?;
     let s2 = r.iter().map(|v| v * v).sum::<f64>() / dof as f64;
     let normal: DMatrix<f64> = j.transpose() * &j;
-    let Some(inv) = normal.try_inverse() else {
-        return out;
-    };
-    for (k, &i) in problem.free.iter().enumerate() {
-        let v = s2 * inv[(k, k)];
-        out[i] = (v.is_finite() && v >= 0.0).then(|| v.sqrt());
+    let inv = normal.try_inverse()?;
+    let mut out = DMatrix::zeros(n, n);
+    for (a, &i) in problem.free.iter().enumerate() {
+        for (b, &k) in problem.free.iter().enumerate() {
+            out[(i, k)] = s2 * inv[(a, b)];
+        }
     }
-    out
+    Some(out)
 }

@@ -4,9 +4,13 @@
 //! (`θL, θV·cosΔφ, θV·sinΔφ`, the form written), `ISOTROPIC_TV_TL_DPHI`
 //! (`θV, θL, Δφ`) and `SPHERICAL_TL_PL_TV_PV` (`θL, φL, θV, φV`), radians.
 //! Outputs: `INV_STERADIAN` (`f_r`) and `INV_STERADIAN_COSINE_FACTOR`
-//! (`f_r·cosθo`). `#VS 0` only: ALTA's confidence columns are not written.
+//! (`f_r·cosθo`). Confidence columns: `#VS 0` (none), `#VS 1` (one more
+//! number per value: its standard uncertainty) and `#VS 2` (two more: the
+//! lower and upper ends of its k = 2 interval); the writer uses `#VS 2` for
+//! values that carry an uncertainty.
 
 use crate::fit::{Dataset, Observation, Units};
+use crate::uncertainty::K_COVERAGE;
 use anyhow::{anyhow, bail, Result};
 use std::fmt::Write;
 
@@ -62,6 +66,7 @@ fn unit_name(u: Units) -> &'static str {
 /// Parses an ALTA text file; errors name the line (1-based).
 pub fn parse(text: &str) -> Result<Dataset> {
     let (mut dim, mut param_in, mut out_units) = (None, None, None);
+    let mut vs = 0usize;
     let mut metadata = Vec::new();
     let mut observations = Vec::new();
     for (i, raw) in text.lines().enumerate() {
@@ -99,9 +104,12 @@ pub fn parse(text: &str) -> Result<Dataset> {
                     })?);
                 }
                 Some("VS") => {
-                    if words.next() != Some("0") {
-                        return Err(err(format!("only `#VS 0` (no confidence columns) is supported, found `{line}`")));
-                    }
+                    vs = match words.next() {
+                        Some("0") => 0,
+                        Some("1") => 1,
+                        Some("2") => 2,
+                        _ => return Err(err(format!("#VS must be 0, 1 or 2 (confidence columns per value), found `{line}`"))),
+                    };
                 }
                 _ => metadata.push(rest.trim().to_string()),
             }
@@ -114,15 +122,15 @@ pub fn parse(text: &str) -> Result<Dataset> {
             return Err(err(format!("#DIM says {d} inputs but #PARAM_IN has {}", p.dim())));
         }
         let fields: Vec<&str> = line.split_whitespace().collect();
-        if fields.len() != d + 1 {
+        if fields.len() != d + 1 + vs {
             return Err(err(format!(
-                "expected {} numbers ({} inputs, 1 output), found {}",
-                d + 1,
+                "expected {} numbers ({} inputs, 1 output, {vs} confidence), found {}",
+                d + 1 + vs,
                 d,
                 fields.len()
             )));
         }
-        let mut x = Vec::with_capacity(d + 1);
+        let mut x = Vec::with_capacity(d + 1 + vs);
         for f in fields {
             let v: f64 = f.parse().map_err(|_| err(format!("`{f}` is not a number")))?;
             if !v.is_finite() {
@@ -131,12 +139,20 @@ pub fn parse(text: &str) -> Result<Dataset> {
             x.push(v);
         }
         let (theta_i, theta_o, dphi) = p.angles(&x);
+        let sigma = match vs {
+            1 => Some(x[d + 1]),
+            2 => Some((x[d + 2] - x[d + 1]) / (2.0 * K_COVERAGE)),
+            _ => None,
+        };
+        if sigma.is_some_and(|s| s < 0.0) {
+            return Err(err("the confidence interval is negative".into()));
+        }
         observations.push(Observation {
             theta_i,
             theta_o,
             dphi,
             value: x[d],
-            sigma: None,
+            sigma,
         });
     }
     let Some(units) = out_units else {
@@ -152,23 +168,29 @@ pub fn parse(text: &str) -> Result<Dataset> {
         units,
         observations,
         metadata,
+        common_rel_u: None,
     })
 }
 
 /// Writes a data set as ALTA text in `ISOTROPIC_TL_TV_PROJ_DPHI`, in its own
 /// units; metadata become `#` comment lines. Numbers are written in Rust's
-/// shortest round-trip form, so reading back gives the same `f64`s.
+/// shortest round-trip form, so reading back gives the same `f64`s. When
+/// every value has an uncertainty, `#VS 2` with its k = 2 interval.
 pub fn write(data: &Dataset) -> String {
+    let intervals = !data.observations.is_empty() && data.observations.iter().all(|o| o.sigma.is_some());
     let mut s = String::new();
     let _ = writeln!(s, "#DIM 3 1");
     let _ = writeln!(s, "#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI");
     let _ = writeln!(s, "#PARAM_OUT {}", unit_name(data.units));
-    let _ = writeln!(s, "#VS 0");
+    let _ = writeln!(s, "#VS {}", if intervals { 2 } else { 0 });
+    if intervals {
+        let _ = writeln!(s, "# confidence: the value's k = {K_COVERAGE} interval [lower upper]");
+    }
     for m in &data.metadata {
         let _ = writeln!(s, "# {m}");
     }
     for o in &data.observations {
-        let _ = writeln!(
+        let _ = write!(
             s,
             "{:e} {:e} {:e} {:e}",
             o.theta_i,
@@ -176,6 +198,12 @@ pub fn write(data: &Dataset) -> String {
             o.theta_o * o.dphi.sin(),
             o.value
         );
+        match o.sigma {
+            Some(u) if intervals => {
+                let _ = writeln!(s, " {:e} {:e}", o.value - K_COVERAGE * u, o.value + K_COVERAGE * u);
+            }
+            _ => s.push('\n'),
+        }
     }
     s
 }

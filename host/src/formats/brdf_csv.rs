@@ -23,6 +23,8 @@ pub fn parse(text: &str) -> Result<Dataset> {
         (None, None) => bail!("line 1: no value column: expected `brdf_sr` (f_r) or `brdf_cos_sr` (f_r·cosθo)"),
     };
     let usable = col("usable");
+    let common = col("u_rho_ref_sr").zip(col("u_scale_sr"));
+    let mut common_rel = Vec::new();
     let mut observations = Vec::new();
     for record in reader.records() {
         let record = record.context("malformed CSV")?;
@@ -41,6 +43,12 @@ pub fn parse(text: &str) -> Result<Dataset> {
         if usable.and_then(|u| record.get(u)) == Some("false") {
             continue;
         }
+        if let Some((r, k)) = common {
+            let v = num(value)?;
+            if v != 0.0 {
+                common_rel.push(num(r)?.hypot(num(k)?) / v.abs());
+            }
+        }
         observations.push(Observation {
             theta_i: num(ti)?.to_radians(),
             theta_o: num(to)?.to_radians(),
@@ -55,9 +63,11 @@ pub fn parse(text: &str) -> Result<Dataset> {
     if observations.is_empty() {
         bail!("line 2: no data rows");
     }
+    common_rel.sort_by(f64::total_cmp);
     Ok(Dataset {
         units,
         observations,
         metadata: Vec::new(),
+        common_rel_u: common_rel.get(common_rel.len() / 2).copied(),
     })
 }

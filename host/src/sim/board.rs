@@ -127,10 +127,11 @@ impl AdcStream for SimAdc {
         let lost = w.faults.take_overrun(w.moves);
         let dt = timing.ticks_per_sample as f64 / Self::TIMER_HZ as f64;
         let m = out.len();
-        let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64;
+        let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64 * w.imperfections.gain_scale[w.gain_index()];
         let vref = w.cfg.detector.adc_vref as f64;
         let sig_a = if w.laser && !dead {
-            w.photodiode.signal_a(w.target(), &w.cfg, w.angles(), |d| w.defect(d)) * w.photodiode.laser_factor(w.t_s)
+            (w.photodiode.signal_a(w.target(), &w.cfg, w.load_angles(), |d| w.defect(d)) + w.imperfections.stray_a)
+                * w.photodiode.laser_factor(w.t_s)
         } else {
             0.0
         };

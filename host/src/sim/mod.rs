@@ -7,12 +7,14 @@ mod board;
 pub mod faults;
 mod faulty_link;
 mod frames;
+mod imperfections;
 mod inproc;
 mod optics;
 mod pty;
 mod world;
 
 pub use frames::{FrameHead, Sent};
+pub use imperfections::Imperfections;
 pub use inproc::spawn_in_process;
 pub use optics::Photodiode;
 pub use pty::serve_pty;
@@ -45,6 +47,9 @@ pub struct SimConfig {
     pub mount: Mount,
     /// Faults to suffer on the link and in the hardware.
     pub faults: faults::Faults,
+    /// Angle, gain, stray-light and plate errors the firmware does not know
+    /// of (boxed: most heads have none, and `Target` stays small).
+    pub imperfections: Box<Imperfections>,
 }
 
 /// Which target sits on the sample holder. Shared between the host (the
@@ -53,8 +58,11 @@ pub struct SimConfig {
 #[derive(Debug, Clone, Default)]
 pub struct Mount(std::sync::Arc<std::sync::atomic::AtomicBool>);
 
-/// Hemispherical reflectance of the simulated head's reference plate (Spectralon).
+/// Hemispherical reflectance of the simulated head's reference plate
+/// (Spectralon), as its certificate states it...
 pub const PLATE_RHO: f64 = 0.99;
+/// ...with this standard uncertainty.
+pub const PLATE_RHO_U: f64 = 0.005;
 
 impl Mount {
     pub fn set_plate(&self, plate: bool) {
@@ -77,6 +85,7 @@ impl Default for SimConfig {
             clock_start_s: 0.0,
             mount: Mount::default(),
             faults: faults::Faults::default(),
+            imperfections: Box::default(),
         }
     }
 }

@@ -4,7 +4,6 @@
 //! ambient light, mains pickup, amplifier bandwidth, noise, offset,
 //! quantisation and saturation.
 
-use crate::brdf::frame::dot;
 use crate::brdf::{Directions, Material};
 use gonio_firmware::board::HeadConfig;
 use rand::Rng;
@@ -63,44 +62,20 @@ impl Default for Photodiode {
     }
 }
 
-fn normalize(a: [f64; 3]) -> [f64; 3] {
-    let n = dot(a, a).sqrt();
-    [a[0] / n, a[1] / n, a[2] / n]
-}
-
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
-}
-
 impl Photodiode {
     /// Signal photocurrent (A) with the laser on, at stage angles `(ω, τ, ψ)` in degrees:
     /// `P·R·f_r·cosθo·Ω`, times the splitter factor in the retro zone, zero in
     /// the blind zone or behind the sample; `defect` scales the material's
     /// reflection at a direction pair (a dust speck).
     pub fn signal_a(&self, material: &Material, cfg: &HeadConfig, angles: [f64; 3], defect: impl Fn(&Directions) -> f64) -> f64 {
-        let [om, ta, ps] = angles.map(f64::to_radians);
-        let n = [ta.cos() * om.cos(), ta.cos() * om.sin(), ta.sin()];
-        let l_lab = [1.0, 0.0, 0.0];
-        let d_lab = [ps.cos(), ps.sin(), 0.0];
-        let (cl, cd) = (dot(n, l_lab), dot(n, d_lab));
         let psi_abs = angles[2].abs();
         let optics = &cfg.optics;
-        if cl <= 0.0 || cd <= 0.0 || (psi_abs > optics.retro_max_deg as f64 && psi_abs < optics.blind_max_deg as f64) {
+        let Some(d) = Directions::from_stage(angles) else {
+            return 0.0;
+        };
+        if psi_abs > optics.retro_max_deg as f64 && psi_abs < optics.blind_max_deg as f64 {
             return 0.0;
         }
-        // Sample frame: z = n, x along the light's projection.
-        let proj = [l_lab[0] - cl * n[0], l_lab[1] - cl * n[1], l_lab[2] - cl * n[2]];
-        let x = if dot(proj, proj) > 1e-24 {
-            normalize(proj)
-        } else {
-            normalize(cross(n, [0.0, 0.0, 1.0]))
-        };
-        let y = cross(n, x);
-        let to_sample = |w: [f64; 3]| [dot(w, x), dot(w, y), dot(w, n)];
-        let d = Directions {
-            l: to_sample(l_lab),
-            v: to_sample(d_lab),
-        };
         let splitter = if psi_abs <= optics.retro_max_deg as f64 {
             self.splitter_factor
         } else {

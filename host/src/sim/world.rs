@@ -28,6 +28,10 @@ pub struct World {
     /// Microstep range the mechanics allow per axis (end stops).
     stops: [(i32, i32); 3],
     pub dir_positive: [bool; 3],
+    /// Direction of each motor's last step (±1): the side backlash leaves the load on.
+    last_step: [i32; 3],
+    /// What the head gets wrong (angles, gains, stray light, the plate).
+    pub imperfections: super::Imperfections,
     pub enable_n: [bool; 3],
     pub gain_bits: [bool; 2],
     pub laser: bool,
@@ -79,12 +83,15 @@ impl World {
             steps,
             stops,
             dir_positive: [true; 3],
+            last_step: [1; 3],
+            imperfections: (*sim.imperfections).clone(),
             enable_n: [true; 3],
             gain_bits: [false; 2],
             laser: false,
             chop: None,
             material: sim.material.clone(),
-            plate: Material::parse(crate::brdf::ModelId::Lambert, &format!("kd={}", super::PLATE_RHO)).expect("a valid Lambertian"),
+            plate: Material::parse(crate::brdf::ModelId::Lambert, &format!("kd={}", sim.imperfections.plate_rho))
+                .expect("a valid Lambertian"),
             mount: sim.mount.clone(),
             photodiode: sim.photodiode.clone(),
             dust: sim.dust.clone(),
@@ -103,6 +110,7 @@ impl World {
         }
         let (lo, hi) = self.stops[axis];
         let d = if self.dir_positive[axis] { 1 } else { -1 };
+        self.last_step[axis] = d;
         self.steps[axis] = (self.steps[axis] + d).clamp(lo, hi);
     }
 
@@ -121,6 +129,15 @@ impl World {
     /// True stage angles (degrees).
     pub fn angles(&self) -> [f64; 3] {
         [0, 1, 2].map(|i| units::steps_to_deg(&self.cfg.axes[i], self.steps[i]) as f64)
+    }
+
+    /// Angles of the loads the motors drive (degrees): the motor's angle,
+    /// the stage's zero error, and half the backlash behind the last step's
+    /// direction (the load trails the motor).
+    pub fn load_angles(&self) -> [f64; 3] {
+        let m = self.angles();
+        let im = &self.imperfections;
+        [0, 1, 2].map(|i| m[i] + im.zero_offset_deg[i] - 0.5 * im.backlash_deg[i] * self.last_step[i] as f64)
     }
 
     /// Reflection factor at a direction pair: a speck of dust or one.

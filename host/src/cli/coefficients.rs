@@ -1,0 +1,197 @@
+//! `gonio coefficients`: R_A and R_L (CIE 54.2, ASTM E810, EN 1436) from a
+//! fit, a model, or measured data, with standard uncertainties.
+
+use crate::brdf::{Material, ModelId};
+use crate::coefficients::{self, Apertures, Coefficient, Kind, Request, Set, Source, WAVELENGTH_NM};
+use crate::fit;
+use crate::formats;
+use crate::uncertainty::HeadUncertainty;
+use anyhow::{bail, Context, Result};
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub struct CoefficientsArgs {
+    /// A fit (FIT.json from `gonio fit --out`): its covariance gives the
+    /// uncertainty, with the calibration's common scale if it recorded one.
+    #[arg(long, value_name = "FIT.json", conflicts_with_all = ["model", "data"])]
+    pub fit: Option<PathBuf>,
+    /// With --fit: standard uncertainty (degrees) of the stage zeros the
+    /// fitted scan shared, taken through the coefficient's slopes in α and
+    /// β (default: the reference head's when the fit is of data `gonio
+    /// calibrate` wrote, else none).
+    #[arg(long, requires = "fit")]
+    pub u_zero_deg: Option<f64>,
+    /// A model id of models.md, with --params (no uncertainty).
+    #[arg(long, requires = "params", conflicts_with = "data")]
+    pub model: Option<String>,
+    /// The model's parameters, NAME=V,...
+    #[arg(long)]
+    pub params: Option<String>,
+    /// Measured data (calibrated CSV or ALTA .dat), interpolated between the
+    /// nearest measured geometries, which are named.
+    #[arg(long, value_name = "FILE")]
+    pub data: Option<PathBuf>,
+    /// Named sets of geometries (repeatable).
+    #[arg(long, value_enum)]
+    pub set: Vec<Set>,
+    /// R_A at these observation angles α (degrees), with --beta.
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub alpha: Vec<f64>,
+    /// ...and these entrance angles β (degrees, coplanar: β2 = 0).
+    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    pub beta: Vec<f64>,
+    /// ...and these rotation angles ε (degrees; no effect on an isotropic BRDF).
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub epsilon: Vec<f64>,
+    /// Also R_L at the 30 m road-marking geometry (as --set en1436).
+    #[arg(long)]
+    pub rl: bool,
+    /// Angular diameter of the source seen from the sample (degrees); default: each set's own.
+    #[arg(long)]
+    pub source_aperture_deg: Option<f64>,
+    /// Angular diameter of the receiver seen from the sample (degrees); default: each set's own.
+    #[arg(long)]
+    pub receiver_aperture_deg: Option<f64>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl CoefficientsArgs {
+    fn source(&self) -> Result<Source> {
+        if let Some(path) = &self.fit {
+            let f = fit::file::read(path)?;
+            return Ok(Source::Model {
+                material: f.material,
+                covariance: f.covariance,
+                common_rel_u: f.common_rel_u.unwrap_or(0.0),
+                zero_u_deg: match self.u_zero_deg {
+                    Some(u) if u.is_finite() && u >= 0.0 => Some([u, u]),
+                    Some(u) => bail!("--u-zero-deg {u} must be finite and ≥ 0"),
+                    None => f.common_rel_u.map(|_| HeadUncertainty::default().shared_zeros_deg()),
+                },
+            });
+        }
+        if let (Some(m), Some(p)) = (&self.model, &self.params) {
+            return Ok(Source::model(Material::parse(ModelId::parse(m)?, p)?));
+        }
+        if let Some(path) = &self.data {
+            let data = formats::load(path)?;
+            return Source::data(&data).with_context(|| format!("{}", path.display()));
+        }
+        bail!("give a BRDF: --fit FIT.json, --model M --params ..., or --data FILE")
+    }
+
+    fn requests(&self) -> Result<Vec<Request>> {
+        let mut out = Vec::new();
+        for s in &self.set {
+            out.extend(s.requests());
+        }
+        if self.rl {
+            out.extend(Set::En1436.requests());
+        }
+        match (self.alpha.is_empty(), self.beta.is_empty()) {
+            (false, false) => out.extend(coefficients::grid(
+                &self.alpha,
+                &self.beta,
+                &self.epsilon,
+                coefficients::ASTM_APERTURES,
+            )),
+            (true, true) => {}
+            _ => bail!("--alpha and --beta go together"),
+        }
+        if out.is_empty() {
+            bail!("no geometry: give --set astm-e810, --set en1436, --rl, or --alpha with --beta");
+        }
+        for r in &mut out {
+            r.apertures = Apertures {
+                source_deg: self.source_aperture_deg.unwrap_or(r.apertures.source_deg),
+                receiver_deg: self.receiver_aperture_deg.unwrap_or(r.apertures.receiver_deg),
+            };
+        }
+        Ok(out)
+    }
+}
+
+/// The JSON of the contract: `ra` (a list) and `rl` (the last R_L, or null).
+pub fn to_json(values: &[Coefficient]) -> Value {
+    let entry = |c: &Coefficient| {
+        let g = &c.request.geometry;
+        let mut v = json!({
+            "alpha_deg": g.alpha_deg, "beta_deg": g.beta_deg(), "epsilon_deg": g.epsilon_deg,
+            "value": c.estimate.value, "u": c.estimate.u,
+            "theta_i_deg": c.sample_angles_deg[0], "theta_o_deg": c.sample_angles_deg[1], "dphi_deg": c.sample_angles_deg[2],
+            "source_aperture_deg": c.request.apertures.source_deg, "receiver_aperture_deg": c.request.apertures.receiver_deg,
+        });
+        if g.beta2_deg != 0.0 {
+            v["beta1_deg"] = json!(g.beta1_deg);
+            v["beta2_deg"] = json!(g.beta2_deg);
+        }
+        if !c.estimate.nearest.is_empty() {
+            v["nearest"] = json!(c.estimate.nearest);
+        }
+        v
+    };
+    let ra: Vec<Value> = values.iter().filter(|c| c.request.kind == Kind::Ra).map(entry).collect();
+    let rl = values.iter().rev().find(|c| c.request.kind == Kind::Rl).map(|c| {
+        let mut v = entry(c);
+        if let Some(o) = v.as_object_mut() {
+            o.remove("epsilon_deg");
+        }
+        v
+    });
+    json!({
+        "ra": ra, "rl": rl,
+        "units": {"ra": Kind::Ra.unit(), "rl": Kind::Rl.unit()},
+        "wavelength_nm": WAVELENGTH_NM,
+        "note": "spectral values at the laser's wavelength (633 nm), not photometric; u is the standard uncertainty (k = 1)",
+    })
+}
+
+pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
+    let source = a.source()?;
+    let requests = a.requests()?;
+    let values = coefficients::compute(&source, &requests)?;
+    if a.json {
+        println!("{}", to_json(&values));
+        return Ok(());
+    }
+    println!("at {WAVELENGTH_NM} nm (the laser's wavelength), not photometric; u: standard uncertainty (k = 1)");
+    println!(
+        "{:<4} {:>6} {:>7} {:>6} {:>8} {:>8} {:>8} {:>13} {:>11}  unit",
+        "", "α°", "β°", "ε°", "θi°", "θo°", "Δφ°", "value", "u"
+    );
+    for c in &values {
+        let g = &c.request.geometry;
+        let [ti, to, dp] = c.sample_angles_deg;
+        let name = match c.request.kind {
+            Kind::Ra => "R_A",
+            Kind::Rl => "R_L",
+        };
+        println!(
+            "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>13.5e} {:>11.3e}  {}",
+            g.alpha_deg,
+            g.beta_deg(),
+            g.epsilon_deg,
+            c.estimate.value,
+            c.estimate.u,
+            c.request.kind.unit()
+        );
+        if let Some(n) = c.estimate.nearest.first() {
+            let names: Vec<String> = c
+                .estimate
+                .nearest
+                .iter()
+                .map(|n| format!("({:.2}°, {:.2}°, {:.1}°)", n.theta_i_deg, n.theta_o_deg, n.dphi_deg))
+                .collect();
+            println!("       from the measured geometries {}", names.join(", "));
+            if n.distance_deg > 1.0 {
+                println!(
+                    "       warning: the nearest measured geometry is {:.2}° away: extrapolated",
+                    n.distance_deg
+                );
+            }
+        }
+    }
+    Ok(())
+}
