@@ -21,7 +21,7 @@
 
 use crate::brdf::{Directions, Material};
 use crate::samples_csv::Row;
-use crate::uncertainty::{Components, HeadUncertainty, K_COVERAGE};
+use crate::uncertainty::{Components, HeadUncertainty, K_COVERAGE, SHARED};
 use anyhow::{bail, Result};
 use gonio_shared::SampleFlags;
 use serde::{Deserialize, Serialize};
@@ -270,6 +270,14 @@ impl Calibration {
                 let f = fr.abs();
                 let noise = r.noise_v as f64 / r.amplitude_v.abs().max(f32::MIN_POSITIVE) as f64;
                 let split = if through_splitter(r) { self.splitter_rel_sd } else { 0.0 };
+                let slopes = budget.slope.as_ref().map_or([0.0; 3], |m| stage_slopes(m, r));
+                let shifts = [
+                    f * self.rho_ref_u / self.rho_ref,
+                    -f * self.scale_rel_sd,
+                    slopes[0] * head.zero_deg[0],
+                    slopes[1] * head.zero_deg[1],
+                    slopes[2] * head.zero_deg[2],
+                ];
                 let u = Components {
                     noise: f * noise,
                     rho_ref: f * self.rho_ref_u / self.rho_ref,
@@ -277,7 +285,7 @@ impl Calibration {
                     splitter: f * split,
                     drift: f * drift.rel_sd,
                     gain: f * head.gain_ratio_rel(),
-                    angle: budget.slope.as_ref().map_or(0.0, |m| angle_u(m, head, r)),
+                    angle: (0..3).map(|a| (slopes[a] * head.axis_deg(a)).powi(2)).sum::<f64>().sqrt(),
                     stray: head.stray_u_a() / (d * self.scale_a_sr * t * cos_o(r)),
                 };
                 CalibratedRow {
@@ -288,6 +296,7 @@ impl Calibration {
                     brdf_sigma_sr: u.combined(),
                     brdf_cos_sr: fr_cos,
                     budget: u,
+                    shifts,
                 }
             })
             .collect();
@@ -308,29 +317,25 @@ pub struct Budget {
 /// inside the narrowest lobe the models reach, well above f64 rounding.
 const SLOPE_STEP_DEG: f64 = 1e-3;
 
-/// `sqrt(Σ_axes (∂f/∂a · u_a)²)`: each stage's angle error through the
-/// head's lab-frame geometry (`Directions::from_stage`) into the model's
-/// BRDF, at the stage angles the row reports.
-fn angle_u(model: &Material, head: &HeadUncertainty, r: &Row) -> f64 {
+/// `∂f/∂a` for each stage `a` (sr⁻¹ per degree): the stage's angle moved
+/// through the head's lab-frame geometry (`Directions::from_stage`) into the
+/// model's BRDF, at the stage angles the row reports.
+fn stage_slopes(model: &Material, r: &Row) -> [f64; 3] {
     let at = [r.omega_deg as f64, r.tau_deg as f64, r.psi_deg as f64];
     let f = |a: [f64; 3]| Directions::from_stage(a).map(|d| model.eval(&d));
-    (0..3)
-        .map(|axis| {
-            let moved = |s: f64| {
-                let mut a = at;
-                a[axis] += s * SLOPE_STEP_DEG;
-                f(a)
-            };
-            let slope = match (moved(1.0), moved(-1.0), f(at)) {
-                (Some(p), Some(m), _) => (p - m) / (2.0 * SLOPE_STEP_DEG),
-                (Some(p), None, Some(c)) => (p - c) / SLOPE_STEP_DEG,
-                (None, Some(m), Some(c)) => (c - m) / SLOPE_STEP_DEG,
-                _ => 0.0,
-            };
-            (slope * head.axis_deg(axis)).powi(2)
-        })
-        .sum::<f64>()
-        .sqrt()
+    [0, 1, 2].map(|axis| {
+        let moved = |s: f64| {
+            let mut a = at;
+            a[axis] += s * SLOPE_STEP_DEG;
+            f(a)
+        };
+        match (moved(1.0), moved(-1.0), f(at)) {
+            (Some(p), Some(m), _) => (p - m) / (2.0 * SLOPE_STEP_DEG),
+            (Some(p), None, Some(c)) => (p - c) / SLOPE_STEP_DEG,
+            (None, Some(m), Some(c)) => (c - m) / SLOPE_STEP_DEG,
+            _ => 0.0,
+        }
+    })
 }
 
 /// The budget of one incidence angle: the median of each component
@@ -394,11 +399,15 @@ pub struct CalibratedRow {
     pub brdf_cos_sr: f64,
     /// The components `brdf_sigma_sr` combines.
     pub budget: Components,
+    /// How much `brdf_sr` moves when each input every sample shares
+    /// (`uncertainty::SHARED`) is off by one standard uncertainty (sr⁻¹).
+    pub shifts: [f64; SHARED.len()],
 }
 
 /// Writes `calibrated.csv`: the raw columns of `samples.csv`, then
 /// `laser_power, usable, brdf_sr, brdf_sigma_sr, brdf_cos_sr`, the k = 2
-/// interval `brdf_lo_sr, brdf_hi_sr`, and each budget component `u_NAME_sr`.
+/// interval `brdf_lo_sr, brdf_hi_sr`, each budget component `u_NAME_sr`, and
+/// the shifts of the shared inputs `shift_NAME_sr`.
 pub fn write_csv(path: &std::path::Path, rows: &[CalibratedRow]) -> Result<()> {
     use anyhow::Context;
     use std::io::Write;
@@ -415,15 +424,17 @@ pub fn write_csv(path: &std::path::Path, rows: &[CalibratedRow]) -> Result<()> {
         let text = raw_line(&first.raw, true)?;
         let header = text.lines().next().unwrap_or_default();
         let components: Vec<String> = Components::NAMES.iter().map(|n| format!("u_{n}_sr")).collect();
+        let shifts: Vec<String> = SHARED.iter().map(|n| format!("shift_{n}_sr")).collect();
         writeln!(
             out,
-            "{header},laser_power,usable,brdf_sr,brdf_sigma_sr,brdf_cos_sr,brdf_lo_sr,brdf_hi_sr,{}",
-            components.join(",")
+            "{header},laser_power,usable,brdf_sr,brdf_sigma_sr,brdf_cos_sr,brdf_lo_sr,brdf_hi_sr,{},{}",
+            components.join(","),
+            shifts.join(",")
         )?;
     }
     for r in rows {
         let line = raw_line(&r.raw, false)?;
-        let u: Vec<String> = r.budget.values().iter().map(f64::to_string).collect();
+        let u: Vec<String> = r.budget.values().iter().chain(&r.shifts).map(f64::to_string).collect();
         writeln!(
             out,
             "{},{},{},{},{},{},{},{},{}",

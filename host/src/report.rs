@@ -9,7 +9,6 @@ use crate::coefficients::{self, Kind, Source};
 use crate::fit::{self, Dataset, Fit, Metrics, Units};
 use crate::formats::brdf_explorer;
 use crate::plot;
-use crate::uncertainty::HeadUncertainty;
 use anyhow::{Context, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -37,22 +36,15 @@ fn coefficients_section(best: &Fit) -> Result<String> {
     let source = Source::Model {
         material: best.material.clone(),
         covariance: best.covariance.clone(),
-        common_rel_u: best.common_rel_u.unwrap_or(0.0),
-        // Data calibrated by this head's plate: its stage zeros too.
-        zero_u_deg: best.common_rel_u.map(|_| HeadUncertainty::default().shared_zeros_deg()),
     };
     let values = coefficients::compute(&source, &coefficients::report_requests())?;
     let mut html = format!(
         "<h2>Coefficients of retroreflection</h2>\n<p>From the best fit ({}), averaged over the instruments' source and \
-         receiver apertures, ± the standard uncertainty (k = 1: the fit's covariance{}). Spectral values at the laser's \
+         receiver apertures, ± the standard uncertainty (k = 1: from the fit's covariance, which holds the shared inputs of calibrated data, the plate and the stage zeros{}). Spectral values at the laser's \
          wavelength ({} nm), <b>not photometric</b>. Definitions: docs/retroreflection.md.</p>\n<table>\n\
          <tr><th class=\"l\">R_A (cd·lx⁻¹·m⁻²)</th>",
         best.material.model.name(),
-        if best.common_rel_u.is_some() {
-            ", the calibration's common scale and the stage zeros"
-        } else {
-            ""
-        },
+        if best.covariance.is_some() { "" } else { ", none: no covariance" },
         coefficients::WAVELENGTH_NM
     );
     for a in coefficients::ASTM_ALPHAS {

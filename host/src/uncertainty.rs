@@ -51,15 +51,6 @@ impl HeadUncertainty {
         self.zero_deg[axis].hypot(self.backlash_deg[axis] / 2.0)
     }
 
-    /// Standard uncertainties (degrees) of the observation and entrance
-    /// angles that every sample of a scan shares: the arm's zero (ψ moves
-    /// the detector about the laser) and the rotation stage's (ω turns the
-    /// normal about the beam in the incidence plane). Backlash is left out:
-    /// it changes from sample to sample, and the fit sees it as noise.
-    pub fn shared_zeros_deg(&self) -> [f64; 2] {
-        [self.zero_deg[2], self.zero_deg[0]]
-    }
-
     /// Standard uncertainty of the stray photocurrent (A).
     pub fn stray_u_a(&self) -> f64 {
         self.stray_a / 3f64.sqrt()
@@ -71,6 +62,13 @@ impl HeadUncertainty {
         self.gain_rel * std::f64::consts::SQRT_2
     }
 }
+
+/// Inputs every sample of a scan shares: the plate's certificate, the
+/// scale `K`, and each stage's zero. A fit cannot average them out, so each
+/// sample carries, per shared input, how much its value moves when that
+/// input is off by one standard uncertainty (`Observation::shared`), and the
+/// fit's covariance adds their effect on the parameters.
+pub const SHARED: [&str; 5] = ["rho_ref", "scale", "zero_omega", "zero_tau", "zero_psi"];
 
 /// The named components of one value's budget, standard uncertainties in sr⁻¹.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -116,18 +114,6 @@ impl Components {
         self.values().iter().map(|u| u * u).sum::<f64>().sqrt()
     }
 
-    /// The part shared by every sample of a scan, relative to the value: the
-    /// plate's reflectance and the scale. A fit's covariance cannot see it
-    /// (it moves every sample together), so quantities derived from a fit
-    /// add it back (`gonio coefficients`).
-    pub fn common_rel(&self, value: f64) -> f64 {
-        if value == 0.0 {
-            0.0
-        } else {
-            self.rho_ref.hypot(self.scale) / value.abs()
-        }
-    }
-
     /// The largest component and its name.
     pub fn largest(&self) -> (&'static str, f64) {
         Self::NAMES
@@ -150,12 +136,6 @@ mod tests {
         };
         assert!((c.combined() - 5.0).abs() < 1e-12);
         assert_eq!(c.largest(), ("angle", 4.0));
-        let common = Components {
-            rho_ref: 0.3,
-            scale: 0.4,
-            ..Components::default()
-        };
-        assert!((common.common_rel(10.0) - 0.05).abs() < 1e-12);
     }
 
     #[test]

@@ -55,6 +55,12 @@ fn lambertian_ra_and_rl_by_the_named_sets() {
     assert!((rl["alpha_deg"].as_f64().unwrap() - 1.05).abs() < 1e-12);
     assert!((rl["beta_deg"].as_f64().unwrap() - 88.76).abs() < 1e-9);
     assert_eq!(v["wavelength_nm"].as_f64(), Some(633.0));
+    // A negative entrance angle in a list, as the README writes it.
+    let v = json(&[
+        "coefficients", "--model", "lambert", "--params", "kd=0.5", "--alpha", "0.2", "--beta", "-4,30", "--json",
+    ]);
+    assert_eq!(v["ra"].as_array().unwrap().len(), 2);
+    assert!((ra_at(&v, 0.2, -4.0, 0.0)["value"].as_f64().unwrap() - 0.15838).abs() < 1e-3);
     // The text output says the values are not photometric.
     let o = gonio(&["coefficients", "--model", "lambert", "--params", "kd=0.5", "--rl"]);
     assert!(o.status.success() && text(&o).contains("not photometric"), "{}", text(&o));
@@ -199,8 +205,6 @@ fn coefficients_of_a_fitted_scan_hold_the_truth() {
     let src = Source::Model {
         material: f.material,
         covariance: f.covariance,
-        common_rel_u: f.common_rel_u.unwrap(),
-        zero_u_deg: None,
     };
     let reqs: Vec<_> = Set::AstmE810
         .requests()

@@ -21,6 +21,7 @@ fn dataset(m: &Material, units: Units) -> Dataset {
                     dphi: (-180.0 + 10.0 * j as f64).to_radians(),
                     value: 0.0,
                     sigma: None,
+                    shared: Default::default(),
                 };
                 o.value = m.eval(&o.directions()) * o.unit_factor(units);
                 observations.push(o);
@@ -31,7 +32,6 @@ fn dataset(m: &Material, units: Units) -> Dataset {
         units,
         observations,
         metadata: vec!["material: synthetic".into()],
-        common_rel_u: None,
     }
 }
 

@@ -58,6 +58,7 @@ pub fn samples(material: &Material, n: usize, noise: f64, seed: u64) -> Dataset 
                 dphi,
                 value: 0.0,
                 sigma: None,
+                shared: Default::default(),
             };
             let f = material.eval(&o.directions());
             let e: f64 = rng.sample(StandardNormal);
@@ -70,6 +71,5 @@ pub fn samples(material: &Material, n: usize, noise: f64, seed: u64) -> Dataset 
         units: Units::Fr,
         observations,
         metadata: Vec::new(),
-        common_rel_u: None,
     }
 }

@@ -159,3 +159,47 @@ fn alta_round_trip_is_exact() {
         }
     }
 }
+
+/// Issue #19: an input every sample shares (a reference plate 1 % off, a
+/// stage zero) does not average out over the samples. The covariance adds
+/// the move of the optimum it causes: refitting data shifted by exactly that
+/// input's effect moves each parameter by the square root of what it added
+/// to the diagonal, and a 1 % scale gives retro-phong's linear parameters
+/// 1 % and its exponents nothing.
+#[test]
+fn shared_inputs_enter_the_covariance_as_the_refit_moves_the_parameters() {
+    let truth = synthetic::reference(ModelId::RetroPhong);
+    let plain = synthetic::samples(&truth, 3000, 0.02, 4);
+    let mut shared = plain.clone();
+    for o in &mut shared.observations {
+        o.shared[0] = 0.01 * o.value;
+    }
+    let spec = FitSpec {
+        weighting: Weighting::Sigma,
+        ..FitSpec::new(ModelId::RetroPhong)
+    };
+    let (a, b) = (fit::fit(&plain, &spec).unwrap(), fit::fit(&shared, &spec).unwrap());
+    assert_eq!(a.material.params, b.material.params, "the shifts change the covariance, not the fit");
+    let mut moved = shared.clone();
+    for o in &mut moved.observations {
+        o.value += o.shared[0];
+    }
+    let start = FitSpec {
+        start: Some(a.material.params.clone()),
+        ..spec
+    };
+    let c = fit::fit(&moved, &start).unwrap();
+    let (ca, cb) = (a.covariance.unwrap(), b.covariance.unwrap());
+    for (i, name) in ModelId::RetroPhong.param_names().iter().enumerate() {
+        let predicted = (cb[(i, i)] - ca[(i, i)]).max(0.0).sqrt();
+        let refit = (c.material.params[i] - a.material.params[i]).abs();
+        let p = a.material.params[i].abs();
+        assert!(
+            (refit - predicted).abs() <= 0.05 * predicted + 1e-6 * p,
+            "{name}: refit moved {refit:.3e}, the covariance says {predicted:.3e}"
+        );
+        let linear = ["kd", "k1", "k2", "k3"].contains(name);
+        let want = if linear { 0.01 * p } else { 0.0 };
+        assert!((predicted - want).abs() <= 1e-3 * p, "{name}: {predicted:.3e} vs {want:.3e}");
+    }
+}

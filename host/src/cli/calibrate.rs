@@ -132,15 +132,9 @@ pub struct Calibrated {
     pub csv: PathBuf,
 }
 
-/// The usable calibrated values as a data set in `f_r`, with the
-/// calibration's common relative uncertainty (the median over the values).
+/// The usable calibrated values as a data set in `f_r`, each with its
+/// uncertainty and the shifts of the inputs every sample shares.
 pub fn dataset(rows: &[CalibratedRow]) -> Dataset {
-    let mut common: Vec<f64> = rows
-        .iter()
-        .filter(|r| r.usable && r.brdf_sr != 0.0)
-        .map(|r| r.budget.common_rel(r.brdf_sr))
-        .collect();
-    common.sort_by(f64::total_cmp);
     Dataset {
         units: Units::Fr,
         observations: rows
@@ -152,10 +146,10 @@ pub fn dataset(rows: &[CalibratedRow]) -> Dataset {
                 dphi: (r.raw.dphi_deg as f64).to_radians(),
                 value: r.brdf_sr,
                 sigma: Some(r.brdf_sigma_sr).filter(|s| *s > 0.0),
+                shared: r.shifts,
             })
             .collect(),
         metadata: Vec::new(),
-        common_rel_u: common.get(common.len() / 2).copied(),
     }
 }
 

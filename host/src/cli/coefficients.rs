@@ -5,7 +5,6 @@ use crate::brdf::{Material, ModelId};
 use crate::coefficients::{self, Apertures, Coefficient, Kind, Request, Set, Source, WAVELENGTH_NM};
 use crate::fit;
 use crate::formats;
-use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -13,15 +12,10 @@ use std::path::PathBuf;
 #[derive(Debug, clap::Args)]
 pub struct CoefficientsArgs {
     /// A fit (FIT.json from `gonio fit --out`): its covariance gives the
-    /// uncertainty, with the calibration's common scale if it recorded one.
+    /// uncertainty (with the plate and the stage zeros when the fitted data
+    /// came from `gonio calibrate`).
     #[arg(long, value_name = "FIT.json", conflicts_with_all = ["model", "data"])]
     pub fit: Option<PathBuf>,
-    /// With --fit: standard uncertainty (degrees) of the stage zeros the
-    /// fitted scan shared, taken through the coefficient's slopes in α and
-    /// β (default: the reference head's when the fit is of data `gonio
-    /// calibrate` wrote, else none).
-    #[arg(long, requires = "fit")]
-    pub u_zero_deg: Option<f64>,
     /// A model id of models.md, with --params (no uncertainty).
     #[arg(long, requires = "params", conflicts_with = "data")]
     pub model: Option<String>,
@@ -36,10 +30,10 @@ pub struct CoefficientsArgs {
     #[arg(long, value_enum)]
     pub set: Vec<Set>,
     /// R_A at these observation angles α (degrees), with --beta.
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub alpha: Vec<f64>,
     /// ...and these entrance angles β (degrees, coplanar: β2 = 0).
-    #[arg(long, value_delimiter = ',', allow_negative_numbers = true)]
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
     pub beta: Vec<f64>,
     /// ...and these rotation angles ε (degrees; no effect on an isotropic BRDF).
     #[arg(long, value_delimiter = ',', default_value = "0")]
@@ -64,12 +58,6 @@ impl CoefficientsArgs {
             return Ok(Source::Model {
                 material: f.material,
                 covariance: f.covariance,
-                common_rel_u: f.common_rel_u.unwrap_or(0.0),
-                zero_u_deg: match self.u_zero_deg {
-                    Some(u) if u.is_finite() && u >= 0.0 => Some([u, u]),
-                    Some(u) => bail!("--u-zero-deg {u} must be finite and ≥ 0"),
-                    None => f.common_rel_u.map(|_| HeadUncertainty::default().shared_zeros_deg()),
-                },
             });
         }
         if let (Some(m), Some(p)) = (&self.model, &self.params) {

@@ -15,18 +15,12 @@ use serde::Serialize;
 /// The BRDF a coefficient is computed from.
 #[derive(Debug, Clone)]
 pub enum Source {
-    /// A model; with a covariance its parameters' uncertainty is propagated,
-    /// and what every sample of the fitted scan shared, which the covariance
-    /// cannot see, is added in quadrature: `common_rel_u` (the calibration's
-    /// scale) and `zero_u_deg` (the standard uncertainties of the arm's and
-    /// the sample rotation's zeros, degrees: a zero error moves every
-    /// sample's observation or entrance angle alike, so the coefficient
-    /// takes it through its own slope in α and β).
+    /// A model; with a covariance (`gonio fit`'s: the samples' scatter and
+    /// the inputs they share, the plate and the stage zeros) its parameters'
+    /// uncertainty is propagated.
     Model {
         material: Material,
         covariance: Option<DMatrix<f64>>,
-        common_rel_u: f64,
-        zero_u_deg: Option<[f64; 2]>,
     },
     /// Measured values (`f_r`), interpolated between the nearest geometries.
     Data { points: Vec<Point> },
@@ -61,12 +55,6 @@ pub struct Estimate {
     /// Part of `u` from the model's parameters (linear propagation).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub u_params: Option<f64>,
-    /// Part of `u` from the calibration's common scale.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub u_common: Option<f64>,
-    /// Part of `u` from the stage zeros shared by the fitted scan.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub u_zero: Option<f64>,
     /// The measured geometries behind a value interpolated from data.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub nearest: Vec<Nearest>,
@@ -96,8 +84,6 @@ impl Source {
         Source::Model {
             material,
             covariance: None,
-            common_rel_u: 0.0,
-            zero_u_deg: None,
         }
     }
 
@@ -126,22 +112,13 @@ impl Source {
     /// The coefficient and its standard uncertainty.
     pub fn estimate(&self, r: &Request) -> Result<Estimate> {
         match self {
-            Source::Model {
-                material,
-                covariance,
-                common_rel_u,
-                zero_u_deg,
-            } => {
+            Source::Model { material, covariance } => {
                 let value = model_value(material, r);
                 let u_params = covariance.as_ref().map(|c| linear_u(material, c, r));
-                let u_common = value.abs() * common_rel_u;
-                let u_zero = zero_u_deg.map(|z| zero_u(material, r, z));
                 Ok(Estimate {
                     value,
-                    u: u_params.unwrap_or(0.0).hypot(u_common).hypot(u_zero.unwrap_or(0.0)),
+                    u: u_params.unwrap_or(0.0),
                     u_params,
-                    u_common: Some(u_common),
-                    u_zero,
                     nearest: Vec::new(),
                 })
             }
@@ -158,7 +135,6 @@ impl Source {
         let Source::Model {
             material,
             covariance: Some(c),
-            ..
         } = self
         else {
             return None;
@@ -208,30 +184,6 @@ fn linear_u(m: &Material, c: &DMatrix<f64>, r: &Request) -> f64 {
     (g.transpose() * c * &g)[(0, 0)].max(0.0).sqrt()
 }
 
-/// Step of the slopes in α and β (degrees).
-const ANGLE_STEP_DEG: f64 = 0.01;
-
-/// `sqrt((∂v/∂α·u_α)² + (∂v/∂β1·u_β)²)`: the arm's zero moves the observer
-/// about the source, the sample rotation's zero the normal about the beam.
-fn zero_u(m: &Material, r: &Request, [u_alpha, u_beta]: [f64; 2]) -> f64 {
-    let slope = |shift: fn(&mut Request, f64)| {
-        let at = |s: f64| {
-            let mut q = *r;
-            shift(&mut q, s * ANGLE_STEP_DEG);
-            model_value(m, &q)
-        };
-        // One-sided at α = 0, where the observer cannot cross the source.
-        if r.geometry.alpha_deg < ANGLE_STEP_DEG {
-            (at(1.0) - at(0.0)) / ANGLE_STEP_DEG
-        } else {
-            (at(1.0) - at(-1.0)) / (2.0 * ANGLE_STEP_DEG)
-        }
-    };
-    let d_alpha = slope(|q, d| q.geometry.alpha_deg += d);
-    let d_beta = slope(|q, d| q.geometry.beta1_deg += d);
-    (d_alpha * u_alpha).hypot(d_beta * u_beta)
-}
-
 /// Inverse-square-distance interpolation between the nearest measured
 /// geometries (distance: the angles between the lights and between the
 /// views, added in quadrature), at the nominal directions: measured values
@@ -267,8 +219,6 @@ fn interpolate(points: &[Point], r: &Request) -> Estimate {
         value: f * k,
         u: own.hypot(spread) * k,
         u_params: None,
-        u_common: None,
-        u_zero: None,
         nearest: near
             .iter()
             .zip(&weights)

@@ -4,6 +4,7 @@
 
 use crate::brdf::{Directions, Geometry};
 use anyhow::{bail, Result};
+use crate::uncertainty::SHARED;
 use serde::{Deserialize, Serialize};
 
 /// Units of a value (`models.md` §1, ALTA's `#PARAM_OUT`).
@@ -24,6 +25,10 @@ pub struct Observation {
     pub dphi: f64,
     pub value: f64,
     pub sigma: Option<f64>,
+    /// How much `value` moves when each input shared by the whole data set
+    /// (`uncertainty::SHARED`) is off by one standard uncertainty; zeros
+    /// where the source says nothing of them.
+    pub shared: [f64; SHARED.len()],
 }
 
 impl Observation {
@@ -56,10 +61,6 @@ pub struct Dataset {
     pub observations: Vec<Observation>,
     /// Header lines of the source kept as metadata (ALTA comments, …).
     pub metadata: Vec<String>,
-    /// Relative standard uncertainty shared by every value (the reference
-    /// plate's certificate and scale, from `calibrated.csv`): a fit's
-    /// covariance cannot see it, so what is derived from a fit adds it.
-    pub common_rel_u: Option<f64>,
 }
 
 /// Whether `theta` (rad) is one of `list` (degrees), within 0.05°.
@@ -79,6 +80,7 @@ impl Dataset {
             }
             o.value *= k;
             o.sigma = o.sigma.map(|s| s * k);
+            o.shared = o.shared.map(|s| s * k);
         }
         Ok(out)
     }

@@ -24,9 +24,6 @@ pub fn to_json(f: &Fit, units: Units, holdout: Option<&Metrics>) -> Value {
         let rows: Vec<Vec<f64>> = (0..c.nrows()).map(|i| c.row(i).iter().copied().collect()).collect();
         v["covariance"] = json!(rows);
     }
-    if let Some(u) = f.common_rel_u {
-        v["common_rel_u"] = json!(u);
-    }
     if let Some(h) = holdout {
         v["holdout"] = json!(h);
     }
@@ -39,8 +36,6 @@ pub struct FitFile {
     pub material: Material,
     /// Covariance of the parameters, `models.md` order (`None` if the file has none).
     pub covariance: Option<nalgebra::DMatrix<f64>>,
-    /// The data's common relative uncertainty, if the fit recorded one.
-    pub common_rel_u: Option<f64>,
 }
 
 /// Reads a fit file whole.
@@ -63,7 +58,6 @@ pub fn read(path: &Path) -> Result<FitFile> {
     Ok(FitFile {
         material,
         covariance,
-        common_rel_u: v["common_rel_u"].as_f64(),
     })
 }
 

@@ -75,12 +75,9 @@ pub struct Fit {
     /// Weighted sum of squared residuals at the optimum.
     pub cost: f64,
     /// Covariance of the parameters (every parameter, in `models.md` order;
-    /// rows and columns of fixed ones are zero); `None` where the normal
-    /// matrix is singular.
+    /// rows and columns of fixed ones are zero): the samples' scatter and
+    /// the inputs they share; `None` where the normal matrix is singular.
     pub covariance: Option<DMatrix<f64>>,
-    /// The data's relative uncertainty shared by every sample, which the
-    /// covariance cannot hold (`Dataset::common_rel_u`).
-    pub common_rel_u: Option<f64>,
 }
 
 /// Builds the least-squares problem of a data set.
@@ -123,6 +120,7 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
         param: spec.param,
         geos: data.observations.iter().map(Observation::geometry).collect(),
         scale: data.observations.iter().map(|o| o.unit_factor(spec.units)).collect(),
+        shared: data.observations.iter().zip(&weight).map(|(o, w)| o.shared.map(|s| w * s)).collect(),
         y,
         weight,
         template,
@@ -152,7 +150,6 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         metrics: evaluate(&material, data),
         stderr,
         covariance,
-        common_rel_u: data.common_rel_u,
         samples: data.observations.len(),
         seconds: t0.elapsed().as_secs_f64(),
         cost,
@@ -188,9 +185,15 @@ pub fn evaluate(material: &Material, data: &Dataset) -> Metrics {
     Metrics::new(&measured, &model)
 }
 
-/// `s²(JᵀJ)⁻¹` with `s² = Σr²/(N − p)`, `J` the weighted Jacobian in the
-/// parameters themselves (not the transformed ones), spread over every
-/// parameter (fixed ones zero). Standard errors are the roots of its diagonal.
+/// `s²(JᵀJ)⁻¹ + Σ_a (JᵀJ)⁻¹Jᵀd_a·((JᵀJ)⁻¹Jᵀd_a)ᵀ`, spread over every
+/// parameter (fixed ones zero); standard errors are the roots of its
+/// diagonal. The first term is the samples' own scatter: `s² = Σr²/(N − p)`,
+/// `J` the weighted Jacobian in the parameters themselves (not the
+/// transformed ones). The second is what the samples share (the plate, the
+/// stage zeros): `d_a` the weighted shifts of the targets when shared input
+/// `a` is off by one standard uncertainty, and `(JᵀJ)⁻¹Jᵀd_a` the move of the
+/// optimum it causes (one Gauss–Newton step): errors common to every sample
+/// do not average out, however many samples there are.
 fn covariance(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
     let n = problem.template.len();
     let (r, j) = problem.residuals_and_jacobian(x);
@@ -198,10 +201,19 @@ fn covariance(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
     let s2 = r.iter().map(|v| v * v).sum::<f64>() / dof as f64;
     let normal: DMatrix<f64> = j.transpose() * &j;
     let inv = normal.try_inverse()?;
+    let mut cov = &inv * s2;
+    for a in 0..crate::uncertainty::SHARED.len() {
+        let d = nalgebra::DVector::from_iterator(r.len(), problem.shared.iter().map(|s| s[a]));
+        if d.iter().all(|v| *v == 0.0) {
+            continue;
+        }
+        let shift = &inv * (j.transpose() * d);
+        cov += &shift * shift.transpose();
+    }
     let mut out = DMatrix::zeros(n, n);
     for (a, &i) in problem.free.iter().enumerate() {
         for (b, &k) in problem.free.iter().enumerate() {
-            out[(i, k)] = s2 * inv[(a, b)];
+            out[(i, k)] = cov[(a, b)];
         }
     }
     Some(out)

@@ -5,6 +5,7 @@
 //! differentiation (`num-dual`).
 
 use crate::brdf::{Bound, Geometry, HandGradient, ModelId, Param};
+use crate::uncertainty::SHARED;
 use nalgebra::{Const, DMatrix, U1};
 use num_dual::DualSVec64;
 
@@ -18,6 +19,9 @@ pub struct Problem {
     /// `f_r` → fitting units, per sample.
     pub scale: Vec<f64>,
     pub weight: Vec<f64>,
+    /// Weighted shifts of the targets when each shared input is off by one
+    /// standard uncertainty (`Observation::shared`), per sample.
+    pub shared: Vec<[f64; SHARED.len()]>,
     /// Every parameter; the free ones are overwritten on evaluation.
     pub template: Vec<f64>,
     /// Indices of the free parameters.
@@ -146,6 +150,7 @@ impl Problem {
             y: pick(&self.y),
             scale: pick(&self.scale),
             weight: pick(&self.weight),
+            shared: (0..m).filter(|&k| keep[k]).map(|k| self.shared[k]).collect(),
             ..self.clone()
         }
     }

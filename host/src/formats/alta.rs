@@ -153,6 +153,7 @@ pub fn parse(text: &str) -> Result<Dataset> {
             dphi,
             value: x[d],
             sigma,
+            shared: Default::default(),
         });
     }
     let Some(units) = out_units else {
@@ -168,7 +169,6 @@ pub fn parse(text: &str) -> Result<Dataset> {
         units,
         observations,
         metadata,
-        common_rel_u: None,
     })
 }
 

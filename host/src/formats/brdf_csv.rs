@@ -1,11 +1,14 @@
 //! The project's calibrated sample CSV (`docs/samples-csv.md`): columns found
 //! by name, `theta_i_deg, theta_o_deg, dphi_deg` and either `brdf_sr` (`f_r`)
 //! or `brdf_cos_sr` (`f_r·cosθo`), optionally `brdf_sigma_sr` /
-//! `brdf_cos_sigma_sr`. Other columns (the raw values) are ignored. Rows
+//! `brdf_cos_sigma_sr`, and the shifts of the inputs every sample shares
+//! (`shift_NAME_sr`, `uncertainty::SHARED`), which a fit's covariance takes
+//! in. Other columns (the raw values) are ignored. Rows
 //! flagged as rejected (`flags` with the saturated or weak-signal bits) are
 //! left out when a `usable` column says `false`.
 
 use crate::fit::{Dataset, Observation, Units};
+use crate::uncertainty::SHARED;
 use anyhow::{anyhow, bail, Context, Result};
 
 pub fn parse(text: &str) -> Result<Dataset> {
@@ -23,8 +26,7 @@ pub fn parse(text: &str) -> Result<Dataset> {
         (None, None) => bail!("line 1: no value column: expected `brdf_sr` (f_r) or `brdf_cos_sr` (f_r·cosθo)"),
     };
     let usable = col("usable");
-    let common = col("u_rho_ref_sr").zip(col("u_scale_sr"));
-    let mut common_rel = Vec::new();
+    let shared = SHARED.map(|n| col(&format!("shift_{n}_sr")));
     let mut observations = Vec::new();
     for record in reader.records() {
         let record = record.context("malformed CSV")?;
@@ -43,12 +45,6 @@ pub fn parse(text: &str) -> Result<Dataset> {
         if usable.and_then(|u| record.get(u)) == Some("false") {
             continue;
         }
-        if let Some((r, k)) = common {
-            let v = num(value)?;
-            if v != 0.0 {
-                common_rel.push(num(r)?.hypot(num(k)?) / v.abs());
-            }
-        }
         observations.push(Observation {
             theta_i: num(ti)?.to_radians(),
             theta_o: num(to)?.to_radians(),
@@ -58,16 +54,23 @@ pub fn parse(text: &str) -> Result<Dataset> {
                 Some(s) if !record.get(s).unwrap_or("").is_empty() => Some(num(s)?),
                 _ => None,
             },
+            shared: {
+                let mut v = [0.0; SHARED.len()];
+                for (x, c) in v.iter_mut().zip(shared) {
+                    if let Some(c) = c {
+                        *x = num(c)?;
+                    }
+                }
+                v
+            },
         });
     }
     if observations.is_empty() {
         bail!("line 2: no data rows");
     }
-    common_rel.sort_by(f64::total_cmp);
     Ok(Dataset {
         units,
         observations,
         metadata: Vec::new(),
-        common_rel_u: common_rel.get(common_rel.len() / 2).copied(),
     })
 }

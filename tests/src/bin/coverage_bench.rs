@@ -9,7 +9,7 @@
 //! against the material's own: their coverage, and linear propagation of
 //! the fit's covariance against Monte Carlo. One JSON object on stdout.
 //!
-//! `cargo run --release -p tests --bin coverage-bench [-- SCANS]` (default 20).
+//! `cargo run --release -p tests --bin coverage-bench [-- SCANS]` (default 100).
 
 use gonio_host::brdf::{Directions, Material, ModelId, Param};
 use gonio_host::cli::calibrate::{self, CalibrateArgs};
@@ -41,7 +41,7 @@ impl Tally {
 }
 
 fn main() -> anyhow::Result<()> {
-    let scans: u64 = std::env::args().nth(1).map(|s| s.parse()).transpose()?.unwrap_or(20);
+    let scans: u64 = std::env::args().nth(1).map(|s| s.parse()).transpose()?.unwrap_or(100);
     let rt = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
     let truth = Material::tape();
     let reqs = coefficients::report_requests();
@@ -61,7 +61,7 @@ fn main() -> anyhow::Result<()> {
         };
         rt.block_on(demo_scan(sim, dir.path(), &OutputArgs { force: false, json: true }))?;
         let c = calibrate::calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
-        let mut scan = Tally::default();
+        let (mut scan, mut scan_near) = (Tally::default(), Tally::default());
         for r in c.rows.iter().filter(|r| r.usable) {
             let g = &r.raw;
             let f = truth.eval(&Directions::from_degrees(
@@ -73,6 +73,9 @@ fn main() -> anyhow::Result<()> {
             all.add(inside);
             scan.add(inside);
             let near = g.psi_deg.abs() < NEAR_RETRO_DEG;
+            if near {
+                scan_near.add(inside);
+            }
             groups.entry((g.target_theta_i_deg.round() as i32, near)).or_default().add(inside);
         }
         // The fit and the coefficients from it.
@@ -86,8 +89,6 @@ fn main() -> anyhow::Result<()> {
         let src = Source::Model {
             material: f.material.clone(),
             covariance: f.covariance.clone(),
-            common_rel_u: f.common_rel_u.unwrap_or(0.0),
-            zero_u_deg: Some(HeadUncertainty::default().shared_zeros_deg()),
         };
         let mut scan_coef = Tally::default();
         for (k, (got, want)) in coefficients::compute(&src, &reqs)?
@@ -110,15 +111,16 @@ fn main() -> anyhow::Result<()> {
             }
         }
         eprintln!(
-            "scan {seed}: {} samples, coverage {:.3}; R_A/R_L {:.3}; plate ρ {:.4}, zeros {:?}°",
+            "scan {seed}: {} samples, coverage {:.3} (near the retro peak {:.3}); R_A/R_L {:.3}; plate ρ {:.4}, zeros {:?}°",
             scan.all,
             scan.share(),
+            scan_near.share(),
             scan_coef.share(),
             imperfections.plate_rho,
             imperfections.zero_offset_deg.map(|x| (x * 1e4).round() / 1e4)
         );
         per_scan.push(
-            json!({"seed": seed, "samples": scan.all, "coverage_k2": scan.share(), "coefficients_coverage_k2": scan_coef.share(),
+            json!({"seed": seed, "samples": scan.all, "coverage_k2": scan.share(), "near_retro_coverage_k2": scan_near.share(), "coefficients_coverage_k2": scan_coef.share(),
             "fit_params": f.material.params, "imperfections": imperfections}),
         );
     }
