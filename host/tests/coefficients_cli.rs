@@ -57,7 +57,16 @@ fn lambertian_ra_and_rl_by_the_named_sets() {
     assert_eq!(v["wavelength_nm"].as_f64(), Some(633.0));
     // A negative entrance angle in a list, as the README writes it.
     let v = json(&[
-        "coefficients", "--model", "lambert", "--params", "kd=0.5", "--alpha", "0.2", "--beta", "-4,30", "--json",
+        "coefficients",
+        "--model",
+        "lambert",
+        "--params",
+        "kd=0.5",
+        "--alpha",
+        "0.2",
+        "--beta",
+        "-4,30",
+        "--json",
     ]);
     assert_eq!(v["ra"].as_array().unwrap().len(), 2);
     assert!((ra_at(&v, 0.2, -4.0, 0.0)["value"].as_f64().unwrap() - 0.15838).abs() < 1e-3);

@@ -179,7 +179,10 @@ fn shared_inputs_enter_the_covariance_as_the_refit_moves_the_parameters() {
         ..FitSpec::new(ModelId::RetroPhong)
     };
     let (a, b) = (fit::fit(&plain, &spec).unwrap(), fit::fit(&shared, &spec).unwrap());
-    assert_eq!(a.material.params, b.material.params, "the shifts change the covariance, not the fit");
+    assert_eq!(
+        a.material.params, b.material.params,
+        "the shifts change the covariance, not the fit"
+    );
     let mut moved = shared.clone();
     for o in &mut moved.observations {
         o.value += o.shared[0];

@@ -3,8 +3,8 @@
 //! optional standard uncertainty.
 
 use crate::brdf::{Directions, Geometry};
-use anyhow::{bail, Result};
 use crate::uncertainty::SHARED;
+use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
 /// Units of a value (`models.md` §1, ALTA's `#PARAM_OUT`).

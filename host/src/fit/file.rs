@@ -55,10 +55,7 @@ pub fn read(path: &Path) -> Result<FitFile> {
             Some(nalgebra::DMatrix::from_fn(n, n, |i, k| rows[i][k]))
         }
     };
-    Ok(FitFile {
-        material,
-        covariance,
-    })
+    Ok(FitFile { material, covariance })
 }
 
 /// Writes a fit's JSON (pretty, one object).

@@ -120,7 +120,12 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
         param: spec.param,
         geos: data.observations.iter().map(Observation::geometry).collect(),
         scale: data.observations.iter().map(|o| o.unit_factor(spec.units)).collect(),
-        shared: data.observations.iter().zip(&weight).map(|(o, w)| o.shared.map(|s| w * s)).collect(),
+        shared: data
+            .observations
+            .iter()
+            .zip(&weight)
+            .map(|(o, w)| o.shared.map(|s| w * s))
+            .collect(),
         y,
         weight,
         template,
