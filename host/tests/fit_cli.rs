@@ -32,6 +32,8 @@ fn dataset(m: &Material, units: Units) -> Dataset {
         units,
         observations,
         metadata: vec!["material: synthetic".into()],
+        units_stated: true,
+        warnings: Vec::new(),
     }
 }
 
@@ -104,8 +106,10 @@ fn fixed_parameters_stay_put_and_held_out_angles_are_predicted() {
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["params"]["kd"], 0.62);
     assert_eq!(v["stderr"]["kd"], Value::Null);
-    // Retro half-space (|Δφ| ≤ 90°: 19 of 36 azimuths) of θi 15° and 60°.
-    assert_eq!(v["samples"], 2 * 30 * 19);
+    // Retro half-space (|Δφ| ≤ 90°: 19 of 36 azimuths) of θi 15° and 60°,
+    // and every sample at θo = 0 (the view along the normal has no azimuth:
+    // ALTA's projected coordinates are (0, 0) there, read as Δφ = 0).
+    assert_eq!(v["samples"], 2 * (29 * 19 + 36));
     assert!(v["holdout"]["ncc"].as_f64().unwrap() > 0.9999, "{v}");
 }
 
@@ -347,11 +351,11 @@ fn mistakes_name_the_valid_choices_or_the_line() {
                 "--model".into(),
                 "lambert".into(),
             ],
-            "line 1: data before the header",
+            "line 1: data before any #PARAM_IN",
         ),
         (
             vec!["fit".into(), bad("empty.dat", ""), "--model".into(), "lambert".into()],
-            "missing header",
+            "no data lines",
         ),
         (
             vec!["fit".into(), bad("empty.csv", ""), "--model".into(), "lambert".into()],
@@ -390,5 +394,95 @@ fn mistakes_name_the_valid_choices_or_the_line() {
         assert_eq!(o.status.code(), Some(1), "{args:?}: {msg}");
         assert!(msg.contains(says), "{args:?}: `{msg}` does not say `{says}`");
         assert!(!msg.contains("panicked"), "{msg}");
+    }
+}
+
+/// Issue #16: an ALTA file without `#PARAM_OUT` (ALTA's UNKNOWN_OUTPUT) is
+/// fitted, with a warning that says what was assumed; `--units` says what
+/// the values are, and the fit follows it.
+#[test]
+fn a_file_that_does_not_say_its_units_is_fitted_as_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = Material::parse(ModelId::Lambert, "kd=0.5").unwrap();
+    let written = alta::write(&dataset(&m, Units::FrCos));
+    let bare: String = written
+        .lines()
+        .filter(|l| !l.starts_with("#PARAM_OUT"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let p = dir.path().join("bare.dat");
+    std::fs::write(&p, bare).unwrap();
+    let f = p.to_str().unwrap();
+    let o = gonio(&["fit", f, "--model", "lambert", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("warning") && stderr.contains("--units fr-cos"), "{stderr}");
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["warnings"].as_array().is_some_and(|w| !w.is_empty()));
+    assert!(
+        v["ncc"].as_f64().unwrap() < 0.999,
+        "read as f_r, cos-weighted values do not fit a Lambertian exactly"
+    );
+    let o = gonio(&["fit", f, "--model", "lambert", "--units", "fr-cos", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["params"]["kd"].as_f64().unwrap() - 0.5).abs() < 1e-9, "{v}");
+}
+
+/// Issue #16, bad input: no data, all-zero values, fewer samples than
+/// parameters are errors; negative values and a single incidence angle are
+/// warnings that name the problem; never a panic.
+#[test]
+fn doubtful_data_is_refused_or_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = "#DIM 3 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN\n";
+    let write = |name: &str, body: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, format!("{header}{body}")).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let rows = |f: &dyn Fn(usize) -> f64| -> String {
+        (0..40)
+            .map(|k| format!("{} {} 0.1 {}\n", 0.2 + 0.3 * (k % 3) as f64, 0.02 * k as f64, f(k)))
+            .collect()
+    };
+    for (file, model, says) in [
+        (write("empty.dat", ""), "lambert", "no data lines"),
+        (write("zero.dat", &rows(&|_| 0.0)), "lambert", "every value is zero"),
+        (
+            write("few.dat", "0.2 0.1 0.1 1\n0.5 0.1 0.1 1\n"),
+            "retro-phong",
+            "2 samples for 6 free parameters",
+        ),
+    ] {
+        let o = gonio(&["fit", &file, "--model", model]);
+        let msg = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{file}: {msg}");
+        assert!(
+            msg.contains(says) && !msg.contains("panicked"),
+            "{file}: `{msg}` does not say `{says}`"
+        );
+    }
+    for (file, says) in [
+        (
+            write("negative.dat", &rows(&|k| if k % 5 == 0 { -0.01 } else { 0.2 })),
+            "8 of 40 values are negative",
+        ),
+        (
+            write(
+                "single.dat",
+                &(0..40).map(|k| format!("0.5 {} 0.1 0.2\n", 0.02 * k as f64)).collect::<String>(),
+            ),
+            "one incidence angle only",
+        ),
+    ] {
+        let o = gonio(&["fit", &file, "--model", "lambert"]);
+        let msg = text(&o);
+        assert!(o.status.success(), "{file}: {msg}");
+        assert!(
+            msg.contains("warning") && msg.contains(says),
+            "{file}: `{msg}` does not say `{says}`"
+        );
     }
 }

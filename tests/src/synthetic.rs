@@ -71,5 +71,7 @@ pub fn samples(material: &Material, n: usize, noise: f64, seed: u64) -> Dataset 
         units: Units::Fr,
         observations,
         metadata: Vec::new(),
+        units_stated: true,
+        warnings: Vec::new(),
     }
 }

@@ -150,6 +150,8 @@ pub fn dataset(rows: &[CalibratedRow]) -> Dataset {
             })
             .collect(),
         metadata: Vec::new(),
+        units_stated: true,
+        warnings: Vec::new(),
     }
 }
 

@@ -4,7 +4,6 @@
 use crate::brdf::{Material, ModelId};
 use crate::coefficients::{self, Apertures, Coefficient, Kind, Request, Set, Source, WAVELENGTH_NM};
 use crate::fit;
-use crate::formats;
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -64,7 +63,7 @@ impl CoefficientsArgs {
             return Ok(Source::model(Material::parse(ModelId::parse(m)?, p)?));
         }
         if let Some(path) = &self.data {
-            let data = formats::load(path)?;
+            let data = super::load_data(path, None)?;
             return Source::data(&data).with_context(|| format!("{}", path.display()));
         }
         bail!("give a BRDF: --fit FIT.json, --model M --params ..., or --data FILE")

@@ -2,7 +2,7 @@
 //! written as ALTA text, in the units asked for.
 
 use crate::fit::Units;
-use crate::formats::{self, alta};
+use crate::formats::alta;
 use anyhow::{Context, Result};
 use std::path::PathBuf;
 
@@ -12,13 +12,14 @@ pub struct ConvertArgs {
     pub input: PathBuf,
     /// Output ALTA file (ISOTROPIC_TL_TV_PROJ_DPHI; #VS 2 with k = 2 intervals when every value has an uncertainty, else #VS 0).
     pub output: PathBuf,
-    /// Output units (default: the input's).
+    /// Output units (default: the input's); for a file that does not say what
+    /// its values are (ALTA without #PARAM_OUT), what they are.
     #[arg(long, value_enum)]
     pub units: Option<Units>,
 }
 
 pub fn convert_cmd(a: ConvertArgs) -> Result<()> {
-    let mut data = formats::load(&a.input)?;
+    let mut data = super::load_data(&a.input, a.units)?;
     if let Some(u) = a.units {
         data = data.in_units(u)?;
     }

@@ -3,7 +3,6 @@
 
 use crate::brdf::{ModelId, Param};
 use crate::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
-use crate::formats;
 use anyhow::{bail, Context, Result};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -27,7 +26,9 @@ pub struct FitOptions {
     /// Sample weights in the least-squares sum.
     #[arg(long, value_enum, default_value = "uniform")]
     pub weights: Weighting,
-    /// Units the residuals are taken in (default: the file's own).
+    /// Units the residuals are taken in (default: the file's own); for a file
+    /// that does not say what its values are (ALTA without #PARAM_OUT), also
+    /// what they are.
     #[arg(long, value_enum)]
     pub units: Option<Units>,
     /// Seed of the global search.
@@ -112,7 +113,7 @@ pub struct Domain {
 }
 
 pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
-    let data = formats::load(path)?;
+    let data = super::load_data(path, o.units)?;
     let data = data.filter(|s| (!o.retro_only || s.on_retro_side()) && (o.theta_i.is_empty() || theta_in(s.theta_i, &o.theta_i)));
     let all_angles = data.incidence_angles_deg();
     let (train, holdout) = if o.holdout_theta_i.is_empty() {
@@ -176,7 +177,14 @@ fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain) -> Resu
 pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let model = ModelId::parse(&a.model)?;
     let d = domain(&a.file, &a.options)?;
-    let Outcome { fit: f, holdout, json: v } = run_one(model, &a.fix, &a.options, &d)?;
+    let Outcome {
+        fit: f,
+        holdout,
+        json: mut v,
+    } = run_one(model, &a.fix, &a.options, &d)?;
+    if !d.train.warnings.is_empty() {
+        v["warnings"] = serde_json::json!(d.train.warnings);
+    }
     if let Some(out) = &a.out {
         fit::file::write(out, &v)?;
     }

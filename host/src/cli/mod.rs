@@ -60,6 +60,28 @@ pub enum Command {
     Dhr(model_eval::DhrArgs),
 }
 
+/// Reads a data file for a command. Where the file does not say what its
+/// values are (ALTA's `UNKNOWN_OUTPUT`), `units` says it, or they are read
+/// as `f_r` with a warning; what the reader assumed or doubts goes to stderr.
+pub(crate) fn load_data(path: &std::path::Path, units: Option<crate::fit::Units>) -> Result<crate::fit::Dataset> {
+    let mut data = crate::formats::load(path)?;
+    if !data.units_stated {
+        match units {
+            Some(u) => data.units = u,
+            None => data.warnings.push(
+                "the file does not say what its values are (no #PARAM_OUT): read as f_r (sr⁻¹); give --units fr-cos if they are f_r·cosθo"
+                    .into(),
+            ),
+        }
+        data.units_stated = true;
+    }
+    data.warnings.extend(data.doubts());
+    for w in &data.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    Ok(data)
+}
+
 /// Runs a command to completion.
 pub fn run(cli: Cli) -> Result<()> {
     let rt = tokio::runtime::Builder::new_current_thread()

@@ -2,7 +2,6 @@
 
 use crate::brdf::Material;
 use crate::fit;
-use crate::formats;
 use crate::plot;
 use anyhow::Result;
 use std::path::PathBuf;
@@ -20,7 +19,7 @@ pub struct PlotArgs {
 }
 
 pub fn plot_cmd(a: PlotArgs) -> Result<()> {
-    let data = formats::load(&a.file)?;
+    let data = super::load_data(&a.file, None)?;
     let fits: Vec<Material> = a.fit.iter().map(|p| fit::file::read_material(p)).collect::<Result<_>>()?;
     let files = plot::render(&data, &fits, &a.out)?;
     eprintln!("{} pictures written to {}", files.len(), a.out.display());

@@ -61,6 +61,12 @@ pub struct Dataset {
     pub observations: Vec<Observation>,
     /// Header lines of the source kept as metadata (ALTA comments, …).
     pub metadata: Vec<String>,
+    /// False where the source did not say what its values are (ALTA's
+    /// `UNKNOWN_OUTPUT`): `units` is then an assumption, which `--units`
+    /// replaces.
+    pub units_stated: bool,
+    /// What the reader assumed or found doubtful, for the user.
+    pub warnings: Vec<String>,
 }
 
 /// Whether `theta` (rad) is one of `list` (degrees), within 0.05°.
@@ -91,6 +97,28 @@ impl Dataset {
             observations: self.observations.iter().copied().filter(|o| keep(o)).collect(),
             ..self.clone()
         }
+    }
+
+    /// What makes the data doubtful as a fitting input, for a warning:
+    /// negative values, every value zero, a single incidence angle.
+    pub fn doubts(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let n = self.observations.len();
+        let negative = self.observations.iter().filter(|o| o.value < 0.0).count();
+        if negative > 0 {
+            out.push(format!(
+                "{negative} of {n} values are negative (noise about zero, or an offset?); a BRDF is not"
+            ));
+        }
+        if n > 0 && self.observations.iter().all(|o| o.value == 0.0) {
+            out.push("every value is zero".into());
+        }
+        if let [one] = self.incidence_angles_deg()[..] {
+            out.push(format!(
+                "one incidence angle only (θi = {one}°): how the BRDF changes with θi is not measured, and a fit extrapolates it"
+            ));
+        }
+        out
     }
 
     /// The distinct incidence angles, in degrees, rounded to 0.01°.

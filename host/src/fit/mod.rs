@@ -98,6 +98,17 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
     if free.is_empty() {
         bail!("every parameter of {} is fixed: nothing to fit", model.name());
     }
+    if data.observations.len() < free.len() {
+        bail!(
+            "{} samples for {} free parameters of {}: too few to fit",
+            data.observations.len(),
+            free.len(),
+            model.name()
+        );
+    }
+    if data.observations.iter().all(|o| o.value == 0.0) {
+        bail!("every value is zero: there is nothing to fit");
+    }
     let data = data.in_units(spec.units)?;
     let y: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
     let floor = 1e-3 * y.iter().fold(0.0f64, |m, v| m.max(v.abs()));

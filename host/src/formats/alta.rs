@@ -1,13 +1,32 @@
-//! ALTA's text data format (`models.md` §1): a header of `#DIM in out`,
-//! `#PARAM_IN`, `#PARAM_OUT`, `#VS`, other `#` lines (kept as metadata), then
-//! one sample per line. Input forms read: `ISOTROPIC_TL_TV_PROJ_DPHI`
-//! (`θL, θV·cosΔφ, θV·sinΔφ`, the form written), `ISOTROPIC_TV_TL_DPHI`
-//! (`θV, θL, Δφ`) and `SPHERICAL_TL_PL_TV_PV` (`θL, φL, θV, φV`), radians.
-//! Outputs: `INV_STERADIAN` (`f_r`) and `INV_STERADIAN_COSINE_FACTOR`
-//! (`f_r·cosθo`). Confidence columns: `#VS 0` (none), `#VS 1` (one more
-//! number per value: its standard uncertainty) and `#VS 2` (two more: the
-//! lower and upper ends of its k = 2 interval); the writer uses `#VS 2` for
-//! values that carry an uncertainty.
+//! ALTA's text data format, read as ALTA reads it (`belcour/alta`,
+//! `data_storage.cpp` `load_data_from_text` and `args.h` `parse_header`) and
+//! a little more tolerantly: a header of `#KEY value` lines (`#DIM in out`,
+//! `#PARAM_IN`, `#PARAM_OUT`, `#VS`; `# ...` and unknown keys are comments,
+//! kept as metadata), then one sample per line: the inputs, the outputs, and
+//! `#VS` confidence numbers for the first output. Where ALTA assumes, so do
+//! we, and say so: a missing `#PARAM_OUT` is ALTA's `UNKNOWN_OUTPUT`, read as
+//! `f_r` unless the user says otherwise (`Dataset::units_stated` false; the
+//! commands' `--units`); a missing `#DIM` is taken from `#PARAM_IN` with one
+//! output, with a warning.
+//! Accepted beyond ALTA: CRLF line ends and trailing blanks (ALTA reads them
+//! into the parametrization's name and no longer recognises it), blank
+//! lines in the header, comment lines anywhere. Refused, naming the line and
+//! what was expected: unknown input parametrizations, rows with the wrong
+//! count of numbers, non-finite numbers, header keys after the data.
+//!
+//! Input parametrizations (radians; ALTA's `params.cpp`; the view comes
+//! first in ALTA's 6-vectors): `ISOTROPIC_TL_TV_PROJ_DPHI` (θL, θV·cosΔφ,
+//! θV·sinΔφ; the form written), `ISOTROPIC_TV_TL_DPHI` (θV, θL, Δφ),
+//! `ISOTROPIC_TV_PROJ_DPHI` (θV·cosΔφ, θV·sinΔφ; light along the normal),
+//! `SPHERICAL_TL_PL_TV_PV` (θL, φL, θV, φV), `RUSIN_TH_TD_PD` (θh, θd, φd),
+//! `RUSIN_TH_PH_TD_PD` (θh, φh, θd, φd), `RUSIN_TH_TD` (θh, θd; φd = π/2),
+//! `CARTESIAN` (Vx, Vy, Vz, Lx, Ly, Lz). Outputs: `INV_STERADIAN` (`f_r`),
+//! `INV_STERADIAN_COSINE_FACTOR` (`f_r·cosθo`); others (`ENERGY`,
+//! `RGB_COLOR`, `XYZ_COLOR`, `UNKNOWN_OUTPUT`) are read as `f_r` with a
+//! warning, the first channel of several. Confidence: `#VS 1` one more
+//! number, the half-width of the first value's interval; `#VS 2` two, its
+//! lower and upper ends (absolute); both taken as k = 2 intervals. The
+//! writer uses `#VS 2` when every value has an uncertainty.
 
 use crate::fit::{Dataset, Observation, Units};
 use crate::uncertainty::K_COVERAGE;
@@ -18,34 +37,96 @@ use std::fmt::Write;
 enum ParamIn {
     TlTvProjDphi,
     TvTlDphi,
+    TvProjDphi,
     SphericalTlPlTvPv,
+    RusinThTdPd,
+    RusinThPhTdPd,
+    RusinThTd,
+    Cartesian,
+}
+
+const SUPPORTED: &str = "ISOTROPIC_TL_TV_PROJ_DPHI, ISOTROPIC_TV_TL_DPHI, ISOTROPIC_TV_PROJ_DPHI, SPHERICAL_TL_PL_TV_PV, \
+                         RUSIN_TH_TD_PD, RUSIN_TH_PH_TD_PD, RUSIN_TH_TD, CARTESIAN";
+
+type Vec3 = [f64; 3];
+
+fn sph(theta: f64, phi: f64) -> Vec3 {
+    [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()]
+}
+
+/// The view of a projected `(θ·cosφ, θ·sinφ)` pair (ALTA: `(0,0,1)` at θ = 0).
+fn projected(x: f64, y: f64) -> Vec3 {
+    let theta = x.hypot(y);
+    if theta == 0.0 {
+        [0.0, 0.0, 1.0]
+    } else {
+        [x / theta * theta.sin(), y / theta * theta.sin(), theta.cos()]
+    }
+}
+
+/// ALTA's `half_to_cartesian`: `V = Rz(φh)·Ry(θh)·d`, `L = 2(V·h)h − V`.
+fn rusin(th: f64, ph: f64, td: f64, pd: f64) -> (Vec3, Vec3) {
+    let h = sph(th, ph);
+    let d = sph(td, pd);
+    let (c, s) = (th.cos(), th.sin());
+    let r = [c * d[0] + s * d[2], d[1], -s * d[0] + c * d[2]];
+    let (c, s) = (ph.cos(), ph.sin());
+    let v = [c * r[0] - s * r[1], s * r[0] + c * r[1], r[2]];
+    let vh = v[0] * h[0] + v[1] * h[1] + v[2] * h[2];
+    let l = [0, 1, 2].map(|i| 2.0 * vh * h[i] - v[i]);
+    (l, v)
 }
 
 impl ParamIn {
     fn parse(s: &str) -> Option<Self> {
-        match s {
-            "ISOTROPIC_TL_TV_PROJ_DPHI" => Some(Self::TlTvProjDphi),
-            "ISOTROPIC_TV_TL_DPHI" => Some(Self::TvTlDphi),
-            "SPHERICAL_TL_PL_TV_PV" => Some(Self::SphericalTlPlTvPv),
-            _ => None,
-        }
+        Some(match s {
+            "ISOTROPIC_TL_TV_PROJ_DPHI" => Self::TlTvProjDphi,
+            "ISOTROPIC_TV_TL_DPHI" => Self::TvTlDphi,
+            "ISOTROPIC_TV_PROJ_DPHI" => Self::TvProjDphi,
+            "SPHERICAL_TL_PL_TV_PV" => Self::SphericalTlPlTvPv,
+            "RUSIN_TH_TD_PD" => Self::RusinThTdPd,
+            "RUSIN_TH_PH_TD_PD" => Self::RusinThPhTdPd,
+            "RUSIN_TH_TD" => Self::RusinThTd,
+            "CARTESIAN" => Self::Cartesian,
+            _ => return None,
+        })
     }
 
     fn dim(self) -> usize {
         match self {
-            Self::SphericalTlPlTvPv => 4,
-            _ => 3,
+            Self::TvProjDphi | Self::RusinThTd => 2,
+            Self::TlTvProjDphi | Self::TvTlDphi | Self::RusinThTdPd => 3,
+            Self::SphericalTlPlTvPv | Self::RusinThPhTdPd => 4,
+            Self::Cartesian => 6,
         }
     }
 
-    /// `(θi, θo, Δφ)` from one row's inputs.
-    fn angles(self, x: &[f64]) -> (f64, f64, f64) {
+    /// Light and view (unit vectors, sample frame) of one row's inputs.
+    fn directions(self, x: &[f64]) -> (Vec3, Vec3) {
         match self {
-            Self::TlTvProjDphi => (x[0], x[1].hypot(x[2]), x[2].atan2(x[1])),
-            Self::TvTlDphi => (x[1], x[0], x[2]),
-            Self::SphericalTlPlTvPv => (x[0], x[2], x[3] - x[1]),
+            Self::TlTvProjDphi => (sph(x[0], 0.0), projected(x[1], x[2])),
+            Self::TvTlDphi => (sph(x[1], 0.0), sph(x[0], x[2])),
+            Self::TvProjDphi => ([0.0, 0.0, 1.0], projected(x[0], x[1])),
+            Self::SphericalTlPlTvPv => (sph(x[0], x[1]), sph(x[2], x[3])),
+            Self::RusinThTdPd => rusin(x[0], 0.0, x[1], x[2]),
+            Self::RusinThPhTdPd => rusin(x[0], x[1], x[2], x[3]),
+            Self::RusinThTd => rusin(x[0], 0.0, x[1], std::f64::consts::FRAC_PI_2),
+            Self::Cartesian => ([x[3], x[4], x[5]], [x[0], x[1], x[2]]),
         }
     }
+}
+
+/// `(θi, θo, Δφ)` (radians) of a light and a view; `None` for a zero vector.
+fn angles(l: Vec3, v: Vec3) -> Option<(f64, f64, f64)> {
+    let norm = |w: Vec3| (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
+    let (nl, nv) = (norm(l), norm(v));
+    if !(nl > 0.0 && nv > 0.0) {
+        return None;
+    }
+    let polar = |w: Vec3| w[0].hypot(w[1]).atan2(w[2]);
+    let dphi = v[1].atan2(v[0]) - l[1].atan2(l[0]);
+    let dphi = dphi.sin().atan2(dphi.cos());
+    Some((polar(l), polar(v), dphi))
 }
 
 fn units(s: &str) -> Option<Units> {
@@ -63,13 +144,26 @@ fn unit_name(u: Units) -> &'static str {
     }
 }
 
-/// Parses an ALTA text file; errors name the line (1-based).
+/// What the header said so far.
+#[derive(Default)]
+struct Header {
+    dim: Option<(usize, usize)>,
+    param_in: Option<ParamIn>,
+    /// `Some(None)`: a `#PARAM_OUT` we do not know the units of.
+    param_out: Option<Option<Units>>,
+    vs: usize,
+}
+
+/// Parses an ALTA text file; errors name the line (1-based) and what was
+/// expected; what was assumed is in the data set's warnings.
 pub fn parse(text: &str) -> Result<Dataset> {
-    let (mut dim, mut param_in, mut out_units) = (None, None, None);
-    let mut vs = 0usize;
+    let mut h = Header::default();
     let mut metadata = Vec::new();
+    let mut warnings = Vec::new();
     let mut observations = Vec::new();
-    for (i, raw) in text.lines().enumerate() {
+    // Settled at the first data line: inputs, outputs, units.
+    let mut layout: Option<(ParamIn, usize, Option<Units>)> = None;
+    for (i, raw) in text.split('\n').enumerate() {
         let n = i + 1;
         let line = raw.trim();
         let err = |msg: String| anyhow!("line {n}: {msg}");
@@ -77,60 +171,95 @@ pub fn parse(text: &str) -> Result<Dataset> {
             continue;
         }
         if let Some(rest) = line.strip_prefix('#') {
-            let mut words = rest.split_whitespace();
-            match words.next() {
-                Some("DIM") => {
-                    let v: Vec<&str> = words.collect();
-                    let parsed: Option<Vec<usize>> = v.iter().map(|w| w.parse().ok()).collect();
+            let key = rest.split_whitespace().next().unwrap_or("");
+            let value = rest.trim_start().strip_prefix(key).unwrap_or("").trim();
+            let is_key = !rest.starts_with(char::is_whitespace) && matches!(key, "DIM" | "PARAM_IN" | "PARAM_OUT" | "VS");
+            if !is_key {
+                if !rest.trim().is_empty() {
+                    metadata.push(rest.trim().to_string());
+                }
+                continue;
+            }
+            if layout.is_some() {
+                return Err(err(format!(
+                    "#{key} after the data: header lines must come before the first sample"
+                )));
+            }
+            match key {
+                "DIM" => {
+                    let parsed: Option<Vec<usize>> = value.split_whitespace().map(|w| w.parse().ok()).collect();
                     match parsed.as_deref() {
-                        Some([i, 1]) => dim = Some(*i),
-                        _ => return Err(err(format!("#DIM must be `#DIM <inputs> 1`, found `{line}`"))),
+                        Some([i, o]) if *i > 0 && *o > 0 => h.dim = Some((*i, *o)),
+                        _ => return Err(err(format!("expected `#DIM <inputs> <outputs>`, found `{line}`"))),
                     }
                 }
-                Some("PARAM_IN") => {
-                    let w = words.next().unwrap_or("");
-                    param_in = Some(ParamIn::parse(w).ok_or_else(|| {
-                        err(format!(
-                            "unsupported #PARAM_IN `{w}`; supported: ISOTROPIC_TL_TV_PROJ_DPHI, ISOTROPIC_TV_TL_DPHI, SPHERICAL_TL_PL_TV_PV"
-                        ))
-                    })?);
+                "PARAM_IN" => {
+                    h.param_in =
+                        Some(ParamIn::parse(value).ok_or_else(|| err(format!("unsupported #PARAM_IN `{value}`; supported: {SUPPORTED}")))?);
                 }
-                Some("PARAM_OUT") => {
-                    let w = words.next().unwrap_or("");
-                    out_units = Some(units(w).ok_or_else(|| {
-                        err(format!(
-                            "unsupported #PARAM_OUT `{w}`; supported: INV_STERADIAN, INV_STERADIAN_COSINE_FACTOR"
-                        ))
-                    })?);
+                "PARAM_OUT" => {
+                    let u = units(value);
+                    if u.is_none() {
+                        warnings.push(format!(
+                            "line {n}: #PARAM_OUT {value} is not a unit of the BRDF (ALTA's UNKNOWN_OUTPUT)"
+                        ));
+                    }
+                    h.param_out = Some(u);
                 }
-                Some("VS") => {
-                    vs = match words.next() {
-                        Some("0") => 0,
-                        Some("1") => 1,
-                        Some("2") => 2,
-                        _ => return Err(err(format!("#VS must be 0, 1 or 2 (confidence columns per value), found `{line}`"))),
+                _ => {
+                    h.vs = match value {
+                        "0" => 0,
+                        "1" => 1,
+                        "2" => 2,
+                        _ => {
+                            return Err(err(format!(
+                                "expected `#VS 0`, `#VS 1` or `#VS 2` (confidence numbers per row), found `{line}`"
+                            )))
+                        }
                     };
                 }
-                _ => metadata.push(rest.trim().to_string()),
             }
             continue;
         }
-        let (Some(d), Some(p), Some(_)) = (dim, param_in, out_units) else {
-            return Err(err("data before the header: #DIM, #PARAM_IN and #PARAM_OUT must come first".into()));
+        let (p, outputs, _) = match layout {
+            Some(l) => l,
+            None => {
+                let p = h.param_in.ok_or_else(|| {
+                    err(format!(
+                        "data before any #PARAM_IN: which parametrization are the inputs in? ({SUPPORTED})"
+                    ))
+                })?;
+                let (d_in, outputs) = match h.dim {
+                    Some(d) => d,
+                    None => {
+                        warnings.push(format!("no #DIM line: assumed `#DIM {} 1` from #PARAM_IN", p.dim()));
+                        (p.dim(), 1)
+                    }
+                };
+                if d_in != p.dim() {
+                    return Err(err(format!("#DIM says {d_in} inputs but #PARAM_IN has {}", p.dim())));
+                }
+                if outputs > 1 {
+                    warnings.push(format!("{outputs} outputs per sample: the first is used"));
+                }
+                // No #PARAM_OUT: ALTA's UNKNOWN_OUTPUT (`units_stated` false).
+                let u = h.param_out.flatten();
+                layout = Some((p, outputs, u));
+                (p, outputs, u)
+            }
         };
-        if d != p.dim() {
-            return Err(err(format!("#DIM says {d} inputs but #PARAM_IN has {}", p.dim())));
-        }
+        let d = p.dim();
         let fields: Vec<&str> = line.split_whitespace().collect();
-        if fields.len() != d + 1 + vs {
+        let want = d + outputs + h.vs;
+        if fields.len() != want {
             return Err(err(format!(
-                "expected {} numbers ({} inputs, 1 output, {vs} confidence), found {}",
-                d + 1 + vs,
-                d,
+                "expected {want} numbers ({d} inputs, {outputs} output{}, {} confidence), found {}",
+                if outputs == 1 { "" } else { "s" },
+                h.vs,
                 fields.len()
             )));
         }
-        let mut x = Vec::with_capacity(d + 1 + vs);
+        let mut x = Vec::with_capacity(want);
         for f in fields {
             let v: f64 = f.parse().map_err(|_| err(format!("`{f}` is not a number")))?;
             if !v.is_finite() {
@@ -138,37 +267,36 @@ pub fn parse(text: &str) -> Result<Dataset> {
             }
             x.push(v);
         }
-        let (theta_i, theta_o, dphi) = p.angles(&x);
-        let sigma = match vs {
-            1 => Some(x[d + 1]),
-            2 => Some((x[d + 2] - x[d + 1]) / (2.0 * K_COVERAGE)),
+        let (l, v) = p.directions(&x);
+        let (theta_i, theta_o, dphi) = angles(l, v).ok_or_else(|| err("a direction of length zero".into()))?;
+        let value = x[d];
+        let conf = &x[d + outputs..];
+        let sigma = match h.vs {
+            1 => Some(conf[0] / K_COVERAGE),
+            2 => Some((conf[1] - conf[0]) / (2.0 * K_COVERAGE)),
             _ => None,
         };
         if sigma.is_some_and(|s| s < 0.0) {
-            return Err(err("the confidence interval is negative".into()));
+            return Err(err("the confidence interval is negative (#VS 2: lower end, then upper end)".into()));
         }
         observations.push(Observation {
             theta_i,
             theta_o,
             dphi,
-            value: x[d],
+            value,
             sigma,
             shared: Default::default(),
         });
     }
-    let Some(units) = out_units else {
-        bail!("missing header: no #PARAM_OUT line (an ALTA file starts with #DIM, #PARAM_IN, #PARAM_OUT)");
+    let Some((_, _, units)) = layout else {
+        bail!("no data lines: the file holds no sample (a header at most)");
     };
-    if dim.is_none() || param_in.is_none() {
-        bail!("missing header: #DIM and #PARAM_IN are required");
-    }
-    if observations.is_empty() {
-        bail!("no data lines: the file holds a header only");
-    }
     Ok(Dataset {
-        units,
+        units: units.unwrap_or(Units::Fr),
+        units_stated: units.is_some(),
         observations,
         metadata,
+        warnings,
     })
 }
 

@@ -72,5 +72,7 @@ pub fn parse(text: &str) -> Result<Dataset> {
         units,
         observations,
         metadata: Vec::new(),
+        units_stated: true,
+        warnings: Vec::new(),
     })
 }
