@@ -1,7 +1,7 @@
 //! `run.json`: what was scanned, with what, and how it went. Written once the
 //! scan completed, next to `samples.csv`.
 
-use crate::brdf::Material;
+use crate::brdf::Specimen;
 use crate::scan::ScanOutcome;
 use anyhow::{Context, Result};
 use gonio_shared::{CalibrationReport, DetectionReport, Identity, ScanSpec};
@@ -71,7 +71,7 @@ pub struct RunRecord {
     pub versions: Versions,
     pub head: Head,
     /// The simulated head's material; absent for a real head.
-    pub material: Option<Material>,
+    pub material: Option<Specimen>,
     pub grid: Grid,
     pub detection: Detection,
     /// The detector calibration taken before the scan, if any.
@@ -85,7 +85,7 @@ pub struct RunRecord {
 impl RunRecord {
     pub fn new(
         id: &Identity,
-        material: Option<Material>,
+        material: Option<Specimen>,
         spec: &ScanSpec,
         det: &DetectionReport,
         calibration: Option<CalibrationReport>,

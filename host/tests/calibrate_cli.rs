@@ -40,6 +40,8 @@ fn calibrated_brdf_matches_the_truth_with_the_laser_drifting() {
     let o = gonio(&[
         "scan",
         "--sim",
+        "--material",
+        "retro-phong",
         "--laser-drift",
         "0.05",
         "--reference-plate",

@@ -117,6 +117,8 @@ fn coefficients_of_a_fitted_scan_hold_the_truth() {
     let o = gonio(&[
         "scan",
         "--sim",
+        "--material",
+        "retro-phong",
         "--imperfect",
         "--seed",
         "1",

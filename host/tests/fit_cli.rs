@@ -486,3 +486,47 @@ fn doubtful_data_is_refused_or_named() {
         );
     }
 }
+
+/// Issue #16: the search box holds data in relative units (its amplitudes
+/// follow the data's scale), `--bounds` replaces it, and a fit that ends on
+/// its edge says so (`at_bound` in JSON, a warning in text).
+#[test]
+fn search_boxes_follow_the_data_and_say_when_they_bind() {
+    let dir = tempfile::tempdir().unwrap();
+    // A Lambertian in counts: kd = 500, far outside the calibrated box.
+    let m = Material::parse(ModelId::Lambert, "kd=500").unwrap();
+    let p = dir.path().join("counts.dat");
+    std::fs::write(&p, alta::write(&dataset(&m, Units::Fr))).unwrap();
+    let f = p.to_str().unwrap();
+    let o = gonio(&["fit", f, "--model", "lambert", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["params"]["kd"].as_f64().unwrap() / 500.0 - 1.0).abs() < 1e-9, "{v}");
+    assert_eq!(v["at_bound"], serde_json::json!([]));
+    // A box that excludes it: the fit ends on its edge and says so.
+    let o = gonio(&["fit", f, "--model", "lambert", "--bounds", "kd=0:100", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["at_bound"], serde_json::json!(["kd"]));
+    assert!((v["params"]["kd"].as_f64().unwrap() - 100.0).abs() < 1e-6);
+    let o = gonio(&["fit", f, "--model", "lambert", "--bounds", "kd=0:100"]);
+    assert!(text(&o).contains("warning: kd ended on the edge of its search box"), "{}", text(&o));
+    for (bad, says) in [
+        ("kd=1", "not NAME=LO:HI"),
+        ("kd=3:1", "LO < HI"),
+        ("zz=0:1", "unknown parameter `zz`"),
+    ] {
+        let o = gonio(&["fit", f, "--model", "lambert", "--bounds", bad]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(text(&o).contains(says), "{bad}: {}", text(&o));
+    }
+    // compare: every model takes the names it has; AIC/BIC ranks beside RMSE's.
+    let o = gonio(&["compare", f, "--bounds", "kd=0:1000,n=1:100", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let rows: Vec<Value> = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(rows.len(), 8);
+    let mut ranks: Vec<u64> = rows.iter().map(|r| r["rank"]["aic"].as_u64().unwrap()).collect();
+    ranks.sort();
+    assert_eq!(ranks, (1..=8).collect::<Vec<u64>>());
+    assert!(rows.iter().all(|r| r["at_bound"].is_array() && r["bic"].is_f64()));
+}

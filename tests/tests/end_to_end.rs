@@ -4,7 +4,7 @@
 
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::kinematics;
-use gonio_host::brdf::Directions;
+use gonio_host::brdf::{Directions, Material, Specimen};
 use gonio_host::client::{Head, Target};
 use gonio_host::session::{Session, Setup};
 use gonio_host::sim::{serve_pty, SimConfig};
@@ -43,7 +43,11 @@ async fn session(target: Target) -> Session {
 
 #[tokio::test]
 async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
-    let sim = SimConfig::default();
+    // The retroreflective tape: its four decades need more than one gain.
+    let sim = SimConfig {
+        material: Specimen::Model(Material::tape()),
+        ..SimConfig::default()
+    };
     let mut session = session(Target::Sim(sim.clone())).await;
     let dir = tempfile::tempdir().unwrap();
     let spec = small_grid();

@@ -2,7 +2,7 @@
 //! loaded and a 3σ band, dust specks (five times the model value at a few
 //! points) are flagged and measured again, and clean points are not flagged.
 
-use gonio_host::brdf::Directions;
+use gonio_host::brdf::{Directions, Material, Specimen};
 use gonio_host::client::Target;
 use gonio_host::session::{Session, Setup};
 use gonio_host::sim::SimConfig;
@@ -26,9 +26,10 @@ async fn dust_is_flagged_and_clean_data_is_not() {
     ];
     let sim = SimConfig {
         dust: dust.to_vec(),
+        material: Specimen::Model(Material::tape()),
         ..SimConfig::default()
     };
-    let material = sim.material.clone();
+    let material = Material::tape();
     let setup = Setup {
         settings: DetectionSettings::default(),
         calibrate_at: None,

@@ -10,6 +10,7 @@ pub mod dhr;
 mod five_param;
 pub mod frame;
 pub mod geometry;
+mod glass_beads;
 mod lafortune;
 mod lambert;
 mod oren_nayar;
@@ -19,10 +20,56 @@ pub mod scalar;
 pub use catalog::{Bound, HandGradient, ModelId, Spread};
 pub use frame::{Directions, Param};
 pub use geometry::Geometry;
+pub use glass_beads::GlassBeads;
 pub use retro_phong::energy_sum as retro_phong_energy_sum;
 
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
+
+/// What a simulated head measures: a model of `models.md` with its
+/// parameters, or a physical reflector that none of the models is (the
+/// default, as a real material). Serialised untagged: a model is written
+/// as before (`scan.json` of older scans still reads).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Specimen {
+    Model(Material),
+    GlassBeads(GlassBeads),
+}
+
+impl Default for Specimen {
+    fn default() -> Self {
+        Specimen::GlassBeads(GlassBeads::default())
+    }
+}
+
+impl Specimen {
+    /// `f_r` (sr⁻¹) for a pair of directions.
+    pub fn eval(&self, d: &Directions) -> f64 {
+        match self {
+            Specimen::Model(m) => m.eval(d),
+            Specimen::GlassBeads(g) => g.eval(d),
+        }
+    }
+
+    /// The model, if the specimen is one.
+    pub fn model(&self) -> Option<&Material> {
+        match self {
+            Specimen::Model(m) => Some(m),
+            Specimen::GlassBeads(_) => None,
+        }
+    }
+
+    /// What it is, in a line.
+    pub fn describe(&self) -> String {
+        match self {
+            Specimen::Model(m) => format!("{} {}", m.model.name(), m.params_string()),
+            Specimen::GlassBeads(_) => {
+                "glass-bead retroreflector (n = 1.9 beads in a white binder, glossy top): a physical material, none of the models".into()
+            }
+        }
+    }
+}
 
 /// A model id and its parameters, in the order of `models.md`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -34,6 +34,10 @@ pub struct FitOptions {
     /// Seed of the global search.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Search boxes replacing the defaults, NAME=LO:HI,... (in `compare`,
+    /// each model takes the names it has).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "NAME=LO:HI")]
+    pub bounds: Vec<String>,
     /// Machine-readable output.
     #[arg(long)]
     pub json: bool,
@@ -51,6 +55,7 @@ impl Default for FitOptions {
             weights: Weighting::Uniform,
             units: None,
             seed: 1,
+            bounds: Vec::new(),
             json: false,
         }
     }
@@ -138,16 +143,36 @@ pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
     Ok(Domain { train, holdout })
 }
 
-fn spec(model: ModelId, fixes: &[String], o: &FitOptions, data: &Dataset) -> Result<FitSpec> {
+/// `--bounds` for one model: `(index, lo, hi)`. With `every_model`
+/// (`compare`), names the model lacks are skipped, unless no model has them.
+fn boxes(model: ModelId, given: &[String], every_model: bool) -> Result<Vec<(usize, f64, f64)>> {
+    let mut out = Vec::new();
+    for g in given {
+        let parsed = g.split_once('=').and_then(|(n, r)| {
+            let (lo, hi) = r.split_once(':')?;
+            Some((n.trim(), lo.trim().parse::<f64>().ok()?, hi.trim().parse::<f64>().ok()?))
+        });
+        let Some((name, lo, hi)) = parsed else {
+            bail!("--bounds `{g}` is not NAME=LO:HI");
+        };
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            bail!("--bounds {name}: the box [{lo}, {hi}] must be finite with LO < HI");
+        }
+        match model.param_index(name) {
+            Ok(i) => out.push((i, lo, hi)),
+            Err(_) if every_model && ModelId::ALL.iter().any(|m| m.param_index(name).is_ok()) => {}
+            Err(e) => return Err(e.context("--bounds")),
+        }
+    }
+    Ok(out)
+}
+
+fn spec(model: ModelId, fixes: &[String], o: &FitOptions, data: &Dataset, every_model: bool) -> Result<FitSpec> {
     let mut fixed = Vec::new();
     for f in fixes {
         let (name, v) = f.split_once('=').with_context(|| format!("--fix `{f}` is not NAME=VALUE"))?;
         let i = model.param_index(name.trim())?;
         let v: f64 = v.trim().parse().with_context(|| format!("--fix {name}: `{v}` is not a number"))?;
-        let b = model.bounds()[i];
-        if !(b.lo..=b.hi).contains(&v) {
-            bail!("--fix {name}={v} is outside the model's range [{}, {}]", b.lo, b.hi);
-        }
         fixed.push((i, v));
     }
     Ok(FitSpec {
@@ -155,6 +180,7 @@ fn spec(model: ModelId, fixes: &[String], o: &FitOptions, data: &Dataset) -> Res
         units: o.units.unwrap_or(data.units),
         weighting: o.weights,
         fixed,
+        bounds: boxes(model, &o.bounds, every_model)?,
         seed: o.seed,
         ..FitSpec::new(model)
     })
@@ -166,8 +192,8 @@ pub struct Outcome {
     pub json: Value,
 }
 
-fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain) -> Result<Outcome> {
-    let spec = spec(model, fixes, o, &d.train)?;
+fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain, every_model: bool) -> Result<Outcome> {
+    let spec = spec(model, fixes, o, &d.train, every_model)?;
     let f = fit::fit(&d.train, &spec).with_context(|| format!("fitting {}", model.name()))?;
     let holdout = d.holdout.as_ref().map(|h| fit::evaluate(&f.material, h));
     let json = fit::file::to_json(&f, d.train.units, holdout.as_ref());
@@ -181,7 +207,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         fit: f,
         holdout,
         json: mut v,
-    } = run_one(model, &a.fix, &a.options, &d)?;
+    } = run_one(model, &a.fix, &a.options, &d, false)?;
     if !d.train.warnings.is_empty() {
         v["warnings"] = serde_json::json!(d.train.warnings);
     }
@@ -207,9 +233,14 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         }
     }
     println!(
-        "  rmse {:.4e}  nrmse {:.4e}  ncc {:.5}  l2 {:.4e}",
-        f.metrics.rmse, f.metrics.nrmse, f.metrics.ncc, f.metrics.l2
+        "  rmse {:.4e}  nrmse {:.4e}  ncc {:.5}  l2 {:.4e}  aic {:.1}  bic {:.1}",
+        f.metrics.rmse, f.metrics.nrmse, f.metrics.ncc, f.metrics.l2, f.aic, f.bic
     );
+    for name in &f.at_bound {
+        eprintln!(
+            "warning: {name} ended on the edge of its search box: the optimum may lie beyond it (widen the box with --bounds {name}=LO:HI)"
+        );
+    }
     if let Some(h) = &holdout {
         println!(
             "  held out θi {:?}°: rmse {:.4e}  nrmse {:.4e}  ncc {:.5}",
@@ -225,7 +256,7 @@ pub fn compare(d: &Domain, o: &FitOptions) -> Result<Vec<Outcome>> {
     let mut rows = Vec::new();
     for model in ModelId::ALL {
         bar.set_message(model.name());
-        rows.push(run_one(model, &[], o, d)?);
+        rows.push(run_one(model, &[], o, d, true)?);
         bar.inc(1);
     }
     bar.finish_and_clear();
@@ -267,27 +298,66 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
             eprintln!("report: {}", path.display());
         }
     }
+    let ranks = ranks(&rows);
     if a.options.json {
-        println!("{}", Value::Array(rows.into_iter().map(|r| r.json).collect()));
+        let out: Vec<Value> = rows
+            .into_iter()
+            .zip(&ranks)
+            .map(|(r, k)| {
+                let mut v = r.json;
+                v["rank"] = serde_json::json!({"rmse": k[0], "aic": k[1], "bic": k[2]});
+                v
+            })
+            .collect();
+        println!("{}", Value::Array(out));
         return Ok(());
     }
-    println!("{} samples ({:?})", d.train.observations.len(), d.train.units);
     println!(
-        "{:<16} {:>6} {:>12} {:>12} {:>9} {:>8}",
-        "model", "coeffs", "RMSE", "NRMSE", "NCC", "s"
+        "{} samples ({:?}); best first by RMSE, with the ranks by AIC and BIC (which charge each coefficient)",
+        d.train.observations.len(),
+        d.train.units
     );
-    for r in &rows {
-        let f = &r.fit;
+    println!(
+        "{:<16} {:>6} {:>12} {:>12} {:>9} {:>13} {:>13} {:>4} {:>4} {:>8}  at bound",
+        "model", "coeffs", "RMSE", "NRMSE", "NCC", "AIC", "BIC", "#AIC", "#BIC", "s"
+    );
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    order.sort_by_key(|&i| ranks[i][0]);
+    for i in order {
+        let f = &rows[i].fit;
         let m = &f.metrics;
         let k = f.material.params.len();
         println!(
-            "{:<16} {k:>6} {:>12.4e} {:>12.4e} {:>9.5} {:>8.2}",
+            "{:<16} {k:>6} {:>12.4e} {:>12.4e} {:>9.5} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2}  {}",
             f.material.model.name(),
             m.rmse,
             m.nrmse,
             m.ncc,
-            f.seconds
+            f.aic,
+            f.bic,
+            ranks[i][1],
+            ranks[i][2],
+            f.seconds,
+            f.at_bound.join(", ")
         );
     }
     Ok(())
+}
+
+/// Each fit's rank (1 = best) by RMSE, AIC and BIC.
+fn ranks(rows: &[Outcome]) -> Vec<[usize; 3]> {
+    let key = |f: &Fit, c: usize| match c {
+        0 => f.metrics.rmse,
+        1 => f.aic,
+        _ => f.bic,
+    };
+    let mut out = vec![[0; 3]; rows.len()];
+    for c in 0..3 {
+        let mut order: Vec<usize> = (0..rows.len()).collect();
+        order.sort_by(|&a, &b| key(&rows[a].fit, c).total_cmp(&key(&rows[b].fit, c)));
+        for (rank, i) in order.into_iter().enumerate() {
+            out[i][c] = rank + 1;
+        }
+    }
+    out
 }

@@ -1,16 +1,17 @@
 //! Options shared by the commands that start a simulated head.
 
-use crate::brdf::{Material, ModelId};
+use crate::brdf::{Material, ModelId, Specimen};
 use crate::sim::{Imperfections, SimConfig, PLATE_RHO_U};
 use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Context, Result};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct SimHeadArgs {
-    /// Virtual material of the simulated head: a model id of models.md.
-    #[arg(long, default_value = "retro-phong")]
+    /// Virtual material of the simulated head: `glass-beads` (a physical
+    /// retroreflector that none of the models is), or a model id of models.md.
+    #[arg(long, default_value = "glass-beads")]
     pub material: String,
-    /// Its parameters, NAME=V,... (default for retro-phong: a retroreflective tape).
+    /// A model's parameters, NAME=V,... (default for retro-phong: a retroreflective tape).
     #[arg(long)]
     pub params: Option<String>,
     /// Seed of the simulated head's noise.
@@ -42,11 +43,18 @@ pub struct SimHeadArgs {
 
 impl SimHeadArgs {
     pub fn config(&self) -> Result<SimConfig> {
-        let model = ModelId::parse(&self.material)?;
-        let material = match &self.params {
-            Some(p) => Material::parse(model, p)?,
-            None if model == ModelId::RetroPhong => Material::tape(),
-            None => bail!("--params is required for --material {}", model.name()),
+        let material = if self.material == "glass-beads" {
+            if self.params.is_some() {
+                bail!("--material glass-beads takes no --params (its parameters are fixed: docs/architecture.md#the-simulated-head)");
+            }
+            Specimen::default()
+        } else {
+            let model = ModelId::parse(&self.material).context("--material: glass-beads or a model id")?;
+            Specimen::Model(match &self.params {
+                Some(p) => Material::parse(model, p)?,
+                None if model == ModelId::RetroPhong => Material::tape(),
+                None => bail!("--params is required for --material {}", model.name()),
+            })
         };
         if !(0.0..0.5).contains(&self.laser_drift) {
             bail!("--laser-drift {} must be in [0, 0.5)", self.laser_drift);

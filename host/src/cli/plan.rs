@@ -2,7 +2,7 @@
 //! so `gonio scan --resume DIR` can finish an interrupted scan exactly.
 
 use super::detector::DetectorArgs;
-use crate::brdf::Material;
+use crate::brdf::Specimen;
 use crate::client::Target;
 use crate::scan::Monitor;
 use crate::sim::faults::Faults;
@@ -17,7 +17,7 @@ use std::path::Path;
 #[serde(rename_all = "lowercase")]
 pub enum PlanTarget {
     Sim {
-        material: Material,
+        material: Specimen,
         seed: u64,
         #[serde(default)]
         laser_drift: f64,

@@ -109,10 +109,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
     let rows = fit::compare(&domain, &options)?;
     let facts = vec![
         ("head".to_string(), "simulated (gonio demo)".to_string()),
-        (
-            "virtual material".to_string(),
-            format!("{} {}", truth.model.name(), truth.params_string()),
-        ),
+        ("virtual material".to_string(), truth.describe()),
         (
             "scan".to_string(),
             format!(
@@ -133,14 +130,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ("data".to_string(), calibrated.csv.display().to_string()),
     ];
     let budget = crate::calibration::budget_by_incidence(&calibrated.rows);
-    let report = fit::report(
-        &a.out,
-        "gonio demo: simulated retroreflective tape".into(),
-        facts,
-        &domain,
-        &rows,
-        &budget,
-    )?;
+    let report = fit::report(&a.out, format!("gonio demo: {}", truth.describe()), facts, &domain, &rows, &budget)?;
     let best = rows
         .iter()
         .min_by(|x, y| x.fit.metrics.rmse.total_cmp(&y.fit.metrics.rmse))
@@ -149,10 +139,12 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         let mut v = serde_json::to_value(&outcome)?;
         v["calibration"] = calibrated.summary;
         v["models"] = rows.iter().map(|r| r.json.clone()).collect();
+        v["material"] = truth.describe().into();
         v["best_model"] = best.fit.material.model.name().into();
         v["report"] = report.display().to_string().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
+        println!("material: {}", truth.describe());
         println!(
             "calibrated: {} of {} samples usable; best model {} (RMSE {:.3e} sr⁻¹, NCC {:.4})",
             calibrated.usable,

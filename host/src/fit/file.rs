@@ -19,6 +19,7 @@ pub fn to_json(f: &Fit, units: Units, holdout: Option<&Metrics>) -> Value {
         "model": m.model.name(), "parametrization": parametrization, "params": params, "stderr": stderr,
         "rmse": f.metrics.rmse, "nrmse": f.metrics.nrmse, "ncc": f.metrics.ncc, "l2": f.metrics.l2,
         "samples": f.samples, "seconds": f.seconds, "units": units,
+        "aic": f.aic, "bic": f.bic, "at_bound": f.at_bound,
     });
     if let Some(c) = &f.covariance {
         let rows: Vec<Vec<f64>> = (0..c.nrows()).map(|i| c.row(i).iter().copied().collect()).collect();

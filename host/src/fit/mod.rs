@@ -41,6 +41,9 @@ pub struct FitSpec {
     pub weighting: Weighting,
     /// Parameters held at a value: `(index, value)`.
     pub fixed: Vec<(usize, f64)>,
+    /// Search boxes given by the user: `(index, lo, hi)`, replacing the
+    /// defaults (`ModelId::bounds_for` the data's median).
+    pub bounds: Vec<(usize, f64, f64)>,
     /// Seed of the global search.
     pub seed: u64,
     /// Start here with a local fit only, instead of the global search.
@@ -55,6 +58,7 @@ impl FitSpec {
             units: Units::Fr,
             weighting: Weighting::Uniform,
             fixed: Vec::new(),
+            bounds: Vec::new(),
             seed: 1,
             start: None,
         }
@@ -72,6 +76,15 @@ pub struct Fit {
     pub metrics: Metrics,
     pub samples: usize,
     pub seconds: f64,
+    /// Akaike's and Bayes' information criteria of the least-squares fit,
+    /// `N·ln(S/N) + 2k` and `N·ln(S/N) + k·ln N` (`S` the weighted sum of
+    /// squares, `k` the free parameters): lower is better, and each extra
+    /// coefficient must earn its place.
+    pub aic: f64,
+    pub bic: f64,
+    /// Free parameters that ended on (within 1e-6 of the box's width of) a
+    /// bound of their search box: the optimum may lie outside it.
+    pub at_bound: Vec<&'static str>,
     /// Weighted sum of squared residuals at the optimum.
     pub cost: f64,
     /// Covariance of the parameters (every parameter, in `models.md` order;
@@ -87,10 +100,43 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
     if data.observations.is_empty() {
         bail!("no samples to fit (after the domain restriction)");
     }
-    let mut template: Vec<f64> = model.bounds().iter().map(|b| (b.lo + b.hi) / 2.0).collect();
+    let mut values: Vec<f64> = data
+        .observations
+        .iter()
+        .map(|o| (o.value / o.unit_factor(data.units)).abs())
+        .filter(|v| v.is_finite())
+        .collect();
+    values.sort_by(f64::total_cmp);
+    let mut bounds_all = model.bounds_for(values.get(values.len() / 2).copied().unwrap_or(0.0));
+    for &(i, lo, hi) in &spec.bounds {
+        if i >= n || !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            bail!(
+                "a search box must be one of {}, with finite lo < hi",
+                model.param_names().join(", ")
+            );
+        }
+        let d = model.bounds()[i];
+        if d.spread == crate::brdf::Spread::Log && lo <= 0.0 {
+            bail!(
+                "the box of {} must stay above 0 (it is searched in its logarithm)",
+                model.param_names()[i]
+            );
+        }
+        bounds_all[i] = crate::brdf::Bound { lo, hi, ..d };
+    }
+    let mut template: Vec<f64> = bounds_all.iter().map(|b| (b.lo + b.hi) / 2.0).collect();
     for &(i, v) in &spec.fixed {
         if i >= n || !v.is_finite() {
             bail!("a fixed parameter must be one of {} and finite", model.param_names().join(", "));
+        }
+        let b = bounds_all[i];
+        if !(b.lo..=b.hi).contains(&v) {
+            bail!(
+                "{} = {v} is outside its range [{}, {}] (widen it with --bounds)",
+                model.param_names()[i],
+                b.lo,
+                b.hi
+            );
         }
         template[i] = v;
     }
@@ -139,6 +185,7 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
             .collect(),
         y,
         weight,
+        bounds_all,
         template,
         free,
     })
@@ -162,7 +209,23 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         })
         .collect();
     let cost = problem.cost(&x);
+    let names = spec.model.param_names();
+    let at_bound = problem
+        .free
+        .iter()
+        .filter(|&&i| {
+            let b = problem.bounds_all[i];
+            let (v, tol) = (material.params[i], 1e-6 * (b.hi - b.lo));
+            (v - b.lo).abs() <= tol || (b.hi - v).abs() <= tol
+        })
+        .map(|&i| names[i])
+        .collect();
+    let (nf, kf) = (problem.y.len() as f64, problem.free.len() as f64);
+    let log_mean = (cost / nf).max(f64::MIN_POSITIVE).ln();
     Ok(Fit {
+        aic: nf * log_mean + 2.0 * kf,
+        bic: nf * log_mean + kf * nf.ln(),
+        at_bound,
         metrics: evaluate(&material, data),
         stderr,
         covariance,

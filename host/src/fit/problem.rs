@@ -22,6 +22,9 @@ pub struct Problem {
     /// Weighted shifts of the targets when each shared input is off by one
     /// standard uncertainty (`Observation::shared`), per sample.
     pub shared: Vec<[f64; SHARED.len()]>,
+    /// The search box of every parameter (`ModelId::bounds_for` the data,
+    /// with the user's overrides).
+    pub bounds_all: Vec<Bound>,
     /// Every parameter; the free ones are overwritten on evaluation.
     pub template: Vec<f64>,
     /// Indices of the free parameters.
@@ -30,8 +33,7 @@ pub struct Problem {
 
 impl Problem {
     pub fn bounds(&self) -> Vec<Bound> {
-        let all = self.model.bounds();
-        self.free.iter().map(|&i| all[i]).collect()
+        self.free.iter().map(|&i| self.bounds_all[i]).collect()
     }
 
     /// Every parameter, with the free ones set to `x`.

@@ -54,6 +54,7 @@ mod tests {
                 lo: 0.5,
                 hi: 200.0,
                 spread,
+                scales: false,
             };
             for x in [0.5, 0.51, 3.0, 199.0, 200.0] {
                 assert!((to_external(&b, to_internal(&b, x)) - x).abs() < 1e-9 * x);
@@ -64,6 +65,7 @@ mod tests {
             lo: -1.0,
             hi: 3.0,
             spread: Spread::Linear,
+            scales: false,
         };
         assert_eq!(to_external(&b, -std::f64::consts::FRAC_PI_2), -1.0);
         assert_eq!(to_external(&b, std::f64::consts::FRAC_PI_2), 3.0);

@@ -20,7 +20,7 @@ pub use optics::Photodiode;
 pub use pty::serve_pty;
 pub use world::World;
 
-use crate::brdf::Material;
+use crate::brdf::Specimen;
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::Head;
@@ -31,7 +31,7 @@ use std::rc::Rc;
 /// What the simulated head is made of.
 #[derive(Debug, Clone)]
 pub struct SimConfig {
-    pub material: Material,
+    pub material: Specimen,
     pub photodiode: Photodiode,
     /// Seed of the noise generator: the same seed gives the same samples.
     pub seed: u64,
@@ -77,7 +77,7 @@ impl Mount {
 impl Default for SimConfig {
     fn default() -> Self {
         SimConfig {
-            material: Material::tape(),
+            material: Specimen::default(),
             photodiode: Photodiode::default(),
             seed: 1,
             protocol_version: PROTOCOL_VERSION,

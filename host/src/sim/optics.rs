@@ -4,7 +4,7 @@
 //! ambient light, mains pickup, amplifier bandwidth, noise, offset,
 //! quantisation and saturation.
 
-use crate::brdf::{Directions, Material};
+use crate::brdf::{Directions, Specimen};
 use gonio_firmware::board::HeadConfig;
 use rand::Rng;
 use rand_distr::StandardNormal;
@@ -67,7 +67,7 @@ impl Photodiode {
     /// `P·R·f_r·cosθo·Ω`, times the splitter factor in the retro zone, zero in
     /// the blind zone or behind the sample; `defect` scales the material's
     /// reflection at a direction pair (a dust speck).
-    pub fn signal_a(&self, material: &Material, cfg: &HeadConfig, angles: [f64; 3], defect: impl Fn(&Directions) -> f64) -> f64 {
+    pub fn signal_a(&self, material: &Specimen, cfg: &HeadConfig, angles: [f64; 3], defect: impl Fn(&Directions) -> f64) -> f64 {
         let psi_abs = angles[2].abs();
         let optics = &cfg.optics;
         let Some(d) = Directions::from_stage(angles) else {

@@ -3,7 +3,7 @@
 
 use super::optics::Photodiode;
 use super::SimConfig;
-use crate::brdf::{Directions, Material};
+use crate::brdf::{Directions, Material, Specimen};
 use gonio_firmware::board::HeadConfig;
 use gonio_firmware::hw::ChopTiming;
 use gonio_firmware::units;
@@ -37,9 +37,9 @@ pub struct World {
     pub laser: bool,
     /// Running chop timer and the time its current period started.
     pub chop: Option<ChopTiming>,
-    pub material: Material,
+    pub material: Specimen,
     /// The reference plate (Lambertian, `PLATE_RHO`) and whether it is mounted.
-    pub plate: Material,
+    pub plate: Specimen,
     pub mount: super::Mount,
     pub photodiode: Photodiode,
     /// Dust specks: direction pairs (θi, θo, |Δφ| in degrees) that reflect
@@ -58,7 +58,7 @@ pub struct World {
 
 impl World {
     /// The target on the holder.
-    pub fn target(&self) -> &Material {
+    pub fn target(&self) -> &Specimen {
         if self.mount.plate() {
             &self.plate
         } else {
@@ -90,8 +90,9 @@ impl World {
             laser: false,
             chop: None,
             material: sim.material.clone(),
-            plate: Material::parse(crate::brdf::ModelId::Lambert, &format!("kd={}", sim.imperfections.plate_rho))
-                .expect("a valid Lambertian"),
+            plate: Specimen::Model(
+                Material::parse(crate::brdf::ModelId::Lambert, &format!("kd={}", sim.imperfections.plate_rho)).expect("a valid Lambertian"),
+            ),
             mount: sim.mount.clone(),
             photodiode: sim.photodiode.clone(),
             dust: sim.dust.clone(),

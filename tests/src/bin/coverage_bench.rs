@@ -11,7 +11,7 @@
 //!
 //! `cargo run --release -p tests --bin coverage-bench [-- SCANS]` (default 100).
 
-use gonio_host::brdf::{Directions, Material, ModelId, Param};
+use gonio_host::brdf::{Directions, Material, ModelId, Param, Specimen};
 use gonio_host::cli::calibrate::{self, CalibrateArgs};
 use gonio_host::cli::scan::{demo_scan, OutputArgs};
 use gonio_host::coefficients::{self, Source};
@@ -57,6 +57,7 @@ fn main() -> anyhow::Result<()> {
         let sim = SimConfig {
             seed,
             imperfections: Box::new(imperfections.clone()),
+            material: Specimen::Model(truth.clone()),
             ..SimConfig::default()
         };
         rt.block_on(demo_scan(sim, dir.path(), &OutputArgs { force: false, json: true }))?;
