@@ -34,12 +34,13 @@ use serde::{Deserialize, Serialize};
 #[serde(untagged)]
 pub enum Specimen {
     Model(Material),
-    GlassBeads(GlassBeads),
+    /// Boxed: a head's configuration stays small.
+    GlassBeads(Box<GlassBeads>),
 }
 
 impl Default for Specimen {
     fn default() -> Self {
-        Specimen::GlassBeads(GlassBeads::default())
+        Specimen::GlassBeads(Box::default())
     }
 }
 

@@ -351,13 +351,15 @@ fn ranks(rows: &[Outcome]) -> Vec<[usize; 3]> {
         1 => f.aic,
         _ => f.bic,
     };
-    let mut out = vec![[0; 3]; rows.len()];
-    for c in 0..3 {
+    let by = |c: usize| {
         let mut order: Vec<usize> = (0..rows.len()).collect();
         order.sort_by(|&a, &b| key(&rows[a].fit, c).total_cmp(&key(&rows[b].fit, c)));
-        for (rank, i) in order.into_iter().enumerate() {
-            out[i][c] = rank + 1;
+        let mut rank = vec![0; rows.len()];
+        for (r, i) in order.into_iter().enumerate() {
+            rank[i] = r + 1;
         }
-    }
-    out
+        rank
+    };
+    let (rmse, aic, bic) = (by(0), by(1), by(2));
+    (0..rows.len()).map(|i| [rmse[i], aic[i], bic[i]]).collect()
 }
