@@ -142,14 +142,19 @@ def main():
     if "starts" in job:
         # Multi-start: a plain least_squares from each start, the best kept,
         # the total time reported (the peer of the engine's global search).
-        best, t0 = None, time.perf_counter()
-        for s in job["starts"]:
-            res = least_squares(residuals, np.asarray(s), bounds=(job["lo"], job["hi"]), method="trf")
-            if best is None or res.cost < best.cost:
-                best = res
+        best, failed, t0 = None, 0, time.perf_counter()
+        with np.errstate(all="ignore"):
+            for s in job["starts"]:
+                try:
+                    res = least_squares(residuals, np.asarray(s), bounds=(job["lo"], job["hi"]), method="trf")
+                except ValueError:  # a start where the residuals overflow
+                    failed += 1
+                    continue
+                if best is None or res.cost < best.cost:
+                    best = res
         seconds = time.perf_counter() - t0
         r = w * (scale * model(name, g, best.x) - y)
-        print(json.dumps({"seconds": seconds, "params": best.x.tolist(), "cost": float(np.sum(r * r))}))
+        print(json.dumps({"seconds": seconds, "params": best.x.tolist(), "cost": float(np.sum(r * r)), "failed_starts": failed}))
         return
     times = []
     for _ in range(job.get("repeats", 1)):

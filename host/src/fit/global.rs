@@ -28,9 +28,14 @@ fn thinned_size(n: usize) -> usize {
 }
 
 /// Budget of cost evaluations per free parameter.
-const EVALS_PER_PARAM: usize = 2500;
-/// Quasi-random starts of the local fits on the thinned data.
-const STARTS: usize = 12;
+const EVALS_PER_PARAM: usize = 1000;
+/// Quasi-random starts of the local fits on the thinned data, inside
+/// `[0.02, 0.98]` of the cube (on a bound the bounded LM's transform is
+/// flat, and a start there cannot move).
+const STARTS: usize = 16;
+/// Rounds of each probing fit on the thinned data: enough to reach the
+/// floor of its basin roughly, which is all the ranking needs.
+const PROBE_ITERATIONS: usize = 40;
 /// Candidates polished on all the data.
 const POLISHED: usize = 3;
 
@@ -79,9 +84,9 @@ pub fn search(problem: &Problem, seed: u64) -> Vec<f64> {
     };
     // Local fits on the thinned data, judged on all of it.
     let mut candidates: Vec<(f64, Vec<f64>)> = std::iter::once(best_z)
-        .chain((0..STARTS).map(|k| halton(k + seed as usize * STARTS, n)))
-        .map(|z| {
-            let x = local::minimize(&thin, &to_x(&z));
+        .chain((0..STARTS).map(|k| halton(k + seed as usize * STARTS, n).into_iter().map(|z| 0.02 + 0.96 * z).collect()))
+        .map(|z: Vec<f64>| {
+            let x = local::minimize_within(&thin, &to_x(&z), PROBE_ITERATIONS);
             let c = problem.cost(&x);
             (if c.is_finite() { c } else { f64::INFINITY }, x)
         })

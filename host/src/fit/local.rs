@@ -24,6 +24,16 @@ const GTOL: f64 = 1e-10;
 const MAX_ITERATIONS: usize = 500;
 /// Largest change of one transformed parameter in one step (rad).
 const MAX_STEP: f64 = 1.0;
+/// A parameter whose transformed value is this close to a bound's (rad;
+/// `x` within about 1e-4 of the box's width) is tried on the bound.
+const SNAP: f64 = 0.02;
+/// Where a snapped parameter is put: this far (rad) inside the bound, a
+/// few 1e-9 of the box's width from it, where the transform's slope is
+/// small but not zero, so a later step can still take it off the bound (one
+/// exactly on it could never leave: its Jacobian column is zero).
+const ON_BOUND: f64 = 1e-4;
+/// Progress per step (relative cost) below which a fit is crawling.
+const CRAWL: f64 = 1e-6;
 
 struct State {
     u: DVector<f64>,
@@ -41,6 +51,12 @@ struct State {
 /// rejection only the residuals are taken, since more rejections tend to
 /// follow while the damping grows.
 pub fn minimize(problem: &Problem, start: &[f64]) -> Vec<f64> {
+    minimize_within(problem, start, MAX_ITERATIONS)
+}
+
+/// [`minimize`] with at most `iterations` rounds: the global search's
+/// probes of a basin, which need its floor only roughly.
+pub fn minimize_within(problem: &Problem, start: &[f64], iterations: usize) -> Vec<f64> {
     let bounds = problem.bounds();
     let external = |u: &DVector<f64>| -> Vec<f64> { bounds.iter().zip(u.iter()).map(|(b, &u)| to_external(b, u)).collect() };
     let evaluate = |u: DVector<f64>, with_jacobian: bool| {
@@ -73,7 +89,7 @@ pub fn minimize(problem: &Problem, start: &[f64]) -> Vec<f64> {
     }
     let (mut lambda, mut nu) = (1e-3, 10.0);
     let mut scale = DVector::zeros(start.len());
-    'outer: for _ in 0..MAX_ITERATIONS {
+    'outer: for _ in 0..iterations {
         let j = match s.j.take() {
             Some(j) => j,
             None => evaluate(s.u.clone(), true)
@@ -82,6 +98,11 @@ pub fn minimize(problem: &Problem, start: &[f64]) -> Vec<f64> {
         };
         let a: DMatrix<f64> = j.tr_mul(&j);
         let g: DVector<f64> = j.tr_mul(&s.r);
+        // A Jacobian that overflowed (a lobe's power of a base at 0) gives no
+        // direction to follow: stop where the cost was last finite.
+        if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
+            break;
+        }
         // MINPACK's scaling: the largest diagonal seen so far, so a direction
         // that went flat (a parameter at its bound) stays damped.
         scale = scale.zip_map(&a.diagonal(), f64::max);
@@ -104,6 +125,9 @@ pub fn minimize(problem: &Problem, start: &[f64]) -> Vec<f64> {
             let Some(ch) = damped.cholesky() else {
                 lambda *= nu;
                 nu *= 2.0;
+                if lambda > 1e16 {
+                    break 'outer;
+                }
                 continue;
             };
             let mut step = ch.solve(&(-&g));
@@ -124,7 +148,30 @@ pub fn minimize(problem: &Problem, start: &[f64]) -> Vec<f64> {
                 let rho = (s.cost - trial.cost) / predicted.max(f64::MIN_POSITIVE);
                 lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
                 nu = 10.0;
+                let crawling = s.cost - trial.cost <= CRAWL * s.cost;
                 s = trial;
+                // The transform is flat at a bound: an optimum on it is
+                // approached ever more slowly (the cost is quartic in `u`
+                // there). Once progress has slowed to a crawl, try the
+                // parameters that are nearly on a bound on it; keep that if
+                // it is no worse.
+                let near: Vec<usize> = (0..s.u.len())
+                    .filter(|_| crawling)
+                    .filter(|&i| {
+                        let d = (s.u[i].sin().abs().min(1.0)).acos();
+                        d > 1.5 * ON_BOUND && d < SNAP
+                    })
+                    .collect();
+                if !near.is_empty() {
+                    let mut u = s.u.clone();
+                    for &i in &near {
+                        u[i] = (std::f64::consts::FRAC_PI_2 - ON_BOUND).copysign(s.u[i].sin());
+                    }
+                    let snapped = evaluate(u, true);
+                    if snapped.cost <= s.cost {
+                        s = snapped;
+                    }
+                }
                 if small_f || small_x {
                     break 'outer;
                 }

@@ -111,8 +111,11 @@ fn rmse(p: &Problem, x: &[f64]) -> f64 {
 fn main() {
     ensure_scipy();
     let mut report = Map::new();
+    // `fit-bench misfit [N]`: the misfit table alone (its first N cases).
+    let misfit_only = std::env::args().nth(1).as_deref() == Some("misfit");
+    let cases: usize = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(usize::MAX);
     let mut worst = (f64::INFINITY, 0.0f64, SEEDS);
-    for model in ModelId::ALL {
+    for model in ModelId::ALL.into_iter().filter(|_| !misfit_only) {
         let truth = synthetic::reference(model);
         let data = synthetic::samples(&truth, SAMPLES, NOISE, 7);
         let spec = FitSpec::new(model);
@@ -193,7 +196,7 @@ fn main() {
             }),
         );
     }
-    let (misfit, worst_rmse, worst_time) = misfit();
+    let (misfit, worst_rmse, worst_time) = misfit(cases);
     report.insert("misfit".into(), misfit);
     report.insert("misfit_max_rmse_ratio".into(), worst_rmse.into());
     report.insert("misfit_max_time_ratio".into(), worst_time.into());
@@ -251,7 +254,7 @@ const RETRO_MODELS: [ModelId; 5] = [
 
 /// Ours against the peer's multi-start on data no model is exactly; returns
 /// the table and the worst RMSE and time ratios.
-fn misfit() -> (Value, f64, f64) {
+fn misfit(limit: usize) -> (Value, f64, f64) {
     let mut rng = rand::rngs::StdRng::seed_from_u64(24);
     let mut cases = Vec::new();
     let (mut worst_rmse, mut worst_time) = (0.0f64, 0.0f64);
@@ -267,6 +270,7 @@ fn misfit() -> (Value, f64, f64) {
                 if Some(model) == g.model
                     || (samples > 7000 && model == ModelId::BeckmannRetro)
                     || (samples > 7000 && model == ModelId::BlinnRetro)
+                    || cases.len() >= limit
                 {
                     continue;
                 }
@@ -305,6 +309,7 @@ fn misfit() -> (Value, f64, f64) {
                 cases.push(json!({
                     "samples": samples, "material": g.name, "model": model.name(), "rmse": r_ours, "peer_rmse": r_peer,
                     "rmse_ratio": rmse_ratio, "seconds": ours.seconds, "peer_seconds": peer_seconds, "time_ratio": time_ratio,
+                    "peer_failed_starts": peer["failed_starts"], "peer_params": peer_params,
                     "at_bound": ours.at_bound, "params": ours.material.params,
                 }));
             }
