@@ -29,20 +29,16 @@ fn ra_at(v: &Value, alpha: f64, beta: f64, epsilon: f64) -> &Value {
         .unwrap_or_else(|| panic!("no R_A at α {alpha}, β {beta}, ε {epsilon}"))
 }
 
+/// `gonio coefficients --json` of a Lambertian `kd = 0.5` with these geometry options.
+fn lambert(geometry: &[&str]) -> Value {
+    let mut args = vec!["coefficients", "--model", "lambert", "--params", "kd=0.5", "--json"];
+    args.extend_from_slice(geometry);
+    json(&args)
+}
+
 #[test]
 fn lambertian_ra_and_rl_by_the_named_sets() {
-    let v = json(&[
-        "coefficients",
-        "--model",
-        "lambert",
-        "--params",
-        "kd=0.5",
-        "--set",
-        "astm-e810",
-        "--set",
-        "en1436",
-        "--json",
-    ]);
+    let v = lambert(&["--set", "astm-e810", "--set", "en1436"]);
     assert_eq!(v["ra"].as_array().unwrap().len(), 70);
     for eps in [0.0, 90.0] {
         let ra = ra_at(&v, 0.2, -4.0, eps);
@@ -56,18 +52,7 @@ fn lambertian_ra_and_rl_by_the_named_sets() {
     assert!((rl["beta_deg"].as_f64().unwrap() - 88.76).abs() < 1e-9);
     assert_eq!(v["wavelength_nm"].as_f64(), Some(633.0));
     // A negative entrance angle in a list, as the README writes it.
-    let v = json(&[
-        "coefficients",
-        "--model",
-        "lambert",
-        "--params",
-        "kd=0.5",
-        "--alpha",
-        "0.2",
-        "--beta",
-        "-4,30",
-        "--json",
-    ]);
+    let v = lambert(&["--alpha", "0.2", "--beta", "-4,30"]);
     assert_eq!(v["ra"].as_array().unwrap().len(), 2);
     assert!((ra_at(&v, 0.2, -4.0, 0.0)["value"].as_f64().unwrap() - 0.15838).abs() < 1e-3);
     // The text output says the values are not photometric.
