@@ -20,6 +20,7 @@
 //!   model fitted to the same data: only its slope is used).
 
 use crate::brdf::{Directions, Material};
+use crate::fit::{Dataset, Observation, Units};
 use crate::samples_csv::Row;
 use crate::uncertainty::{Components, HeadUncertainty, K_COVERAGE, SHARED};
 use anyhow::{bail, Result};
@@ -271,13 +272,6 @@ impl Calibration {
                 let noise = r.noise_v as f64 / r.amplitude_v.abs().max(f32::MIN_POSITIVE) as f64;
                 let split = if through_splitter(r) { self.splitter_rel_sd } else { 0.0 };
                 let slopes = budget.slope.as_ref().map_or([0.0; 3], |m| stage_slopes(m, r));
-                let shifts = [
-                    f * self.rho_ref_u / self.rho_ref,
-                    -f * self.scale_rel_sd,
-                    slopes[0] * head.zero_deg[0],
-                    slopes[1] * head.zero_deg[1],
-                    slopes[2] * head.zero_deg[2],
-                ];
                 let u = Components {
                     noise: f * noise,
                     rho_ref: f * self.rho_ref_u / self.rho_ref,
@@ -288,6 +282,14 @@ impl Calibration {
                     angle: (0..3).map(|a| (slopes[a] * head.axis_deg(a)).powi(2)).sum::<f64>().sqrt(),
                     stray: head.stray_u_a() / (d * self.scale_a_sr * t * cos_o(r)),
                 };
+                // A higher plate reflectance raises every value, a higher K lowers it.
+                let shifts = [
+                    u.rho_ref,
+                    -u.scale,
+                    slopes[0] * head.zero_deg[0],
+                    slopes[1] * head.zero_deg[1],
+                    slopes[2] * head.zero_deg[2],
+                ];
                 CalibratedRow {
                     raw: r.clone(),
                     laser_power: d,
@@ -356,19 +358,14 @@ pub fn budget_by_incidence(rows: &[CalibratedRow]) -> Vec<IncidenceBudget> {
         v.sort_by(f64::total_cmp);
         v.get(v.len() / 2).copied().unwrap_or(0.0)
     };
-    let mut angles: Vec<f64> = rows
-        .iter()
-        .map(|r| (r.raw.target_theta_i_deg as f64 * 10.0).round() / 10.0)
-        .collect();
+    let incidence = |r: &CalibratedRow| (r.raw.target_theta_i_deg as f64 * 10.0).round() / 10.0;
+    let mut angles: Vec<f64> = rows.iter().map(incidence).collect();
     angles.sort_by(f64::total_cmp);
     angles.dedup();
     angles
         .into_iter()
         .filter_map(|ti| {
-            let at: Vec<&CalibratedRow> = rows
-                .iter()
-                .filter(|r| r.usable && r.brdf_sr != 0.0 && ((r.raw.target_theta_i_deg as f64 * 10.0).round() / 10.0) == ti)
-                .collect();
+            let at: Vec<&CalibratedRow> = rows.iter().filter(|r| r.usable && r.brdf_sr != 0.0 && incidence(r) == ti).collect();
             if at.is_empty() {
                 return None;
             }
@@ -383,6 +380,29 @@ pub fn budget_by_incidence(rows: &[CalibratedRow]) -> Vec<IncidenceBudget> {
             })
         })
         .collect()
+}
+
+/// The usable calibrated values as a data set in `f_r`, each with its
+/// uncertainty and the shifts of the inputs every sample shares.
+pub fn dataset(rows: &[CalibratedRow]) -> Dataset {
+    Dataset {
+        units: Units::Fr,
+        observations: rows
+            .iter()
+            .filter(|r| r.usable)
+            .map(|r| Observation {
+                theta_i: (r.raw.theta_i_deg as f64).to_radians(),
+                theta_o: (r.raw.theta_o_deg as f64).to_radians(),
+                dphi: (r.raw.dphi_deg as f64).to_radians(),
+                value: r.brdf_sr,
+                sigma: Some(r.brdf_sigma_sr).filter(|s| *s > 0.0),
+                shared: r.shifts,
+            })
+            .collect(),
+        metadata: Vec::new(),
+        units_stated: true,
+        warnings: Vec::new(),
+    }
 }
 
 /// A raw row with its calibrated value beside it (`calibrated.csv`).

@@ -13,13 +13,19 @@ pub fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn normalize(a: [f64; 3]) -> [f64; 3] {
+pub fn normalize(a: [f64; 3]) -> [f64; 3] {
     let n = dot(a, a).sqrt();
     [a[0] / n, a[1] / n, a[2] / n]
 }
 
-fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+pub fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+}
+
+/// Angle (rad) between two directions, accurate near 0 and π (not `acos`).
+pub fn angle_between(a: [f64; 3], b: [f64; 3]) -> f64 {
+    let c = cross(a, b);
+    dot(c, c).sqrt().atan2(dot(a, b))
 }
 
 /// `(a + b)/‖a + b‖`, or the normal when the sum vanishes.
@@ -66,22 +72,33 @@ impl Directions {
         let n = [ta.cos() * om.cos(), ta.cos() * om.sin(), ta.sin()];
         let l_lab = [1.0, 0.0, 0.0];
         let d_lab = [ps.cos(), ps.sin(), 0.0];
-        let (cl, cd) = (dot(n, l_lab), dot(n, d_lab));
-        if cl <= 0.0 || cd <= 0.0 {
+        if dot(n, l_lab) <= 0.0 || dot(n, d_lab) <= 0.0 {
             return None;
         }
-        let proj = [l_lab[0] - cl * n[0], l_lab[1] - cl * n[1], l_lab[2] - cl * n[2]];
-        let x = if dot(proj, proj) > 1e-24 {
-            normalize(proj)
-        } else {
-            normalize(cross(n, [0.0, 0.0, 1.0]))
+        Some(Self::in_frame(n, l_lab, d_lab, cross(n, [0.0, 0.0, 1.0])))
+    }
+
+    /// Light `l` and view `v` (unit vectors of any frame) in the frame of the
+    /// unit normal `n`: `z = n`, `x` along the light's projection on the
+    /// surface, or along `tangent`'s where the light is on the normal.
+    pub fn in_frame(n: [f64; 3], l: [f64; 3], v: [f64; 3], tangent: [f64; 3]) -> Self {
+        let on_surface = |w: [f64; 3]| {
+            let c = dot(n, w);
+            [w[0] - c * n[0], w[1] - c * n[1], w[2] - c * n[2]]
         };
+        let proj = on_surface(l);
+        let x = normalize(if dot(proj, proj) > 1e-24 { proj } else { on_surface(tangent) });
         let y = cross(n, x);
-        let to_sample = |w: [f64; 3]| [dot(w, x), dot(w, y), dot(w, n)];
-        Some(Directions {
-            l: to_sample(l_lab),
-            v: to_sample(d_lab),
-        })
+        let to = |w: [f64; 3]| [dot(w, x), dot(w, y), dot(w, n)];
+        Directions { l: to(l), v: to(v) }
+    }
+
+    /// `(θi, θo, Δφ)` in radians, `Δφ = φv − φl` in (−π, π] (0 where a
+    /// direction is the normal's and has no azimuth).
+    pub fn angles(&self) -> (f64, f64, f64) {
+        let polar = |w: [f64; 3]| w[0].hypot(w[1]).atan2(w[2]);
+        let dphi = self.v[1].atan2(self.v[0]) - self.l[1].atan2(self.l[0]);
+        (polar(self.l), polar(self.v), dphi.sin().atan2(dphi.cos()))
     }
 
     /// `cos θi`.

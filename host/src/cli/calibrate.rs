@@ -4,7 +4,7 @@
 
 use crate::brdf::{Material, ModelId, Param};
 use crate::calibration::{self, Budget, CalibratedRow, Calibration};
-use crate::fit::{self, Dataset, FitSpec, Observation, Units};
+use crate::fit::{self, FitSpec};
 use crate::samples_csv;
 use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Context, Result};
@@ -132,29 +132,6 @@ pub struct Calibrated {
     pub csv: PathBuf,
 }
 
-/// The usable calibrated values as a data set in `f_r`, each with its
-/// uncertainty and the shifts of the inputs every sample shares.
-pub fn dataset(rows: &[CalibratedRow]) -> Dataset {
-    Dataset {
-        units: Units::Fr,
-        observations: rows
-            .iter()
-            .filter(|r| r.usable)
-            .map(|r| Observation {
-                theta_i: (r.raw.theta_i_deg as f64).to_radians(),
-                theta_o: (r.raw.theta_o_deg as f64).to_radians(),
-                dphi: (r.raw.dphi_deg as f64).to_radians(),
-                value: r.brdf_sr,
-                sigma: Some(r.brdf_sigma_sr).filter(|s| *s > 0.0),
-                shared: r.shifts,
-            })
-            .collect(),
-        metadata: Vec::new(),
-        units_stated: true,
-        warnings: Vec::new(),
-    }
-}
-
 /// The model whose slope gives the angle component.
 fn slope_model(a: &CalibrateArgs, first: &[CalibratedRow]) -> Result<Option<Material>> {
     if let Some(path) = &a.slope_fit {
@@ -168,7 +145,7 @@ fn slope_model(a: &CalibrateArgs, first: &[CalibratedRow]) -> Result<Option<Mate
         param: Param::View,
         ..FitSpec::new(model)
     };
-    let f = fit::fit(&dataset(first), &spec).with_context(|| format!("fitting {} for the BRDF's slope", model.name()))?;
+    let f = fit::fit(&calibration::dataset(first), &spec).with_context(|| format!("fitting {} for the BRDF's slope", model.name()))?;
     Ok(Some(f.material))
 }
 

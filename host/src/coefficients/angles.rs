@@ -15,7 +15,6 @@
 //! it changes nothing here and is carried for the report only.
 //! Derivation and hand-computed cases: `docs/retroreflection.md`.
 
-use crate::brdf::frame::dot;
 use crate::brdf::Directions;
 use serde::Serialize;
 
@@ -73,40 +72,22 @@ impl Cie {
     }
 }
 
-/// Light `l` and view `v` (lab frame) expressed in the frame of normal `n`,
-/// `x` along the light's projection (or, at normal incidence, along the
-/// first axis).
+/// Light `l` and view `v` (lab frame) in the frame of normal `n`, `x`
+/// along the light's projection (or, at normal incidence, the first axis').
 pub fn in_sample_frame(n: [f64; 3], l: [f64; 3], v: [f64; 3]) -> Directions {
-    let cl = dot(n, l);
-    let proj = [l[0] - cl * n[0], l[1] - cl * n[1], l[2] - cl * n[2]];
-    let len = dot(proj, proj).sqrt();
-    let x = if len > 1e-15 {
-        [proj[0] / len, proj[1] / len, proj[2] / len]
-    } else {
-        // Normal incidence: any tangent will do; take the first axis' projection.
-        let fx = [1.0 - n[0] * n[0], -n[0] * n[1], -n[0] * n[2]];
-        let f = dot(fx, fx).sqrt();
-        [fx[0] / f, fx[1] / f, fx[2] / f]
-    };
-    let y = [n[1] * x[2] - n[2] * x[1], n[2] * x[0] - n[0] * x[2], n[0] * x[1] - n[1] * x[0]];
-    let to = |w: [f64; 3]| [dot(w, x), dot(w, y), dot(w, n)];
-    Directions { l: to(l), v: to(v) }
+    Directions::in_frame(n, l, v, [1.0, 0.0, 0.0])
 }
 
 /// `(θi, θo, |Δφ|)` in degrees of a pair of directions.
 pub fn sample_angles_deg(d: &Directions) -> [f64; 3] {
-    let polar = |w: [f64; 3]| w[0].hypot(w[1]).atan2(w[2]).to_degrees();
-    let azimuth = |w: [f64; 3]| w[1].atan2(w[0]);
-    let mut dphi = (azimuth(d.v) - azimuth(d.l)).to_degrees().abs();
-    if dphi > 180.0 {
-        dphi = 360.0 - dphi;
-    }
-    [polar(d.l), polar(d.v), dphi]
+    let (ti, to, dphi) = d.angles();
+    [ti.to_degrees(), to.to_degrees(), dphi.abs().to_degrees()]
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::brdf::frame::dot;
 
     fn close(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {
         a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol)

@@ -9,6 +9,7 @@
 //! narrow-lobe case against a brute-force Monte Carlo average.
 
 use super::angles::{in_sample_frame, Cie};
+use crate::brdf::frame::{cross, normalize};
 use crate::brdf::Directions;
 use serde::Serialize;
 
@@ -39,12 +40,7 @@ fn disc(axis: [f64; 3], diameter_deg: f64) -> Vec<[f64; 3]> {
     let rho = (diameter_deg / 2.0).to_radians();
     // Two unit vectors perpendicular to the axis.
     let helper = if axis[0].abs() < 0.9 { [1.0, 0.0, 0.0] } else { [0.0, 1.0, 0.0] };
-    let cross = |a: [f64; 3], b: [f64; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-    let e1 = {
-        let c = cross(axis, helper);
-        let n = (c[0] * c[0] + c[1] * c[1] + c[2] * c[2]).sqrt();
-        [c[0] / n, c[1] / n, c[2] / n]
-    };
+    let e1 = normalize(cross(axis, helper));
     let e2 = cross(axis, e1);
     let mut out = Vec::with_capacity(RINGS * PER_RING);
     for ring in 0..RINGS {

@@ -4,6 +4,7 @@
 
 use super::aperture;
 use super::Request;
+use crate::brdf::frame::angle_between;
 use crate::brdf::{Directions, Material};
 use crate::fit::{Dataset, Units};
 use anyhow::{bail, Result};
@@ -62,13 +63,6 @@ pub struct Estimate {
 
 /// How many measured geometries an interpolated value leans on.
 const NEIGHBOURS: usize = 4;
-
-fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let c = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-    (c[0] * c[0] + c[1] * c[1] + c[2] * c[2])
-        .sqrt()
-        .atan2(a[0] * b[0] + a[1] * b[1] + a[2] * b[2])
-}
 
 /// Directions with the view folded onto `Δφ ≥ 0`.
 fn folded(d: &Directions) -> Directions {
@@ -195,7 +189,7 @@ fn interpolate(points: &[Point], r: &Request) -> Estimate {
     let want = folded(&r.geometry.directions());
     let mut near: Vec<(f64, &Point)> = points
         .iter()
-        .map(|p| (angle(p.d.l, want.l).hypot(angle(p.d.v, want.v)), p))
+        .map(|p| (angle_between(p.d.l, want.l).hypot(angle_between(p.d.v, want.v)), p))
         .collect();
     near.sort_by(|a, b| a.0.total_cmp(&b.0));
     near.truncate(NEIGHBOURS);

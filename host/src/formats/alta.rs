@@ -28,6 +28,8 @@
 //! lower and upper ends (absolute); both taken as k = 2 intervals. The
 //! writer uses `#VS 2` when every value has an uncertainty.
 
+use crate::brdf::frame::dot;
+use crate::brdf::Directions;
 use crate::fit::{Dataset, Observation, Units};
 use crate::uncertainty::K_COVERAGE;
 use anyhow::{anyhow, bail, Result};
@@ -118,15 +120,7 @@ impl ParamIn {
 
 /// `(θi, θo, Δφ)` (radians) of a light and a view; `None` for a zero vector.
 fn angles(l: Vec3, v: Vec3) -> Option<(f64, f64, f64)> {
-    let norm = |w: Vec3| (w[0] * w[0] + w[1] * w[1] + w[2] * w[2]).sqrt();
-    let (nl, nv) = (norm(l), norm(v));
-    if !(nl > 0.0 && nv > 0.0) {
-        return None;
-    }
-    let polar = |w: Vec3| w[0].hypot(w[1]).atan2(w[2]);
-    let dphi = v[1].atan2(v[0]) - l[1].atan2(l[0]);
-    let dphi = dphi.sin().atan2(dphi.cos());
-    Some((polar(l), polar(v), dphi))
+    (dot(l, l) > 0.0 && dot(v, v) > 0.0).then(|| Directions { l, v }.angles())
 }
 
 fn units(s: &str) -> Option<Units> {

@@ -143,9 +143,8 @@ impl World {
 
     /// Reflection factor at a direction pair: a speck of dust or one.
     pub fn defect(&self, d: &Directions) -> f64 {
-        let ti = d.l[2].clamp(-1.0, 1.0).acos().to_degrees();
-        let to = d.v[2].clamp(-1.0, 1.0).acos().to_degrees();
-        let dp = d.v[1].atan2(d.v[0]).to_degrees().abs();
+        let (ti, to, dp) = d.angles();
+        let (ti, to, dp) = (ti.to_degrees(), to.to_degrees(), dp.abs().to_degrees());
         let near = |a: f64, b: f32| (a - b as f64).abs() < DUST_TOLERANCE_DEG;
         let hit = self
             .dust

@@ -12,6 +12,7 @@
 //! `cargo run --release -p tests --bin coverage-bench [-- SCANS]` (default 100).
 
 use gonio_host::brdf::{Directions, Material, ModelId, Param, Specimen};
+use gonio_host::calibration;
 use gonio_host::cli::calibrate::{self, CalibrateArgs};
 use gonio_host::cli::scan::{demo_scan, OutputArgs};
 use gonio_host::coefficients::{self, Source};
@@ -80,7 +81,7 @@ fn main() -> anyhow::Result<()> {
             groups.entry((g.target_theta_i_deg.round() as i32, near)).or_default().add(inside);
         }
         // The fit and the coefficients from it.
-        let data = calibrate::dataset(&c.rows);
+        let data = calibration::dataset(&c.rows);
         let spec = FitSpec {
             param: Param::View,
             weighting: Weighting::Sigma,
