@@ -3,7 +3,11 @@
 //! parameters as uniforms), and g++ compiles the same text as C++ against a
 //! small GLSL shim (tests/glsl/shim.hpp) so that it can be evaluated and
 //! compared with the host's Rust model at the Belcour grid and random
-//! geometries, seen from a random surface frame. CI installs both tools.
+//! geometries, seen from a random surface frame. CI installs both tools and
+//! sets `GONIO_REQUIRE_GLSL_TOOLS`, so there a missing tool fails the test;
+//! on a machine with only a Rust toolchain (the README's `cargo test`) the
+//! steps whose tool is missing are skipped, said so on stderr, and the
+//! parameter blocks are still checked.
 
 use gonio_host::brdf::{Directions, Material, ModelId, Param};
 use gonio_host::formats::brdf_explorer;
@@ -46,6 +50,20 @@ fn run(cmd: &mut Command, what: &str) -> String {
         String::from_utf8_lossy(&out.stderr)
     );
     String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
+/// Whether `tool` runs here; with `GONIO_REQUIRE_GLSL_TOOLS` set (CI) a
+/// missing one fails the test instead.
+fn available(tool: &str) -> bool {
+    let found = Command::new(tool).arg("--version").output().is_ok();
+    if !found {
+        assert!(
+            std::env::var_os("GONIO_REQUIRE_GLSL_TOOLS").is_none(),
+            "{tool} is required here (GONIO_REQUIRE_GLSL_TOOLS): install glslang-tools and g++"
+        );
+        eprintln!("{tool} not found: its check of the exported shaders is skipped (install glslang-tools and g++; .ci/run does)");
+    }
+    found
 }
 
 /// Compiles the shader as a GLSL 4.10 fragment shader, parameters as uniforms.
@@ -168,6 +186,7 @@ fn geometries() -> Vec<(f64, f64, f64)> {
 fn brdf_explorer_shaders_compile_and_equal_the_models() {
     let dir = tempfile::tempdir().unwrap();
     let geos = geometries();
+    let (glslang, cpp) = (available("glslangValidator"), available("g++"));
     for model in ModelId::ALL {
         let params: &[Param] = if model.has_retro_cosine() {
             &[Param::View, Param::Back]
@@ -189,7 +208,12 @@ fn brdf_explorer_shaders_compile_and_equal_the_models() {
                 assert_eq!(v, want, "{name}: default of {p}");
                 assert!(lo <= v && v <= hi && lo < hi, "{name}: {p} range [{lo}, {hi}] ∌ {v}");
             }
-            check_glsl(dir.path(), &name, &text);
+            if glslang {
+                check_glsl(dir.path(), &name, &text);
+            }
+            if !cpp {
+                continue;
+            }
             let want: Vec<f64> = geos
                 .iter()
                 .map(|&(ti, to, dp)| m.eval(&Directions::from_angles(ti, to, dp)))
