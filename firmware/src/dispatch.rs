@@ -4,8 +4,8 @@
 //! shrinks keys when unambiguous) and replies use the same width.
 
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
-    MoveEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
+    MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
 use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, ScanSpec};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
@@ -23,6 +23,8 @@ pub enum Command {
     Measure(MeasureRequest),
     Scan(ScanSpec),
     Abort,
+    Pause,
+    Continue,
     Detection(DetectionSettings),
     Sanity(SanityConfig),
     Calibrate(CalibrateRequest),
@@ -44,6 +46,27 @@ pub fn key_is(key: Key, got: &VarKey) -> bool {
     let mut k = VarKey::Key8(key);
     k.shrink_to(got.kind());
     k == *got
+}
+
+/// Whether a sealed frame asks to stop what runs (abort) or to hold a scan
+/// (pause): the requests the head acts on in the middle of an operation.
+/// Anything that fails its check or its header is neither.
+pub fn stop_request(sealed: &[u8]) -> Option<StopRequest> {
+    let (hdr, _) = crate::check::open(sealed).and_then(VarHeader::take_from_slice)?;
+    if is::<AbortEndpoint>(&hdr.key) {
+        Some(StopRequest::Abort)
+    } else if is::<PauseEndpoint>(&hdr.key) {
+        Some(StopRequest::Pause)
+    } else {
+        None
+    }
+}
+
+/// See [`stop_request`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StopRequest {
+    Abort,
+    Pause,
 }
 
 fn is<E: Endpoint>(key: &VarKey) -> bool {
@@ -72,6 +95,10 @@ pub fn decode(frame: &[u8]) -> Result<(VarHeader, Command), DecodeError> {
         body(hdr, rest).map(Command::Scan)
     } else if is::<AbortEndpoint>(k) {
         body::<()>(hdr, rest).map(|_| Command::Abort)
+    } else if is::<PauseEndpoint>(k) {
+        body::<()>(hdr, rest).map(|_| Command::Pause)
+    } else if is::<ContinueEndpoint>(k) {
+        body::<()>(hdr, rest).map(|_| Command::Continue)
     } else if is::<DetectionEndpoint>(k) {
         body(hdr, rest).map(Command::Detection)
     } else if is::<SanityEndpoint>(k) {

@@ -3,6 +3,8 @@
 //! Requests are served one at a time in arrival order. A scan is accepted at
 //! once and then advanced one point per loop turn; between points the head
 //! looks for waiting requests, so status and abort are answered mid-scan.
+//! Every change of what the head does goes through the state table
+//! ([`crate::state`]) in [`Head::apply`].
 
 use crate::board::HeadConfig;
 use crate::detector::{Detector, Measurement};
@@ -11,6 +13,7 @@ use crate::kinematics;
 use crate::motion::plan::Planner;
 use crate::motion::{self, Position};
 use crate::sanity::Sanity;
+use crate::state::{self, Drivers, Event, Laser, Mode};
 use crate::{homing, units};
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
@@ -54,6 +57,9 @@ pub(crate) struct ScanRun {
     pub(crate) next_order: u32,
     pub(crate) measured: u32,
     pub(crate) skipped: u32,
+    /// The point taken from the plan and not yet done: a stop in the middle
+    /// of it leaves it here, and continuing visits it again.
+    pub(crate) current: Option<(u32, Geometry)>,
 }
 
 pub struct Head<B: Board> {
@@ -74,10 +80,16 @@ pub struct Head<B: Board> {
     samples_flagged: u32,
     samples_remeasured: u32,
     pub(crate) last_fault: Option<Fault>,
-    /// Longest host silence during a scan (µs), 0 for no watch.
-    host_timeout_us: u64,
+    /// What the head is doing (the state table's state).
+    pub(crate) mode: Mode,
+    drivers_on: bool,
+    pub(crate) estop_open: bool,
+    /// Host watch and idle times.
+    pub(crate) safety: SafetySettings,
     /// When the host was last heard (µs, the head's clock).
-    last_heard_us: u64,
+    pub(crate) last_heard_us: u64,
+    /// When the last operation ended (µs): the idle times count from it.
+    pub(crate) rest_since_us: u64,
     suspect: SuspectRuns,
     /// Scan runs started since power-up.
     runs: u32,
@@ -101,8 +113,12 @@ impl<B: Board> Head<B> {
             samples_flagged: 0,
             samples_remeasured: 0,
             last_fault: None,
-            host_timeout_us: 0,
+            mode: Mode::Idle,
+            drivers_on: false,
+            estop_open: false,
+            safety: SafetySettings::default(),
             last_heard_us: 0,
+            rest_since_us: 0,
             suspect: SuspectRuns::default(),
             runs: 0,
         };
@@ -122,12 +138,76 @@ impl<B: Board> Head<B> {
         self.detector.stop(&mut self.hw);
         let _ = self.hw.laser.set_low();
         self.laser_on = false;
+        self.drivers(false);
+    }
+
+    /// Laser enable low and the chop stopped, at once.
+    fn laser_off(&mut self) {
+        let _ = self.hw.laser.set_low();
+        self.laser_on = false;
+        self.detector.stop(&mut self.hw);
+    }
+
+    fn drivers(&mut self, on: bool) {
         for en in self.hw.enable_n.iter_mut() {
-            let _ = en.set_high();
+            let _ = if on { en.set_low() } else { en.set_high() };
         }
+        self.drivers_on = on;
+    }
+
+    /// Applies one event of the state table: a refused request changes
+    /// nothing; otherwise the laser and the drivers follow the table and the
+    /// head takes the new state. The only way the state changes.
+    pub(crate) fn apply(&mut self, e: Event) -> Result<(), Fault> {
+        let t = state::transition(self.mode, e);
+        if let Some(f) = t.refused {
+            return Err(f);
+        }
+        if t.laser == Laser::Off {
+            self.laser_off();
+        }
+        match t.drivers {
+            Drivers::Enable => self.drivers(true),
+            Drivers::Disable => self.drivers(false),
+            Drivers::Keep => {}
+        }
+        if !t.to.busy() && self.mode.busy() {
+            self.rest_since_us = self.hw.clock.now_us();
+        }
+        self.mode = t.to;
+        Ok(())
+    }
+
+    /// Ends an operation in the table: done, or failed (safe state).
+    fn finish<T>(&mut self, r: Reply<T>) -> Reply<T> {
+        match &r {
+            Ok(_) => {
+                let _ = self.apply(Event::Done);
+            }
+            Err(f) => {
+                self.last_fault = Some(*f);
+                let _ = self.apply(Event::Failed);
+            }
+        }
+        r
+    }
+
+    /// Stops whatever runs after `e` (abort, pause, link loss, host silence,
+    /// E-STOP): the laser goes off in the transition, before anything else;
+    /// then the motion in flight decelerates from its current speed, its
+    /// steps counted in, and the head takes the state the stop asked for.
+    pub(crate) async fn stop(&mut self, e: Event) {
+        if self.apply(e).is_err() {
+            return;
+        }
+        motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
+        let _ = self.apply(Event::Stopped);
     }
 
     fn laser(&mut self, on: bool) -> Result<(), Fault> {
+        if on && !self.mode.laser_allowed() {
+            return Err(Fault::Busy);
+        }
         let r = if on { self.hw.laser.set_high() } else { self.hw.laser.set_low() };
         r.map_err(|_| Fault::Gpio)?;
         self.laser_on = on;
@@ -153,16 +233,22 @@ impl<B: Board> Head<B> {
     }
 
     pub fn status(&self) -> Status {
+        let (next_order, total) = self.scan.as_ref().map_or((0, 0), |s| (s.next_order, s.total));
         Status {
-            state: match &self.scan {
-                Some(s) => HeadState::Scanning {
-                    next_order: s.next_order,
-                    total: s.total,
-                },
-                None => HeadState::Idle,
+            state: match self.mode {
+                Mode::Idle => HeadState::Idle,
+                Mode::Homing => HeadState::Homing,
+                Mode::Moving => HeadState::Moving,
+                Mode::Measuring => HeadState::Measuring,
+                Mode::Scanning => HeadState::Scanning { next_order, total },
+                Mode::Paused => HeadState::Paused { next_order, total },
+                Mode::Stopping(_) => HeadState::Stopping,
+                Mode::Faulted => HeadState::Faulted,
             },
             homed: self.pos.all_homed(),
             laser_on: self.laser_on,
+            drivers_enabled: self.drivers_on,
+            estop_open: self.estop_open,
             axes: self.pos.angles(&self.cfg),
             detection: *self.detector.settings(),
             samples_sent: self.seq,
@@ -174,17 +260,8 @@ impl<B: Board> Head<B> {
         }
     }
 
-    fn note<T>(&mut self, r: Reply<T>) -> Reply<T> {
-        if let Err(f) = &r {
-            self.last_fault = Some(*f);
-        }
-        r
-    }
-
     pub async fn home(&mut self, req: HomeRequest) -> Reply<gonio_shared::AxisAngles> {
-        if self.scan.is_some() {
-            return Err(Fault::Busy);
-        }
+        self.apply(Event::Home)?;
         let wanted = [req.rotation, req.cradle, req.arm];
         let mut r = Ok(());
         for axis in Axis::ALL {
@@ -205,7 +282,7 @@ impl<B: Board> Head<B> {
             self.safe_state();
         }
         let r = r.map(|_| self.pos.angles(&self.cfg));
-        self.note(r)
+        self.finish(r)
     }
 
     /// Moves to a geometry; refuses before moving when it is unreachable.
@@ -229,11 +306,9 @@ impl<B: Board> Head<B> {
     }
 
     pub async fn move_to(&mut self, g: Geometry) -> Reply<MoveReport> {
-        if self.scan.is_some() {
-            return Err(Fault::Busy);
-        }
+        self.apply(Event::Move)?;
         let r = self.goto(&g).await;
-        self.note(r)
+        self.finish(r)
     }
 
     /// Moves (if asked), settles, and takes one sample with the laser on.
@@ -315,23 +390,30 @@ impl<B: Board> Head<B> {
     }
 
     pub async fn measure(&mut self, req: MeasureRequest) -> Reply<Sample> {
-        if self.scan.is_some() {
-            return Err(Fault::Busy);
-        }
+        self.apply(Event::Measure)?;
         let r = self.acquire(req.at, None).await;
+        self.rest_laser();
+        self.finish(r)
+    }
+
+    /// After a measurement at rest: the chop stops, and the laser goes off
+    /// unless it is to stay on for its idle time.
+    fn rest_laser(&mut self) {
         self.detector.stop(&mut self.hw);
-        let _ = self.laser(false);
-        self.note(r)
+        if self.safety.laser_idle_s == 0.0 {
+            let _ = self.laser(false);
+        }
     }
 
     pub fn start_scan(&mut self, spec: ScanSpec) -> Reply<ScanAccepted> {
-        if self.scan.is_some() {
-            return Err(Fault::Busy);
+        if self.mode != Mode::Idle && self.mode != Mode::Paused {
+            return Err(state::transition(self.mode, Event::Scan).refused.unwrap_or(Fault::Busy));
         }
         let total = spec.validate()?;
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);
         }
+        self.apply(Event::Scan)?;
         let first_order = spec.first_order;
         // The plan always starts from the park position, wherever the stages
         // are, so that the host and a resumed scan replay the same order.
@@ -348,6 +430,7 @@ impl<B: Board> Head<B> {
             next_order: first_order,
             measured: 0,
             skipped: 0,
+            current: None,
         });
         Ok(ScanAccepted {
             points: total,
@@ -356,21 +439,40 @@ impl<B: Board> Head<B> {
         })
     }
 
-    pub fn abort(&mut self) -> Status {
+    /// Drops a scan, running or held, with a `Stopped` event for `why`.
+    pub(crate) fn drop_scan(&mut self, why: Fault) {
         if let Some(run) = self.scan.take() {
-            self.last_fault = Some(Fault::Aborted);
+            self.last_fault = Some(why);
             self.pending_event = Some(ScanEvent::Stopped {
                 run: run.run,
                 next_order: run.next_order,
-                reason: Fault::Aborted,
+                reason: why,
             });
         }
-        self.safe_state();
+    }
+
+    /// Holds the running scan at its next point, with a `Paused` event.
+    pub(crate) fn hold_scan(&mut self, why: Fault) {
+        if let Some(run) = &self.scan {
+            self.last_fault = Some(why);
+            self.pending_event = Some(ScanEvent::Paused {
+                run: run.run,
+                next_order: run.next_order,
+                reason: why,
+            });
+        }
+    }
+
+    /// Abort at rest (a running operation is stopped by the serve loop first):
+    /// a held scan is dropped, the laser and the drivers go off.
+    pub fn abort(&mut self) -> Status {
+        self.drop_scan(Fault::Aborted);
+        let _ = self.apply(Event::Abort);
         self.status()
     }
 
     pub fn configure_detection(&mut self, s: DetectionSettings) -> Reply<gonio_shared::DetectionReport> {
-        if self.scan.is_some() {
+        if !matches!(self.mode, Mode::Idle | Mode::Faulted) {
             return Err(Fault::Busy);
         }
         self.detector.configure(&mut self.hw, s)
@@ -378,39 +480,58 @@ impl<B: Board> Head<B> {
 
     /// Learns the detection chain at the current position (laser on).
     pub async fn calibrate(&mut self, req: CalibrateRequest) -> Reply<CalibrationReport> {
-        if self.scan.is_some() {
-            return Err(Fault::Busy);
-        }
         // Refused before the laser goes on (found by the validation property test).
+        if let Some(f) = state::transition(self.mode, Event::Measure).refused {
+            return Err(f);
+        }
         self.detector.check_calibration(req.periods)?;
+        self.apply(Event::Measure)?;
         let r = match self.laser(true) {
             Ok(()) => self.detector.calibrate(&mut self.hw, &self.cfg, req.periods).await,
             Err(f) => Err(f),
         };
-        self.detector.stop(&mut self.hw);
-        let _ = self.laser(false);
-        self.note(r)
+        self.rest_laser();
+        self.finish(r)
     }
 
-    /// Sets the host watch; refused (and nothing changed) for an invalid timeout.
+    /// Sets the host watch and the idle times; refused (and nothing
+    /// changed) for an invalid time.
     pub fn configure_safety(&mut self, c: SafetySettings) -> Reply<()> {
         c.validate()?;
-        self.host_timeout_us = units::seconds_to_us(c.host_timeout_s) as u64;
+        self.safety = c;
         self.last_heard_us = self.hw.clock.now_us();
         Ok(())
     }
 
-    /// Notes that a frame came from the host.
-    pub(crate) fn heard_host(&mut self) {
-        self.last_heard_us = self.hw.clock.now_us();
+    /// When the host watch fires, if it is on (µs on the head's clock).
+    pub(crate) fn silence_deadline(&self) -> Option<u64> {
+        let t = units::seconds_to_us(self.safety.host_timeout_s) as u64;
+        (t > 0).then(|| self.last_heard_us.saturating_add(t))
     }
 
-    /// The run and position of a running scan, if the host has been silent
-    /// longer than its timeout.
-    pub(crate) fn host_silent(&self) -> Option<(u32, u32)> {
-        let run = self.scan.as_ref()?;
-        let silent = self.hw.clock.now_us().saturating_sub(self.last_heard_us);
-        (self.host_timeout_us > 0 && silent > self.host_timeout_us).then_some((run.run, run.next_order))
+    /// The next idle deadline at rest: the drivers', then the laser's.
+    pub(crate) fn rest_deadline(&self) -> Option<u64> {
+        let after = |s: f32| self.rest_since_us.saturating_add(units::seconds_to_us(s) as u64);
+        let drivers = (self.drivers_on && self.safety.idle_drivers_s > 0.0).then(|| after(self.safety.idle_drivers_s));
+        let laser = (self.laser_on && self.safety.laser_idle_s > 0.0).then(|| after(self.safety.laser_idle_s));
+        match (drivers, laser) {
+            (Some(a), Some(b)) => Some(a.min(b)),
+            (a, b) => a.or(b),
+        }
+    }
+
+    /// At rest, a deadline has passed: the laser and the drivers let go of
+    /// what has been idle long enough.
+    pub(crate) fn rest_expired(&mut self) {
+        let now = self.hw.clock.now_us();
+        let since = self.rest_since_us;
+        let after = |s: f32| s > 0.0 && now >= since.saturating_add(units::seconds_to_us(s) as u64);
+        if self.laser_on && after(self.safety.laser_idle_s) {
+            let _ = self.apply(Event::LaserIdle);
+        }
+        if self.drivers_on && after(self.safety.idle_drivers_s) {
+            let _ = self.apply(Event::IdleTimeout);
+        }
     }
 
     /// Counts runs of saturated and of dark samples in a scan; a run of

@@ -61,13 +61,49 @@ pub trait StepTimer {
     /// Timer tick rate (Hz) of [`StepBlock::interval`].
     const TICK_HZ: u32;
 
-    /// Queue steps for one axis; nothing is emitted before [`StepTimer::run`].
+    /// Queue steps for one axis; nothing is emitted before [`StepTimer::start`].
     fn push(&mut self, axis: Axis, block: StepBlock) -> Result<(), QueueFull>;
-    /// Start every queue at the same instant and wait until all are empty.
-    /// Returns the number of steps emitted per axis.
-    async fn run(&mut self) -> [u32; 3];
-    /// Drop whatever is queued (the axes stop at the next tick).
+    /// Start every queue at the same instant.
+    fn start(&mut self);
+    /// Wait until every queue is empty; returns the steps emitted per axis
+    /// since [`StepTimer::start`]. Dropping the wait leaves the steps running:
+    /// a stop brakes them and waits again.
+    async fn finished(&mut self) -> [u32; 3];
+    /// Cut the running moves short: each axis decelerates from its current
+    /// speed to a stop (`brake_ticks` from [`crate::units::brake_ticks`]),
+    /// every step counted ([`crate::motion::executor::Executor::brake`]).
+    fn brake(&mut self, brake_ticks: [f32; 3]);
+    /// Drop whatever is queued (the axes stop at the next tick): for faults
+    /// of the timer itself, where braking is no longer possible.
     fn clear(&mut self);
+
+    /// Start the queues and wait until they are empty.
+    async fn run(&mut self) -> [u32; 3] {
+        self.start();
+        self.finished().await
+    }
+}
+
+/// Why [`Sentry::until`] returned.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Wake {
+    EStop,
+    Deadline,
+}
+
+/// What stops the head from outside its link: the E-STOP input (a normally
+/// closed switch to ground with a pull-up, so a pressed button and a cut
+/// wire both read open) and the passing of time. Passed to
+/// [`crate::Head::serve`] beside the link, so that they are watched while an
+/// operation owns the hardware.
+pub trait Sentry {
+    /// Whether the E-STOP input reads open now.
+    fn estop_open(&mut self) -> bool;
+    /// The head's clock (µs since boot), as [`Clock::now_us`].
+    fn now_us(&self) -> u64;
+    /// Resolves when the E-STOP input opens (when `estop`; at once if it is
+    /// open), or at `deadline_us` on the head's clock (when given).
+    async fn until(&mut self, deadline_us: Option<u64>, estop: bool) -> Wake;
 }
 
 /// Monotonic time since boot.

@@ -29,6 +29,7 @@ pub mod link;
 pub mod motion;
 pub mod sanity;
 mod serve;
+pub mod state;
 pub mod units;
 
 pub use head::Head;

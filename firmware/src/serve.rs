@@ -1,64 +1,284 @@
 //! The head's side of the protocol: the serve loop, request dispatch, replies
 //! and the scan's event stream.
+//!
+//! Every operation that takes time (homing, a move, a measurement, a scan
+//! point) runs *under watch*: raced against the link, the E-STOP input and
+//! the host timer ([`watch`]). An abort, a pause of a scan, a closed link,
+//! a silent host or an open E-STOP ends the race at once; the operation is
+//! dropped where it stands, the laser goes off in the state table's
+//! transition, and the motion decelerates from its current speed
+//! ([`Head::stop`]). Other requests that arrive meanwhile are kept and
+//! answered when the operation ends.
 
 use crate::check;
-use crate::dispatch::{decode, encode, Command, DecodeError};
+use crate::dispatch::{decode, encode, stop_request, Command, DecodeError, StopRequest};
 use crate::framing::MAX_FRAME;
 use crate::head::Head;
-use crate::hw::Board;
+use crate::hw::{Board, Sentry, Wake};
 use crate::link::{Link, LinkError};
+use crate::state::{Event, Mode};
+use embassy_futures::select::{select, Either};
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint, SafetyEndpoint,
-    SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint,
+    PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::sample::ScanPosition;
-use gonio_shared::{Fault, ScanEvent};
+use gonio_shared::{Fault, Reply, ScanEvent, Status};
+use heapless::{Deque, Vec};
 use postcard_rpc::header::VarSeq;
 use postcard_rpc::standard_icd::{WireError, ERROR_KEY};
 use postcard_rpc::{Endpoint, Key, Topic};
 use serde::Serialize;
 
+/// Requests kept while an operation runs (status polls, mostly). When they
+/// are full the link is not read until the operation ends: the rest wait in
+/// the link (USB flow control), and the host's timeouts cover them.
+const HELD: usize = 4;
+
+/// How long the E-STOP input must read closed before continuing re-arms
+/// the head (µs): a bouncing contact does not re-arm it.
+pub const ESTOP_DEBOUNCE_US: u64 = 20_000;
+
+type Frame = Vec<u8, MAX_FRAME>;
+
+/// Frames from the host: the receive buffer and the requests held back.
+pub struct Inbox {
+    rx: [u8; MAX_FRAME],
+    held: Deque<Frame, HELD>,
+}
+
+impl Inbox {
+    fn new() -> Self {
+        Inbox {
+            rx: [0; MAX_FRAME],
+            held: Deque::new(),
+        }
+    }
+
+    fn frame(&self, n: usize) -> Frame {
+        Vec::from_slice(&self.rx[..n.min(MAX_FRAME)]).unwrap_or_default()
+    }
+}
+
+/// What ended an operation under watch.
+#[derive(Debug)]
+enum Trip {
+    /// An abort or a pause request (answered once the motion stands).
+    Request(StopRequest, Frame),
+    LinkLost,
+    HostSilent,
+    EStop,
+}
+
+/// Watches the link, the E-STOP input and the host timer while an operation
+/// runs; returns what stops it. Requests other than abort (and pause, when
+/// `pause` trips) are held for later.
+async fn watch<L: Link, S: Sentry>(
+    link: &mut L,
+    sentry: &mut S,
+    inbox: &mut Inbox,
+    heard: &mut u64,
+    silence_us: Option<u64>,
+    pause: bool,
+) -> Trip {
+    loop {
+        let deadline = silence_us.map(|t| heard.saturating_add(t));
+        let woke = if inbox.held.is_full() {
+            Either::First(sentry.until(deadline, true).await)
+        } else {
+            select(sentry.until(deadline, true), link.recv(&mut inbox.rx)).await
+        };
+        match woke {
+            Either::First(Wake::EStop) => return Trip::EStop,
+            Either::First(Wake::Deadline) => return Trip::HostSilent,
+            Either::Second(Err(_)) => return Trip::LinkLost,
+            Either::Second(Ok(n)) => {
+                // Any frame, even a damaged one, shows the host is there.
+                *heard = sentry.now_us();
+                let frame = inbox.frame(n);
+                match stop_request(&frame) {
+                    Some(StopRequest::Abort) => return Trip::Request(StopRequest::Abort, frame),
+                    Some(StopRequest::Pause) if pause => return Trip::Request(StopRequest::Pause, frame),
+                    _ => {
+                        let _ = inbox.held.push_back(frame);
+                    }
+                }
+            }
+        }
+    }
+}
+
 impl<B: Board> Head<B> {
     /// Serves the host until the link fails; the head is then in its safe
-    /// state and an interrupted scan can be resumed from its last position.
-    pub async fn serve<L: Link>(&mut self, link: &mut L) -> LinkError {
-        let mut rx = [0u8; MAX_FRAME];
+    /// state (a running scan held at its next point, to be continued).
+    pub async fn serve<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S) -> LinkError {
+        let mut inbox = Inbox::new();
+        self.estop_open = sentry.estop_open();
         loop {
-            let got = if self.scan.is_some() {
-                link.try_recv(&mut rx)
-            } else {
-                Some(link.recv(&mut rx).await)
-            };
-            let handled = match got {
-                Some(Ok(n)) => {
-                    // Any frame, even a damaged one, shows the host is there.
-                    self.heard_host();
-                    self.handle(&rx[..n], link).await
+            let r = if let Some(f) = inbox.held.pop_front() {
+                self.handle(&f, link, sentry, &mut inbox).await
+            } else if self.mode == Mode::Scanning {
+                match link.try_recv(&mut inbox.rx) {
+                    Some(Ok(n)) => {
+                        self.heard_host(sentry);
+                        let f = inbox.frame(n);
+                        self.handle(&f, link, sentry, &mut inbox).await
+                    }
+                    Some(Err(e)) => Err(e),
+                    None => self.scan_step(link, sentry, &mut inbox).await,
                 }
-                Some(Err(e)) => Err(e),
-                None => Ok(()),
+            } else {
+                self.rest(link, sentry, &mut inbox).await
             };
-            let r = match (handled, self.pending_event.take()) {
+            let r = match (r, self.pending_event.take()) {
                 (Ok(()), Some(ev)) => self.publish::<ScanEventTopic, L>(&ev, link).await,
                 (r, _) => r,
             };
-            let r = match r {
-                Ok(()) if got.is_none() => self.scan_step(link).await,
-                r => r,
-            };
             if let Err(e) = r {
-                self.scan = None;
-                self.safe_state();
+                // Laser off and motion braked at once; a scan is held.
+                let _ = self.tripped(Trip::LinkLost, &mut inbox).await;
                 crate::info!("link lost; head in safe state");
                 return e;
             }
         }
     }
 
+    /// At rest: waits for a request, the E-STOP or an idle deadline.
+    async fn rest<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
+        let armed = self.mode != Mode::Faulted;
+        match select(sentry.until(self.rest_deadline(), armed), link.recv(&mut inbox.rx)).await {
+            Either::First(Wake::EStop) => {
+                let _ = self.tripped(Trip::EStop, inbox).await;
+                Ok(())
+            }
+            Either::First(Wake::Deadline) => {
+                self.rest_expired();
+                Ok(())
+            }
+            Either::Second(Ok(n)) => {
+                self.heard_host(sentry);
+                let f = inbox.frame(n);
+                self.handle(&f, link, sentry, inbox).await
+            }
+            Either::Second(Err(e)) => Err(e),
+        }
+    }
+
+    fn heard_host<S: Sentry>(&mut self, sentry: &S) {
+        self.last_heard_us = sentry.now_us();
+    }
+
+    /// Runs `op` under watch; `Err` says what stopped it (the operation was
+    /// dropped where it stood: [`Head::tripped`] makes the head safe).
+    async fn guarded<T, L: Link, S: Sentry>(
+        &mut self,
+        link: &mut L,
+        sentry: &mut S,
+        inbox: &mut Inbox,
+        pause: bool,
+        op: impl AsyncFnOnce(&mut Self) -> T,
+    ) -> Result<T, Trip> {
+        let silence = self.silence_deadline().map(|d| d - self.last_heard_us);
+        let mut heard = self.last_heard_us;
+        let r = select(op(self), watch(link, sentry, inbox, &mut heard, silence, pause)).await;
+        self.last_heard_us = heard;
+        match r {
+            Either::First(v) => Ok(v),
+            Either::Second(trip) => Err(trip),
+        }
+    }
+
+    /// Stops the head after `trip`, keeps an abort or pause request to be
+    /// answered next, holds or drops the scan; returns the fault to answer
+    /// the interrupted request with, or the link's error.
+    async fn tripped(&mut self, trip: Trip, inbox: &mut Inbox) -> Result<Fault, LinkError> {
+        let (event, fault) = match trip {
+            Trip::Request(kind, frame) => {
+                let _ = inbox.held.push_front(frame);
+                match kind {
+                    StopRequest::Abort => (Event::Abort, Fault::Aborted),
+                    StopRequest::Pause => (Event::Pause, Fault::Aborted),
+                }
+            }
+            Trip::LinkLost => (Event::LinkLost, Fault::LinkLost),
+            Trip::HostSilent => (Event::HostSilent, Fault::HostSilent),
+            Trip::EStop => {
+                self.estop_open = true;
+                (Event::EStop, Fault::EmergencyStop)
+            }
+        };
+        self.stop(event).await;
+        if self.mode == Mode::Paused {
+            self.hold_scan(fault);
+        } else {
+            self.drop_scan(fault);
+        }
+        self.last_fault = Some(fault);
+        crate::info!("stopped: E{}", fault.code());
+        if event == Event::LinkLost {
+            Err(LinkError::Closed)
+        } else {
+            Ok(fault)
+        }
+    }
+
+    /// Runs an operation under watch and turns a stop into its answer.
+    async fn operate<T, L: Link, S: Sentry>(
+        &mut self,
+        link: &mut L,
+        sentry: &mut S,
+        inbox: &mut Inbox,
+        op: impl AsyncFnOnce(&mut Self) -> Reply<T>,
+    ) -> Result<Reply<T>, LinkError> {
+        match self.guarded(link, sentry, inbox, false, op).await {
+            Ok(r) => Ok(r),
+            Err(trip) => Ok(Err(self.tripped(trip, inbox).await?)),
+        }
+    }
+
+    /// Pauses a running scan (braking a move in progress), or answers why not.
+    async fn pause(&mut self) -> Reply<Status> {
+        if self.mode == Mode::Scanning {
+            self.stop(Event::Pause).await;
+            return Ok(self.status());
+        }
+        self.apply(Event::Pause).map(|()| self.status())
+    }
+
+    /// Continues a held scan where it stopped, or re-arms the head after an
+    /// E-STOP once the input has read closed for [`ESTOP_DEBOUNCE_US`].
+    async fn resume<S: Sentry>(&mut self, sentry: &mut S) -> Reply<Status> {
+        if self.mode == Mode::Faulted {
+            let settled = sentry.now_us().saturating_add(ESTOP_DEBOUNCE_US);
+            if sentry.estop_open() || sentry.until(Some(settled), true).await == Wake::EStop {
+                self.estop_open = true;
+                return Err(Fault::EmergencyStop);
+            }
+            self.estop_open = false;
+        }
+        self.apply(Event::Continue)?;
+        self.last_heard_us = sentry.now_us();
+        Ok(self.status())
+    }
+
+    /// Aborts what runs (braking a move in progress) and drops a held scan.
+    async fn abort_now(&mut self) -> Status {
+        if self.mode.busy() {
+            self.stop(Event::Abort).await;
+        }
+        self.abort()
+    }
+
     /// Checks, decodes and answers one frame. A frame that fails its check
     /// is dropped unanswered: its header may be damaged too, and the host
     /// recovers a lost request by its timeout.
-    async fn handle<L: Link>(&mut self, sealed: &[u8], link: &mut L) -> Result<(), LinkError> {
+    async fn handle<L: Link, S: Sentry>(
+        &mut self,
+        sealed: &[u8],
+        link: &mut L,
+        sentry: &mut S,
+        inbox: &mut Inbox,
+    ) -> Result<(), LinkError> {
         let Some(frame) = check::open(sealed) else {
             return Ok(());
         };
@@ -73,32 +293,44 @@ impl<B: Board> Head<B> {
             Command::Identify => self.reply::<IdentifyEndpoint, L>(seq, &self.identity(), link).await,
             Command::Status => self.reply::<StatusEndpoint, L>(seq, &self.status(), link).await,
             Command::Home(r) => {
-                let resp = self.home(r).await;
+                let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.home(r).await).await?;
                 self.reply::<HomeEndpoint, L>(seq, &resp, link).await
             }
             Command::Move(g) => {
-                let resp = self.move_to(g).await;
+                let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.move_to(g).await).await?;
                 self.reply::<MoveEndpoint, L>(seq, &resp, link).await
             }
             Command::Measure(r) => {
-                let resp = self.measure(r).await;
+                let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.measure(r).await).await?;
                 self.reply::<MeasureEndpoint, L>(seq, &resp, link).await
             }
+            Command::Calibrate(c) => {
+                let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.calibrate(c).await).await?;
+                self.reply::<CalibrateEndpoint, L>(seq, &resp, link).await
+            }
             Command::Scan(spec) => {
+                // A held scan is replaced, with a `Stopped` event for it.
+                if self.mode == Mode::Paused {
+                    self.drop_scan(Fault::Aborted);
+                }
                 let resp = self.start_scan(spec);
                 self.reply::<ScanEndpoint, L>(seq, &resp, link).await
             }
             Command::Abort => {
-                let resp = self.abort();
+                let resp = self.abort_now().await;
                 self.reply::<AbortEndpoint, L>(seq, &resp, link).await
+            }
+            Command::Pause => {
+                let resp = self.pause().await;
+                self.reply::<PauseEndpoint, L>(seq, &resp, link).await
+            }
+            Command::Continue => {
+                let resp = self.resume(sentry).await;
+                self.reply::<ContinueEndpoint, L>(seq, &resp, link).await
             }
             Command::Detection(s) => {
                 let resp = self.configure_detection(s);
                 self.reply::<DetectionEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Calibrate(c) => {
-                let resp = self.calibrate(c).await;
-                self.reply::<CalibrateEndpoint, L>(seq, &resp, link).await
             }
             Command::Sanity(c) => {
                 let resp = self.load_sanity(c);
@@ -111,64 +343,62 @@ impl<B: Board> Head<B> {
         }
     }
 
-    /// Visits the next point of the running scan and publishes what happened;
-    /// stops the scan instead when the host has gone silent.
-    async fn scan_step<L: Link>(&mut self, link: &mut L) -> Result<(), LinkError> {
-        if let Some((run, next_order)) = self.host_silent() {
-            self.scan = None;
-            self.last_fault = Some(Fault::HostSilent);
-            self.safe_state();
-            crate::info!("host silent during a scan; head in safe state");
-            let ev = ScanEvent::Stopped {
-                run,
-                next_order,
-                reason: Fault::HostSilent,
-            };
-            return self.publish::<ScanEventTopic, L>(&ev, link).await;
+    /// Visits the next point of the running scan, under watch, and publishes
+    /// what happened; holds the scan instead when the host has gone silent.
+    async fn scan_step<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
+        if self.silence_deadline().is_some_and(|d| sentry.now_us() >= d) {
+            self.tripped(Trip::HostSilent, inbox).await?;
+            return Ok(());
         }
         let Some(run) = self.scan.as_mut() else {
             return Ok(());
         };
+        if run.current.is_none() {
+            run.current = run
+                .planner
+                .next(&self.cfg, &run.spec)
+                .and_then(|i| run.spec.point(i).map(|g| (i, g)));
+        }
         let (order, run_no) = (run.next_order, run.run);
-        let point = run
-            .planner
-            .next(&self.cfg, &run.spec)
-            .and_then(|i| run.spec.point(i).map(|g| (i, g)));
-        let ev = match point {
-            None => {
-                let ev = ScanEvent::Finished {
-                    run: run_no,
-                    measured: run.measured,
-                    skipped: run.skipped,
-                };
-                self.scan = None;
-                self.safe_state();
-                ev
+        let Some((index, g)) = run.current else {
+            let ev = ScanEvent::Finished {
+                run: run_no,
+                measured: run.measured,
+                skipped: run.skipped,
+            };
+            self.scan = None;
+            let _ = self.apply(Event::Done);
+            return self.publish::<ScanEventTopic, L>(&ev, link).await;
+        };
+        let at = Some(ScanPosition { index, order });
+        let visit = async |h: &mut Self| {
+            // A run of suspicious points ends the scan: the sample that
+            // completed it is not sent, and the scan resumes at it.
+            h.acquire(Some(g), at).await.and_then(|s| h.watch(&s).map(|()| s))
+        };
+        let ev = match self.guarded(link, sentry, inbox, true, visit).await {
+            Err(trip) => {
+                self.tripped(trip, inbox).await?;
+                return Ok(());
             }
-            Some((index, g)) => match self.acquire(Some(g), Some(ScanPosition { index, order })).await.and_then(|s| {
-                // A run of suspicious points ends the scan: the sample that
-                // completed it is not sent, and the scan resumes at it.
-                self.watch(&s).map(|()| s)
-            }) {
-                Ok(s) => {
-                    self.advance(|r| r.measured += 1);
-                    ScanEvent::Sample(s)
+            Ok(Ok(s)) => {
+                self.advance(|r| r.measured += 1);
+                ScanEvent::Sample(s)
+            }
+            Ok(Err(reason @ (Fault::Unreachable(_) | Fault::InvalidValue(_)))) => {
+                self.advance(|r| r.skipped += 1);
+                ScanEvent::Skipped { index, order, reason }
+            }
+            Ok(Err(reason)) => {
+                self.scan = None;
+                self.last_fault = Some(reason);
+                let _ = self.apply(Event::Failed);
+                ScanEvent::Stopped {
+                    run: run_no,
+                    next_order: order,
+                    reason,
                 }
-                Err(reason @ (Fault::Unreachable(_) | Fault::InvalidValue(_))) => {
-                    self.advance(|r| r.skipped += 1);
-                    ScanEvent::Skipped { index, order, reason }
-                }
-                Err(reason) => {
-                    self.scan = None;
-                    self.last_fault = Some(reason);
-                    self.safe_state();
-                    ScanEvent::Stopped {
-                        run: run_no,
-                        next_order: order,
-                        reason,
-                    }
-                }
-            },
+            }
         };
         self.publish::<ScanEventTopic, L>(&ev, link).await
     }
@@ -176,6 +406,7 @@ impl<B: Board> Head<B> {
     fn advance(&mut self, count: impl FnOnce(&mut crate::head::ScanRun)) {
         if let Some(run) = self.scan.as_mut() {
             count(run);
+            run.current = None;
             run.next_order += 1;
         }
     }

@@ -26,6 +26,14 @@ pub fn seconds_to_ticks(s: f32, tick_hz: u32) -> u32 {
     }
 }
 
+/// The braking constant of an axis on a `tick_hz` step timer: `sqrt(2/a)`
+/// in ticks, `a` its deceleration limit in microsteps/tick² (see
+/// [`crate::motion::executor::Executor::brake`]).
+pub fn brake_ticks(axis: &AxisConfig, tick_hz: u32) -> f32 {
+    let a = axis.max_accel_dps2 as f64 * axis.microsteps_per_rev as f64 / 360.0;
+    (libm::sqrt(2.0 / a) * tick_hz as f64) as f32
+}
+
 /// Seconds → nanoseconds for `DelayNs` (rounded up, saturating).
 pub fn seconds_to_ns(s: f32) -> u32 {
     seconds_to_ticks(s, 1_000_000_000)

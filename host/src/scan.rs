@@ -278,7 +278,11 @@ impl ScanRun<'_> {
                             return Ok(Stretch::Interrupted(expected, Interruption::Gap));
                         }
                         HeadState::Idle if expected >= outcome.points => return Ok(Stretch::Finished),
-                        HeadState::Idle => return Ok(Stretch::Interrupted(expected, Interruption::Gap)),
+                        // Held (the head stopped hearing us): a new scan from
+                        // the first position not stored replaces it.
+                        HeadState::Idle | HeadState::Paused { .. } => return Ok(Stretch::Interrupted(expected, Interruption::Gap)),
+                        HeadState::Faulted => bail!("the head's E-STOP is open; close it, then resume from position {expected}"),
+                        HeadState::Homing | HeadState::Moving | HeadState::Measuring | HeadState::Stopping => continue,
                     }
                 }
             };
@@ -291,7 +295,7 @@ impl ScanRun<'_> {
             let order = match &ev {
                 ScanEvent::Sample(s) => s.scan.map(|p| p.order),
                 ScanEvent::Skipped { order, .. } => Some(*order),
-                ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } => None,
+                ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } | ScanEvent::Paused { .. } => None,
             };
             if let Some(o) = order {
                 if o < expected {
@@ -329,7 +333,7 @@ impl ScanRun<'_> {
                     }
                     return Ok(Stretch::Finished);
                 }
-                ScanEvent::Stopped { run, reason, .. } if run == accepted.run => {
+                ScanEvent::Stopped { run, reason, .. } | ScanEvent::Paused { run, reason, .. } if run == accepted.run => {
                     return match reason {
                         Fault::Aborted if pausing => Ok(Stretch::Paused(expected)),
                         Fault::AdcOverrun | Fault::HostSilent => Ok(Stretch::Interrupted(expected, Interruption::Transient(reason))),
@@ -338,7 +342,7 @@ impl ScanRun<'_> {
                     };
                 }
                 // The end of an earlier run, arriving late.
-                ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } => {}
+                ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } | ScanEvent::Paused { .. } => {}
             }
             pb.set_message(format!("{} measured, {} unreachable", outcome.measured, outcome.skipped));
             if !pausing && stop_at.is_some_and(|p| expected >= p && expected < outcome.points) {

@@ -91,7 +91,11 @@ impl Session {
         };
         let detection = head.detection(self.setup.settings).await?;
         let watch = if head.identity().simulated { 0.0 } else { HOST_TIMEOUT_S };
-        head.safety(SafetySettings { host_timeout_s: watch }).await?;
+        head.safety(SafetySettings {
+            host_timeout_s: watch,
+            ..SafetySettings::default()
+        })
+        .await?;
         self.detection = Some(detection);
         if calibration.is_some() {
             self.calibration = calibration;

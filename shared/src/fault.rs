@@ -53,6 +53,7 @@ pub enum Field {
     ModelParameter,
     Tolerance,
     HostTimeout,
+    IdleTime,
 }
 
 impl Field {
@@ -70,6 +71,7 @@ impl Field {
             Field::ModelParameter => "model parameter",
             Field::Tolerance => "sanity tolerance",
             Field::HostTimeout => "host timeout",
+            Field::IdleTime => "idle time",
         }
     }
 }
@@ -125,6 +127,15 @@ pub enum Fault {
     /// The head restarted because its independent watchdog fired (hung
     /// firmware); it came up in the safe state.
     WatchdogReset,
+    /// The E-STOP input is open (pressed, or its wire cut): laser off, motion
+    /// braked, drivers disabled; everything is refused until it is closed
+    /// and the host asks to continue.
+    EmergencyStop,
+    /// The link to the host closed (cable pulled, port closed, USB reset or
+    /// suspend) during an operation.
+    LinkLost,
+    /// Pause or continue without a scan to pause or to continue.
+    NotScanning,
 }
 
 impl Fault {
@@ -149,6 +160,9 @@ impl Fault {
             Fault::NoSignal => 504,
             Fault::HostSilent => 303,
             Fault::WatchdogReset => 304,
+            Fault::EmergencyStop => 305,
+            Fault::LinkLost => 306,
+            Fault::NotScanning => 307,
         }
     }
 }
@@ -162,7 +176,7 @@ impl fmt::Display for Fault {
             Fault::Unreachable(Unreachable::AxisTravel(a)) => write!(f, "unreachable: outside the travel of the {} axis", a.name()),
             Fault::Unreachable(Unreachable::BlindZone) => f.write_str("unreachable: arm in the blind zone of the beam-splitter plate"),
             Fault::NotHomed => f.write_str("axes not homed; run home first"),
-            Fault::Busy => f.write_str("head busy with a scan; abort it first"),
+            Fault::Busy => f.write_str("head busy (a scan, a pause or a stop); abort it first"),
             Fault::Aborted => f.write_str("aborted"),
             Fault::HomeSwitchNotFound(a) => write!(f, "home switch of the {} axis not found within its travel", a.name()),
             Fault::HomeSwitchStuck(a) => write!(f, "home switch of the {} axis stuck active", a.name()),
@@ -175,6 +189,9 @@ impl fmt::Display for Fault {
             Fault::NoSignal => f.write_str("no signal at consecutive scan points: laser dead or beam blocked"),
             Fault::HostSilent => f.write_str("the host went silent during the scan (heartbeat timeout)"),
             Fault::WatchdogReset => f.write_str("the head was restarted by its watchdog (hung firmware); it came up safe"),
+            Fault::EmergencyStop => f.write_str("E-STOP open: laser off, motion stopped; close it and continue"),
+            Fault::LinkLost => f.write_str("the link to the host was lost during the operation"),
+            Fault::NotScanning => f.write_str("no scan to pause or to continue"),
         }
     }
 }

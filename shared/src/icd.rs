@@ -63,6 +63,8 @@ pub type DetectionReply = Reply<DetectionReport>;
 pub type SanityReply = Reply<()>;
 pub type CalibrateReply = Reply<CalibrationReport>;
 pub type SafetyReply = Reply<()>;
+pub type PauseReply = Reply<Status>;
+pub type ContinueReply = Reply<Status>;
 
 endpoints! {
     list = ENDPOINT_LIST;
@@ -79,6 +81,8 @@ endpoints! {
     | SanityEndpoint        | SanityConfig      | SanityReply             | "gonio/sanity"       |
     | CalibrateEndpoint     | CalibrateRequest  | CalibrateReply          | "gonio/calibrate"    |
     | SafetyEndpoint        | SafetySettings    | SafetyReply             | "gonio/safety"       |
+    | PauseEndpoint         | ()                | PauseReply              | "gonio/pause"        |
+    | ContinueEndpoint      | ()                | ContinueReply           | "gonio/continue"     |
 }
 
 topics! {

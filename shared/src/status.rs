@@ -10,11 +10,24 @@ use serde::{Deserialize, Serialize};
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum HeadState {
     Idle,
+    Homing,
+    Moving,
+    /// A measurement or a calibration.
+    Measuring,
     /// A scan is running; `next_order` is the next point to visit.
     Scanning {
         next_order: u32,
         total: u32,
     },
+    /// A scan is held at `next_order`; continue resumes it.
+    Paused {
+        next_order: u32,
+        total: u32,
+    },
+    /// The motion decelerates after a stop (the laser is already off).
+    Stopping,
+    /// E-STOP: refused until the input is closed and the host continues.
+    Faulted,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
@@ -23,6 +36,11 @@ pub struct Status {
     pub state: HeadState,
     pub homed: bool,
     pub laser_on: bool,
+    /// The motor drivers are enabled; when not, the motors hold by detent
+    /// (and the worm gears) only, and are enabled again at the next move.
+    pub drivers_enabled: bool,
+    /// The E-STOP input reads open.
+    pub estop_open: bool,
     pub axes: AxisAngles,
     pub detection: DetectionSettings,
     pub samples_sent: u32,

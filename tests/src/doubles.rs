@@ -19,7 +19,8 @@ impl Board for MockBoard {
     type Clock = FixedClock;
 }
 
-/// Records every run as the blocks queued per axis; emits them all.
+/// Records every run as the blocks queued per axis; emits them all at once
+/// (so there is never a move left to brake).
 #[derive(Default)]
 pub struct RecordingSteps {
     queued: Vec<(Axis, StepBlock)>,
@@ -41,14 +42,19 @@ impl StepTimer for RecordingSteps {
         Ok(())
     }
 
-    async fn run(&mut self) -> [u32; 3] {
+    fn start(&mut self) {
+        self.runs.push(std::mem::take(&mut self.queued));
+    }
+
+    async fn finished(&mut self) -> [u32; 3] {
         let mut n = [0u32; 3];
-        for (a, b) in &self.queued {
+        for (a, b) in self.runs.last().into_iter().flatten() {
             n[a.index()] += b.count;
         }
-        self.runs.push(std::mem::take(&mut self.queued));
         n
     }
+
+    fn brake(&mut self, _: [f32; 3]) {}
 
     fn clear(&mut self) {
         self.queued.clear();

@@ -9,8 +9,8 @@ use gonio_firmware::{check, dispatch};
 use gonio_host::formats::{alta, brdf_csv};
 use gonio_host::sim::{FrameHead, SimConfig};
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
-    MoveEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
+    MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
 use gonio_shared::{
     AngleRange, CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, SanityKind, SanityModel, ScanSpec,
@@ -109,10 +109,18 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         ),
         ("scan", request::<ScanEndpoint>(&scan)),
         ("abort", request::<AbortEndpoint>(&())),
+        ("pause", request::<PauseEndpoint>(&())),
+        ("continue", request::<ContinueEndpoint>(&())),
         ("detection", request::<DetectionEndpoint>(&DetectionSettings::default())),
         ("sanity", request::<SanityEndpoint>(&sanity)),
         ("calibrate", request::<CalibrateEndpoint>(&CalibrateRequest { periods: 23 })),
-        ("safety", request::<SafetyEndpoint>(&SafetySettings { host_timeout_s: 5.0 })),
+        (
+            "safety",
+            request::<SafetyEndpoint>(&SafetySettings {
+                host_timeout_s: 5.0,
+                ..SafetySettings::default()
+            }),
+        ),
     ];
     let mut out = Vec::new();
     for (name, f) in &requests {
@@ -140,6 +148,11 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         "dispatch",
         "home-scan-abort".into(),
         session(&["home", "detection", "scan", "status", "abort"]),
+    ));
+    out.push((
+        "dispatch",
+        "scan-pause-continue".into(),
+        session(&["home", "scan", "pause", "status", "continue", "pause", "abort"]),
     ));
     out.push((
         "dispatch",

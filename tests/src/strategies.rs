@@ -163,9 +163,22 @@ pub fn status() -> impl Strategy<Value = Status> {
     (
         prop_oneof![
             Just(HeadState::Idle),
-            (any::<u32>(), any::<u32>()).prop_map(|(n, t)| HeadState::Scanning { next_order: n, total: t })
+            Just(HeadState::Homing),
+            Just(HeadState::Moving),
+            Just(HeadState::Measuring),
+            Just(HeadState::Stopping),
+            Just(HeadState::Faulted),
+            (any::<u32>(), any::<u32>()).prop_map(|(n, t)| HeadState::Scanning { next_order: n, total: t }),
+            (any::<u32>(), any::<u32>()).prop_map(|(n, t)| HeadState::Paused { next_order: n, total: t })
         ],
-        (any::<bool>(), any::<bool>(), axis_angles(), detection_settings()),
+        (
+            any::<bool>(),
+            any::<bool>(),
+            axis_angles(),
+            detection_settings(),
+            any::<bool>(),
+            any::<bool>(),
+        ),
         (
             any::<u32>(),
             any::<u32>(),
@@ -176,10 +189,16 @@ pub fn status() -> impl Strategy<Value = Status> {
         ),
     )
         .prop_map(
-            |(state, (homed, laser_on, axes, detection), (sent, flagged, remeasured, sanity_loaded, last_fault, up))| Status {
+            |(
+                state,
+                (homed, laser_on, axes, detection, drivers_enabled, estop_open),
+                (sent, flagged, remeasured, sanity_loaded, last_fault, up),
+            )| Status {
                 state,
                 homed,
                 laser_on,
+                drivers_enabled,
+                estop_open,
                 axes,
                 detection,
                 samples_sent: sent,

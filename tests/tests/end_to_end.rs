@@ -160,6 +160,7 @@ async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() 
             }
             ScanEvent::Sample(_) | ScanEvent::Skipped { .. } => {}
             ScanEvent::Finished { .. } => panic!("an aborted scan finished"),
+            ScanEvent::Paused { .. } => panic!("an aborted scan was held"),
         }
     };
     assert!(next >= 5);

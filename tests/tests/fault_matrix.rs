@@ -29,15 +29,20 @@ fn scan(faults: &str, host_timeout_s: f32) -> (FrameHead, Vec<Sent>) {
         ..SimConfig::default()
     };
     let mut head = FrameHead::new(&cfg);
+    // The watch is set after homing, as the host does (homing is long).
     let sent = head.serve_open([
-        send::<SafetyEndpoint>(&SafetySettings { host_timeout_s }),
         send::<HomeEndpoint>(&HomeRequest::ALL),
+        send::<SafetyEndpoint>(&SafetySettings {
+            host_timeout_s,
+            ..SafetySettings::default()
+        }),
         send::<ScanEndpoint>(&spec()),
     ]);
     (head, sent)
 }
 
-/// The scan's stop, checked to leave the head safe, and the samples before it.
+/// The scan's stop (or hold, for host silence), checked to leave the head
+/// safe, and the samples before it.
 fn stopped(sent: &[Sent]) -> (Fault, u32, usize) {
     let events = scan_events(sent);
     let samples = events.iter().filter(|(e, _)| matches!(e, ScanEvent::Sample(_))).count();
@@ -48,7 +53,7 @@ fn stopped(sent: &[Sent]) -> (Fault, u32, usize) {
         "the laser was on and the drivers enabled while scanning"
     );
     let (ev, at) = events.last().expect("scan events");
-    let ScanEvent::Stopped { reason, next_order, .. } = ev else {
+    let (ScanEvent::Stopped { reason, next_order, .. } | ScanEvent::Paused { reason, next_order, .. }) = ev else {
         panic!("the scan was not stopped: {ev:?}");
     };
     assert!(!at.laser, "{reason}: laser still on when the fault was reported");
@@ -60,7 +65,8 @@ fn finished(sent: &[Sent]) -> Vec<gonio_shared::Sample> {
     let events = scan_events(sent);
     let (last, at) = events.last().expect("scan events");
     assert!(matches!(last, ScanEvent::Finished { measured: 143, .. }), "{last:?}");
-    assert!(!at.laser && !at.drivers_enabled, "safe state at the end of the scan");
+    // The drivers hold the stages until the idle watch lets them go.
+    assert!(!at.laser && at.drivers_enabled, "laser off, stages held at the end of the scan");
     events
         .into_iter()
         .filter_map(|(e, _)| match e {
@@ -125,10 +131,13 @@ fn one_lost_adc_block_is_measured_again_and_a_lasting_overrun_stops_the_scan() {
 }
 
 /// The host sends nothing after starting the scan: with a 5 s watch the head
-/// stops within the first few points; without one it scans to the end.
+/// stops within the first few points and holds the scan there (a host that
+/// comes back continues it); without one it scans to the end.
 #[test]
 fn host_silence_stops_the_scan_when_watched() {
-    let (reason, next, _) = stopped(&scan("", 5.0).1);
+    let (_, sent) = scan("", 5.0);
+    let (reason, next, _) = stopped(&sent);
+    assert!(matches!(scan_events(&sent).last(), Some((ScanEvent::Paused { .. }, _))));
     assert_eq!(reason, Fault::HostSilent);
     assert!((1..20).contains(&next), "stopped at {next}");
     assert_eq!(finished(&scan("", 0.0).1).len(), 143);
@@ -182,7 +191,12 @@ fn a_damaged_request_is_dropped_unanswered_and_moves_nothing() {
 fn invalid_host_timeouts_are_refused() {
     let mut head = FrameHead::new(&SimConfig::default());
     let frames: Vec<_> = [f32::NAN, f32::INFINITY, -1.0, 0.5, 4000.0, 20.0]
-        .map(|t| send::<SafetyEndpoint>(&SafetySettings { host_timeout_s: t }))
+        .map(|t| {
+            send::<SafetyEndpoint>(&SafetySettings {
+                host_timeout_s: t,
+                ..SafetySettings::default()
+            })
+        })
         .into();
     let r = replies::<SafetyEndpoint>(&head.serve(frames));
     let bad = Err(Fault::InvalidValue(gonio_shared::Field::HostTimeout));

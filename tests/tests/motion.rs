@@ -105,11 +105,14 @@ impl StepTimer for ScopeSteps {
     fn push(&mut self, axis: Axis, b: StepBlock) -> Result<(), QueueFull> {
         self.exec.push(axis, b)
     }
-    async fn run(&mut self) -> [u32; 3] {
+    fn start(&mut self) {
         let origin = self.scope.clock.get();
         run(&mut self.exec, &self.scope, origin, TICK_NS, 0);
+    }
+    async fn finished(&mut self) -> [u32; 3] {
         self.exec.emitted()
     }
+    fn brake(&mut self, _: [f32; 3]) {}
     fn clear(&mut self) {
         self.exec.clear();
     }
@@ -243,9 +246,11 @@ impl StepTimer for Stuck {
     fn push(&mut self, _: Axis, _: StepBlock) -> Result<(), QueueFull> {
         Ok(())
     }
-    async fn run(&mut self) -> [u32; 3] {
+    fn start(&mut self) {}
+    async fn finished(&mut self) -> [u32; 3] {
         std::future::pending().await
     }
+    fn brake(&mut self, _: [f32; 3]) {}
     fn clear(&mut self) {}
 }
 

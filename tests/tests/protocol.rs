@@ -190,6 +190,8 @@ fn largest_messages_fit_the_frame_buffer() {
         },
         homed: true,
         laser_on: true,
+        drivers_enabled: true,
+        estop_open: true,
         axes: AxisAngles::default(),
         detection: DetectionSettings::default(),
         samples_sent: u32::MAX,

@@ -32,7 +32,10 @@ fn command() -> impl Strategy<Value = (Vec<u8>, bool)> {
         2 => detection_settings().prop_map(|d| (send::<DetectionEndpoint>(&d), true)),
         1 => sanity_config().prop_map(|c| (send::<SanityEndpoint>(&c), true)),
         1 => any::<u16>().prop_map(|periods| (send::<CalibrateEndpoint>(&CalibrateRequest { periods }), true)),
-        1 => any_f32().prop_map(|t| (send::<SafetyEndpoint>(&SafetySettings { host_timeout_s: t }), true)),
+        1 => any_f32().prop_map(|t| (send::<SafetyEndpoint>(&SafetySettings {
+            host_timeout_s: t,
+            ..SafetySettings::default()
+        }), true)),
         1 => Just((send::<StatusEndpoint>(&()), false)),
         1 => Just((send::<AbortEndpoint>(&()), false)),
     ]

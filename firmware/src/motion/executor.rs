@@ -3,6 +3,12 @@
 //! the axes that are due, drops each pin after the pulse width, and tells the
 //! timer when to fire next. The chip's TIM5 interrupt, the simulated head and
 //! the tests all run this same code.
+//!
+//! A move can be cut short ([`Executor::brake`]): each moving axis keeps the
+//! step it has already scheduled and then slows down from the speed it has
+//! at that moment at its deceleration limit, one step at a time, until it
+//! stands; the steps it emits are counted like any others, so the position
+//! stays exact and the head stays homed.
 
 use super::blocks::to_tick;
 use crate::hw::{QueueFull, StepBlock};
@@ -13,6 +19,51 @@ use heapless::Deque;
 /// Blocks queued per axis: a whole move (two ramps of at most ~170 blocks
 /// at one-tick accuracy, and the cruise) is queued before it starts.
 pub const QUEUE: usize = 192;
+
+const Q32: f32 = 4_294_967_296.0;
+
+/// A deceleration in progress. With constant deceleration `a` (steps/tick²)
+/// the speed with `r` steps left to the stop is `sqrt(2·a·r)`, so the step
+/// from `r` to `r − 1` left takes `c / (sqrt(r) + sqrt(r − 1))` ticks, where
+/// `c = sqrt(2/a)` (the sum form has no cancellation in f32). `r` starts where
+/// that interval equals the axis's current one: no speed jump.
+///
+/// Single precision on purpose: the M4F computes VSQRT and VDIV in 14 cycles
+/// each, a brake runs once per stop, and f32 keeps an interval of 10⁵ ticks
+/// to 10⁻² ticks; the move's own blocks stay integer.
+#[derive(Debug, Clone, Copy)]
+struct Braking {
+    c: f32,
+    r: f32,
+}
+
+impl Braking {
+    /// The ramp that continues at `interval` ticks per step. An axis slower
+    /// than the last step of a ramp (`s < 1`) stops after its next step.
+    fn from(c: f32, interval_ticks: f32) -> Self {
+        let s = c / interval_ticks.max(f32::MIN_POSITIVE);
+        let r = if s > 1.0 {
+            let root = 0.5 * (s + 1.0 / s);
+            root * root
+        } else {
+            0.0
+        };
+        Braking { c, r }
+    }
+
+    /// Steps after the one already scheduled.
+    fn steps(&self) -> u32 {
+        self.r.max(0.0) as u32
+    }
+
+    /// The next interval (Q32 ticks), one step nearer the stop.
+    fn step(&mut self) -> i64 {
+        let r = self.r;
+        self.r -= 1.0;
+        let ticks = self.c / (libm::sqrtf(r) + libm::sqrtf((r - 1.0).max(0.0)));
+        (ticks * Q32) as i64
+    }
+}
 
 /// One axis: its queue and where it is in the current block.
 struct Track {
@@ -26,6 +77,8 @@ struct Track {
     emitted: u32,
     /// Tick at which this axis's STEP pulse ends, while it is high.
     high_until: Option<u64>,
+    /// Set while the axis decelerates to a stop instead of following its queue.
+    braking: Option<Braking>,
 }
 
 impl Track {
@@ -38,12 +91,14 @@ impl Track {
             next: 0,
             emitted: 0,
             high_until: None,
+            braking: None,
         }
     }
 
     /// Loads the next non-empty block after the step at `from` (Q32 ticks).
     fn load(&mut self, from: u64) {
         self.left = 0;
+        self.braking = None;
         while let Some(b) = self.queue.pop_front() {
             if b.count > 0 {
                 self.left = b.count;
@@ -55,6 +110,28 @@ impl Track {
         }
     }
 
+    /// Steps still to come: the current block's and the queued ones.
+    fn remaining(&self) -> u64 {
+        self.left as u64 + self.queue.iter().map(|b| b.count as u64).sum::<u64>()
+    }
+
+    /// Replaces what is left by a deceleration at `c = sqrt(2/a)` ticks from
+    /// the current interval, unless what is left already stops sooner (a
+    /// move in its own deceleration, which runs at the same limit).
+    fn brake(&mut self, c: f32) {
+        if self.left == 0 || self.braking.is_some() {
+            return;
+        }
+        let b = Braking::from(c, self.interval as f32 / Q32);
+        let steps = 1 + b.steps() as u64;
+        if steps >= self.remaining() {
+            return;
+        }
+        self.queue.clear();
+        self.left = steps as u32;
+        self.braking = Some(b);
+    }
+
     fn next_tick(&self) -> Option<u64> {
         (self.left > 0).then(|| to_tick(self.next))
     }
@@ -63,7 +140,10 @@ impl Track {
     fn advance(&mut self) {
         self.left -= 1;
         if self.left > 0 {
-            self.interval += self.add;
+            self.interval = match self.braking.as_mut() {
+                Some(b) => b.step(),
+                None => self.interval + self.add,
+            };
             self.next = self.next.saturating_add_signed(self.interval.max(1));
         } else {
             self.load(self.next);
@@ -103,6 +183,17 @@ impl<P: OutputPin> Executor<P> {
                 let _ = p.set_low();
             }
         }
+    }
+
+    /// Cuts the moves short: every moving axis decelerates from its current
+    /// speed to a stop, `brake_ticks[i]` = `sqrt(2/a)` in ticks for an axis
+    /// limited to `a` steps/tick² ([`crate::units::brake_ticks`]). The step
+    /// each axis has already scheduled is kept; returns the next tick to fire at.
+    pub fn brake(&mut self, brake_ticks: [f32; 3]) -> Option<u64> {
+        for (t, c) in self.tracks.iter_mut().zip(brake_ticks) {
+            t.brake(c);
+        }
+        self.next_event()
     }
 
     /// Arms every axis at tick 0; returns the first tick to fire at.

@@ -31,6 +31,10 @@ pub const PARK: [i32; 3] = [0; 3];
 pub struct Position {
     pub steps: [i32; 3],
     pub homed: [bool; 3],
+    /// Direction (−1, 0, +1) of each axis in the move the step timer is
+    /// running, until its steps are counted in: a move cut short by a stop
+    /// is counted by [`halt`] instead of [`move_by`].
+    pub in_flight: Option<[i8; 3]>,
 }
 
 impl Position {
@@ -113,27 +117,61 @@ pub async fn move_by<B: Board>(
         .map(|i| trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), speed_dps[i]).duration())
         .fold(0.0, f64::max);
     let limit_ms = (expected * 2.0 * 1e3) as u32 + STALL_MARGIN_MS;
-    let emitted = match select(hw.steps.run(), hw.delay.delay_ms(limit_ms)).await {
-        Either::First(e) => {
-            // DIR hold time before the next move may change it.
-            hw.delay.delay_ns(units::seconds_to_ns(cfg.driver.dir_hold_s)).await;
-            e
-        }
+    pos.in_flight = Some(delta.map(|d| d.signum() as i8));
+    hw.steps.start();
+    let emitted = match select(hw.steps.finished(), hw.delay.delay_ms(limit_ms)).await {
+        Either::First(e) => e,
         Either::Second(()) => {
             hw.steps.clear();
+            pos.in_flight = None;
             let axis = Axis::ALL.into_iter().find(|a| delta[a.index()] != 0).unwrap_or(Axis::Rotation);
             return Err(Fault::StepTimer(axis));
         }
     };
+    count_in(pos, emitted);
+    // DIR hold time before the next move may change it.
+    hw.delay.delay_ns(units::seconds_to_ns(cfg.driver.dir_hold_s)).await;
     for axis in Axis::ALL {
         let i = axis.index();
-        let e = emitted[i].min(delta[i].unsigned_abs()) as i32;
-        pos.steps[i] += if delta[i] < 0 { -e } else { e };
-        if e != delta[i].abs() {
+        if emitted[i] != delta[i].unsigned_abs() {
             return Err(Fault::StepTimer(axis));
         }
     }
     Ok(())
+}
+
+/// Adds the steps of the move in flight to the position.
+fn count_in(pos: &mut Position, emitted: [u32; 3]) {
+    if let Some(dirs) = pos.in_flight.take() {
+        for i in 0..3 {
+            let e = emitted[i].min(i32::MAX as u32) as i32;
+            pos.steps[i] += dirs[i] as i32 * e;
+        }
+    }
+}
+
+/// Stops the move in flight, if any (its future was dropped by a stop):
+/// every axis decelerates from its current speed at its limit, and the
+/// steps it took are counted in, so the axes stay homed.
+pub async fn halt<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, pos: &mut Position) {
+    if pos.in_flight.is_none() {
+        return;
+    }
+    let tick_hz = <B::Steps as StepTimer>::TICK_HZ;
+    hw.steps.brake([0, 1, 2].map(|i| units::brake_ticks(&cfg.axes[i], tick_hz)));
+    // A brake takes at most the longest stop from full speed.
+    let stop_s = cfg.axes.iter().map(|a| a.max_speed_dps / a.max_accel_dps2).fold(0.0, f32::max);
+    let limit_ms = (stop_s * 2.0e3) as u32 + STALL_MARGIN_MS;
+    match select(hw.steps.finished(), hw.delay.delay_ms(limit_ms)).await {
+        Either::First(emitted) => count_in(pos, emitted),
+        Either::Second(()) => {
+            // A stalled timer: where the axes are is no longer known.
+            hw.steps.clear();
+            pos.in_flight = None;
+            pos.homed = [false; 3];
+        }
+    }
+    hw.delay.delay_ns(units::seconds_to_ns(cfg.driver.dir_hold_s)).await;
 }
 
 /// Moves every axis to absolute microstep targets at cruise speed.

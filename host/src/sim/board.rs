@@ -1,6 +1,10 @@
 //! Virtual peripherals implementing the firmware's hardware traits over the
-//! shared [`World`]. Every future completes at once: time is simulated.
+//! shared [`World`]. Time is simulated: a delay, a chop period or a move
+//! advances it in slices ([`super::clock`]), so that what the firmware
+//! watches meanwhile (the link, the E-STOP, the host timer) is looked at
+//! as often as on the chip.
 
+use super::clock::{advance_to, elapse, slice_end};
 use super::faults::HardwareFault;
 use super::world::World;
 use gonio_firmware::board::REFERENCE;
@@ -11,6 +15,7 @@ use gonio_shared::Axis;
 use std::cell::RefCell;
 use std::convert::Infallible;
 use std::rc::Rc;
+use std::task::Poll;
 
 type Shared = Rc<RefCell<World>>;
 
@@ -67,12 +72,7 @@ impl SimPin {
             Role::Dir(i) => w.dir_positive[i] = high,
             Role::EnableN(i) => w.enable_n[i] = high,
             Role::Gain(b) => w.gain_bits[b] = high,
-            Role::Laser => {
-                if high && !w.laser {
-                    w.laser_ons += 1;
-                }
-                w.laser = high;
-            }
+            Role::Laser => w.set_laser(high),
         }
     }
 }
@@ -138,11 +138,12 @@ impl AdcStream for SimAdc {
         let alpha = 1.0 - (-dt / w.photodiode.tau_s).exp();
         let full = ((1u32 << Self::BITS) - 1) as f64;
         let World { photodiode, rng, t_s, .. } = &mut *w;
+        let t_s = *t_s;
         for (k, o) in out.iter_mut().enumerate() {
             let on = if k < m / 2 { 1.0 } else { 0.0 };
             let target = gain * (sig_a * on + photodiode.ambient_a);
             self.amp_v += (target - self.amp_v) * alpha;
-            let t = *t_s + k as f64 * dt;
+            let t = t_s + k as f64 * dt;
             let v = self.amp_v + photodiode.interference_v(t, rng);
             *o = if saturated {
                 full as u16
@@ -150,7 +151,8 @@ impl AdcStream for SimAdc {
                 (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16
             };
         }
-        *t_s += m as f64 * dt;
+        drop(w);
+        elapse(&self.world, m as f64 * dt).await;
         if lost {
             return Err(Overrun);
         }
@@ -158,12 +160,24 @@ impl AdcStream for SimAdc {
     }
 }
 
-/// The step timer: the firmware's executor on virtual STEP pins, run against
-/// a clock that jumps from event to event; every rising edge moves the motor
-/// (unless its driver is disabled or an end stop blocks it).
+/// The step timer: the firmware's executor on virtual STEP pins, run
+/// against simulated time from event to event, one time slice per poll;
+/// every rising edge moves the motor (unless its driver is disabled or an
+/// end stop blocks it).
 pub struct SimSteps {
     world: Shared,
     exec: Executor<SimPin>,
+    /// Simulated time (s) of the executor's tick 0, and its next event.
+    origin_s: f64,
+    next: Option<u64>,
+    /// This move never ends (an injected stall).
+    stalled: bool,
+}
+
+impl SimSteps {
+    fn tick_time(&self, tick: u64) -> f64 {
+        self.origin_s + tick as f64 / Self::TICK_HZ as f64
+    }
 }
 
 impl StepTimer for SimSteps {
@@ -173,26 +187,55 @@ impl StepTimer for SimSteps {
         self.exec.push(axis, block)
     }
 
-    async fn run(&mut self) -> [u32; 3] {
-        let stalled = {
-            let mut w = self.world.borrow_mut();
-            if w.laser {
-                w.moves += 1;
-            }
-            w.faults.take_stall(w.moves)
-        };
-        if stalled {
-            // The timer never finishes: the firmware's watchdog on the move
-            // has to give up on it.
-            std::future::pending::<()>().await;
+    fn start(&mut self) {
+        let mut w = self.world.borrow_mut();
+        if w.laser {
+            w.moves += 1;
         }
-        let end = self.exec.run_to_end();
-        self.world.borrow_mut().t_s += end as f64 / Self::TICK_HZ as f64;
-        self.exec.emitted()
+        self.stalled = w.faults.take_stall(w.moves);
+        self.origin_s = w.t_s;
+        drop(w);
+        self.next = self.exec.start();
+    }
+
+    async fn finished(&mut self) -> [u32; 3] {
+        std::future::poll_fn(|_| {
+            if self.stalled {
+                // The timer never finishes: the firmware's watchdog on the
+                // move (its delay runs the time) has to give up on it.
+                return Poll::Pending;
+            }
+            let limit = slice_end(&self.world.borrow());
+            while let Some(t) = self.next {
+                let at = self.tick_time(t);
+                if at > limit {
+                    break;
+                }
+                {
+                    let mut w = self.world.borrow_mut();
+                    w.t_s = w.t_s.max(at);
+                }
+                self.next = self.exec.fire(t);
+            }
+            if self.next.is_none() {
+                return Poll::Ready(self.exec.emitted());
+            }
+            advance_to(&self.world, limit);
+            Poll::Pending
+        })
+        .await
+    }
+
+    fn brake(&mut self, brake_ticks: [f32; 3]) {
+        if self.next.is_some() {
+            self.next = self.exec.brake(brake_ticks);
+        }
     }
 
     fn clear(&mut self) {
         self.exec.clear();
+        self.next = None;
+        self.stalled = false;
     }
 }
 
@@ -202,7 +245,7 @@ pub struct SimDelay {
 
 impl embedded_hal_async::delay::DelayNs for SimDelay {
     async fn delay_ns(&mut self, ns: u32) {
-        self.world.borrow_mut().t_s += ns as f64 * 1e-9;
+        elapse(&self.world, ns as f64 * 1e-9).await;
     }
 }
 
@@ -241,6 +284,9 @@ pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
                 [0, 1, 2].map(|i| pin(Role::Step(i))),
                 units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, SimSteps::TICK_HZ) as u64,
             ),
+            origin_s: 0.0,
+            next: None,
+            stalled: false,
         },
         delay: SimDelay { world: world.clone() },
         clock: SimClock { world: world.clone() },

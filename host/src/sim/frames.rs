@@ -6,12 +6,13 @@
 //! command-validation property test and the fault matrix drive the
 //! firmware's dispatch with it and look at the virtual hardware.
 
-use super::{board::SimBoard, build, SimConfig, World};
+use super::{board::SimBoard, build, clock, sentry, SimConfig, World};
 use gonio_firmware::link::{Link, LinkError};
 use gonio_firmware::Head;
 use std::cell::{Ref, RefCell, RefMut};
 use std::collections::VecDeque;
 use std::rc::Rc;
+use std::task::Poll;
 
 /// A frame the head sent, and the state of the laser and the motor drivers
 /// at that moment.
@@ -43,8 +44,15 @@ fn take(frame: Vec<u8>, buf: &mut [u8]) -> usize {
 }
 
 impl Link for Batch {
+    /// The next frame; with none left, the link stays open while the head
+    /// works and closes when it next waits for a request.
     async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
-        self.inbound.pop_front().map(|f| take(f, buf)).ok_or(LinkError::Closed)
+        std::future::poll_fn(|_| match self.inbound.pop_front() {
+            Some(f) => Poll::Ready(Ok(take(f, buf))),
+            None if self.world.borrow().busy => Poll::Pending,
+            None => Poll::Ready(Err(LinkError::Closed)),
+        })
+        .await
     }
 
     fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
@@ -109,7 +117,7 @@ impl FrameHead {
             open,
             cut_after,
         };
-        futures::executor::block_on(self.head.serve(&mut link));
+        clock::run(&self.world, self.head.serve(&mut link, &mut sentry(&self.world)));
         link.outbound
     }
 

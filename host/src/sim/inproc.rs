@@ -2,10 +2,14 @@
 //! `gonio demo` and the end-to-end tests use. Frames cross the channels in
 //! exactly the bytes the USB link would carry.
 
+use super::clock::{self, Idle};
 use super::faulty_link::FaultyLink;
-use super::{build, SimConfig};
+use super::{build, sentry, SimConfig, World};
 use gonio_firmware::link::{Link, LinkError};
+use std::cell::RefCell;
+use std::rc::Rc;
 use std::sync::mpsc;
+use std::task::Poll;
 use std::thread::JoinHandle;
 use tokio::sync::mpsc as tmpsc;
 
@@ -13,6 +17,7 @@ use tokio::sync::mpsc as tmpsc;
 struct ChannelLink {
     rx: mpsc::Receiver<Vec<u8>>,
     tx: tmpsc::UnboundedSender<Vec<u8>>,
+    world: Rc<RefCell<World>>,
 }
 
 fn take(frame: Vec<u8>, buf: &mut [u8]) -> usize {
@@ -25,8 +30,26 @@ fn take(frame: Vec<u8>, buf: &mut [u8]) -> usize {
 
 impl Link for ChannelLink {
     async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
-        // The sim thread has nothing else to do while idle: blocking is fine.
-        self.rx.recv().map(|f| take(f, buf)).map_err(|_| LinkError::Closed)
+        std::future::poll_fn(|_| {
+            if let Some(r) = self.try_recv(buf) {
+                return Poll::Ready(r);
+            }
+            // At rest the sim thread has nothing else to do: blocking is fine.
+            let got = match clock::idle(&self.world) {
+                Idle::Busy => return Poll::Pending,
+                Idle::Wait(None) => self.rx.recv().map_err(|_| mpsc::RecvTimeoutError::Disconnected),
+                Idle::Wait(Some(d)) => self.rx.recv_timeout(d),
+            };
+            match got {
+                Ok(f) => Poll::Ready(Ok(take(f, buf))),
+                Err(mpsc::RecvTimeoutError::Timeout) => {
+                    clock::timed_out(&self.world);
+                    Poll::Pending
+                }
+                Err(mpsc::RecvTimeoutError::Disconnected) => Poll::Ready(Err(LinkError::Closed)),
+            }
+        })
+        .await
     }
 
     fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
@@ -57,11 +80,16 @@ pub fn spawn_in_process(cfg: SimConfig) -> InProcessLink {
     let thread = std::thread::Builder::new()
         .name("sim-head".into())
         .spawn(move || {
-            let (mut head, _world) = build(&cfg);
+            let (mut head, world) = build(&cfg);
             // The host's end sees the channels close when this thread ends:
             // when the host has gone, or the plan cut the link.
-            let mut link = FaultyLink::new(ChannelLink { rx, tx }, cfg.faults.clone());
-            futures::executor::block_on(head.serve(&mut link));
+            let channels = ChannelLink {
+                rx,
+                tx,
+                world: world.clone(),
+            };
+            let mut link = FaultyLink::new(channels, cfg.faults.clone());
+            clock::run(&world, head.serve(&mut link, &mut sentry(&world)));
         })
         .expect("spawning the simulated head's thread");
     InProcessLink {

@@ -4,6 +4,7 @@
 //! the firmware's own motion, auto-range and demodulation code.
 
 mod board;
+pub mod clock;
 pub mod faults;
 mod faulty_link;
 mod frames;
@@ -88,6 +89,11 @@ impl Default for SimConfig {
             imperfections: Box::default(),
         }
     }
+}
+
+/// The E-STOP input and timer of a head on `world`.
+pub(crate) fn sentry(world: &Rc<RefCell<World>>) -> clock::SimSentry {
+    clock::SimSentry { world: world.clone() }
 }
 
 /// Builds a firmware head on a fresh virtual world.

@@ -2,8 +2,9 @@
 //! on a byte stream, exactly as the real head's USB CDC-ACM port, so that
 //! `gonio scan --port PATH` cannot tell the two apart except by identity.
 
+use super::clock::{self, Idle};
 use super::faulty_link::FaultyLink;
-use super::{build, SimConfig};
+use super::{build, sentry, SimConfig, World};
 use anyhow::{Context, Result};
 use gonio_firmware::framing::{self, Decoder, MAX_ENCODED};
 use gonio_firmware::link::{Link, LinkError};
@@ -11,11 +12,14 @@ use nix::fcntl::{fcntl, FcntlArg, OFlag};
 use nix::poll::{poll, PollFd, PollFlags, PollTimeout};
 use nix::pty::openpty;
 use nix::sys::termios::{cfmakeraw, tcgetattr, tcsetattr, SetArg};
+use std::cell::RefCell;
 use std::collections::VecDeque;
 use std::fs::File;
 use std::io::{Read, Write};
 use std::os::fd::{AsFd, OwnedFd};
 use std::path::Path;
+use std::rc::Rc;
+use std::task::Poll;
 
 const WRITE_TIMEOUT_MS: u16 = 2000;
 
@@ -23,18 +27,23 @@ struct PtyLink {
     master: File,
     decoder: Decoder,
     frames: VecDeque<Vec<u8>>,
+    world: Rc<RefCell<World>>,
 }
 
 impl PtyLink {
-    /// Reads what is available (blocking when `wait`), queueing whole frames.
-    fn pump(&mut self, wait: bool) {
-        let timeout = if wait { PollTimeout::NONE } else { PollTimeout::ZERO };
+    /// Reads what is available (blocking up to `wait`, for ever for `None`),
+    /// queueing whole frames; false when the wait ran out.
+    fn pump(&mut self, wait: Option<std::time::Duration>) -> bool {
+        let timeout = match wait {
+            None => PollTimeout::NONE,
+            Some(d) => PollTimeout::try_from(d).unwrap_or(PollTimeout::MAX),
+        };
         let ready = {
             let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLIN)];
             poll(&mut fds, timeout).map(|n| n > 0).unwrap_or(false)
         };
         if !ready {
-            return;
+            return false;
         }
         let mut buf = [0u8; 512];
         match self.master.read(&mut buf) {
@@ -45,6 +54,7 @@ impl PtyLink {
             // EIO or a spurious wake-up: wait and look again.
             Err(_) => std::thread::sleep(std::time::Duration::from_millis(20)),
         }
+        true
     }
 
     fn pop(&mut self, buf: &mut [u8]) -> Option<usize> {
@@ -57,17 +67,29 @@ impl PtyLink {
 
 impl Link for PtyLink {
     async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
-        loop {
-            if let Some(n) = self.pop(buf) {
-                return Ok(n);
+        std::future::poll_fn(|_| {
+            if let Some(r) = self.try_recv(buf) {
+                return Poll::Ready(r);
             }
-            self.pump(true);
-        }
+            match clock::idle(&self.world) {
+                Idle::Busy => {}
+                Idle::Wait(wait) => {
+                    if !self.pump(wait) && wait.is_some() {
+                        clock::timed_out(&self.world);
+                    }
+                }
+            }
+            match self.pop(buf) {
+                Some(n) => Poll::Ready(Ok(n)),
+                None => Poll::Pending,
+            }
+        })
+        .await
     }
 
     fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
         if self.frames.is_empty() {
-            self.pump(false);
+            self.pump(Some(std::time::Duration::ZERO));
         }
         self.pop(buf).map(Ok)
     }
@@ -114,15 +136,17 @@ pub fn serve_pty(cfg: SimConfig, link: &Path, on_ready: impl FnOnce(&Path)) -> R
     let _slave: OwnedFd = pty.slave;
     let flags = fcntl(&pty.master, FcntlArg::F_GETFL).context("reading descriptor flags")?;
     fcntl(&pty.master, FcntlArg::F_SETFL(OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK)).context("setting non-blocking mode")?;
-    let (mut head, _world) = build(&cfg);
+    let (mut head, world) = build(&cfg);
     // A cut link (fault plan) leaves the head silent until the host's next request.
     let pty_link = PtyLink {
         master: File::from(pty.master),
         decoder: Decoder::new(),
         frames: VecDeque::new(),
+        world: world.clone(),
     };
     let mut l = FaultyLink::new(pty_link, cfg.faults.clone());
+    let mut sentry = sentry(&world);
     loop {
-        futures::executor::block_on(head.serve(&mut l));
+        clock::run(&world, head.serve(&mut l, &mut sentry));
     }
 }

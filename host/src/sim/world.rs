@@ -54,6 +54,22 @@ pub struct World {
     pub moves: u64,
     /// Times the laser was switched on.
     pub laser_ons: u64,
+    /// Something advanced the time in the current poll of the head (set by
+    /// [`super::clock::elapse`] and the step timer, cleared by
+    /// [`super::clock::run`]): a link that finds nothing to read then
+    /// returns at once instead of waiting.
+    pub busy: bool,
+    /// The earliest time (s) something watches for (a host timeout, a
+    /// scripted frame, the E-STOP): time advances to it exactly.
+    pub wake_at: Option<f64>,
+    /// The E-STOP input reads open (pressed or wire cut)...
+    pub estop: bool,
+    /// ...or will from this time on (s), as a test scripts it.
+    pub estop_at: Option<f64>,
+    /// Every rising STEP edge (axis, time in s) and every change of the
+    /// laser enable (time, level), when a test records them.
+    pub step_log: Option<Vec<(usize, f64)>>,
+    pub laser_log: Option<Vec<(f64, bool)>>,
 }
 
 impl World {
@@ -100,7 +116,39 @@ impl World {
             faults: sim.faults.clone(),
             moves: 0,
             laser_ons: 0,
+            busy: false,
+            wake_at: None,
+            estop: false,
+            estop_at: None,
+            step_log: None,
+            laser_log: None,
         }
+    }
+
+    /// Asks time to stop at `t` (s) on its way.
+    pub fn wake(&mut self, t: f64) {
+        if t > self.t_s {
+            self.wake_at = Some(self.wake_at.map_or(t, |w| w.min(t)));
+        }
+    }
+
+    /// The E-STOP input reads open now.
+    pub fn estop_open(&self) -> bool {
+        self.estop || self.estop_at.is_some_and(|t| self.t_s >= t)
+    }
+
+    /// Sets the laser enable.
+    pub fn set_laser(&mut self, on: bool) {
+        if on && !self.laser {
+            self.laser_ons += 1;
+        }
+        if on != self.laser {
+            let t = self.t_s;
+            if let Some(log) = self.laser_log.as_mut() {
+                log.push((t, on));
+            }
+        }
+        self.laser = on;
     }
 
     /// A rising STEP edge: one microstep in the DIR direction, if the driver
@@ -111,6 +159,10 @@ impl World {
         }
         let (lo, hi) = self.stops[axis];
         let d = if self.dir_positive[axis] { 1 } else { -1 };
+        let t = self.t_s;
+        if let Some(log) = self.step_log.as_mut() {
+            log.push((axis, t));
+        }
         self.last_step[axis] = d;
         self.steps[axis] = (self.steps[axis] + d).clamp(lo, hi);
     }

@@ -73,6 +73,7 @@ fn ik_errors(cfg: &HeadConfig) -> (f64, f64, usize) {
         let pos = Position {
             steps: target_steps(cfg, &axes),
             homed: [true; 3],
+            in_flight: None,
         };
         quantised = quantised.max(geometry_error(&kinematics::forward(&pos.angles(cfg)), &g));
     }

@@ -10,6 +10,7 @@
 //! | cradle STEP/DIR/EN/HOME   | PC4–PC7 |                                      |
 //! | arm STEP/DIR/EN/HOME      | PC8–PC11 |                                     |
 //! | USB FS D−/D+          | PA11, PA12 |                                        |
+//! | E-STOP (EXTI12)       | PB12 | NC switch to ground, pull-up: high = stop  |
 //!
 //! Home switches are normally closed to ground with the internal pull-up, so a
 //! pressed switch and a broken wire both read high: homing then stops at once

@@ -3,6 +3,7 @@
 mod adc_stream;
 mod board;
 mod fault;
+mod sentry;
 mod step_timer;
 mod usb_link;
 mod watchdog;
@@ -19,6 +20,7 @@ use {defmt_rtt as _, panic_probe as _};
 bind_interrupts!(pub struct Irqs {
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
     TIM5 => step_timer::StepInterrupt;
+    EXTI15_10 => embassy_stm32::exti::InterruptHandler<embassy_stm32::interrupt::typelevel::EXTI15_10>;
 });
 
 /// The chip's types for the core.
@@ -92,6 +94,9 @@ async fn main(spawner: Spawner) {
         clock: UptimeClock,
     };
     let mut link = usb_link::start(&spawner, p.USB_OTG_FS, p.PA12, p.PA11);
+    let mut sentry = sentry::ChipSentry {
+        estop: embassy_stm32::exti::ExtiInput::new(p.PB12, p.EXTI12, embassy_stm32::gpio::Pull::Up, Irqs),
+    };
     let info = HeadInfo {
         board: board::NAME,
         serial: heapless::String::try_from(embassy_stm32::uid::uid_hex()).unwrap_or_default(),
@@ -105,7 +110,7 @@ async fn main(spawner: Spawner) {
     loop {
         // Serve until the host goes away (the head is then in its safe
         // state), then wait for the next connection.
-        head.serve(&mut link).await;
+        head.serve(&mut link, &mut sentry).await;
         link.wait_connection().await;
     }
 }

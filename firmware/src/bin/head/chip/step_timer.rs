@@ -67,6 +67,8 @@ impl Handler<Tim5Irq> for StepInterrupt {
 
 pub struct StepTimer5 {
     _timer: Timer<'static, TIM5>,
+    /// A started move has not been waited for to its end yet.
+    running: bool,
 }
 
 impl StepTimer5 {
@@ -88,7 +90,10 @@ impl StepTimer5 {
         // SAFETY: the handler is bound in `Irqs` and shares state only
         // through the critical-section mutex.
         unsafe { Tim5Irq::enable() };
-        StepTimer5 { _timer: timer }
+        StepTimer5 {
+            _timer: timer,
+            running: false,
+        }
     }
 
     fn with<R>(f: impl FnOnce(&mut State) -> R) -> Option<R> {
@@ -103,7 +108,7 @@ impl StepTimer for StepTimer5 {
         Self::with(|s| s.exec.push(axis, block)).unwrap_or(Err(QueueFull))
     }
 
-    async fn run(&mut self) -> [u32; 3] {
+    fn start(&mut self) {
         DONE.reset();
         let first = Self::with(|s| {
             // Tick 0 a little ahead, so the first step is not already late.
@@ -111,13 +116,31 @@ impl StepTimer for StepTimer5 {
             s.exec.start().map(|t| (s.origin, t))
         })
         .flatten();
-        match first {
-            Some((origin, t)) => {
-                arm(origin, t);
-                DONE.wait().await
-            }
-            None => [0; 3],
+        self.running = first.is_some();
+        if let Some((origin, t)) = first {
+            arm(origin, t);
         }
+    }
+
+    async fn finished(&mut self) -> [u32; 3] {
+        if !self.running {
+            return Self::with(|s| s.exec.emitted()).unwrap_or([0; 3]);
+        }
+        let emitted = DONE.wait().await;
+        self.running = false;
+        emitted
+    }
+
+    fn brake(&mut self, brake_ticks: [f32; 3]) {
+        // In the critical section the interrupt cannot fire between the
+        // executor's new schedule and the compare written for it.
+        Self::with(|s| match s.exec.brake(brake_ticks) {
+            Some(t) => arm(s.origin, t),
+            None => {
+                regs().dier().modify(|w| w.set_ccie(0, false));
+                DONE.signal(s.exec.emitted());
+            }
+        });
     }
 
     fn clear(&mut self) {

@@ -1,0 +1,219 @@
+//! Every state of the head and every event that moves it, in one table.
+//!
+//! The head serves one operation at a time; what may run, whether the laser
+//! may stay on and whether the drivers hold the motors all follow from the
+//! state, and every change of state goes through [`transition`]. A stop
+//! (abort, link loss, host silence, E-STOP) switches the laser off in the
+//! transition itself, before the motion is even braked; the deceleration
+//! then runs in [`Mode::Stopping`], and [`Event::Stopped`] ends it in the
+//! state the stop asked for.
+
+use gonio_shared::Fault;
+
+/// Where a stop leaves the head once the motion stands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Rest {
+    /// Nothing held: ready for the next request.
+    Idle,
+    /// A scan is held at its next position, to continue without replanning.
+    Paused,
+    /// E-STOP: everything refused until the input is closed again and the
+    /// host asks to continue.
+    Faulted,
+}
+
+/// What the head is doing.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    Idle,
+    Homing,
+    Moving,
+    /// A single measurement or a calibration (laser on).
+    Measuring,
+    Scanning,
+    /// A scan is held; moves and measurements (a drift-monitor visit) are
+    /// served without leaving it.
+    Paused,
+    /// The motion decelerates after a stop; the laser is already off.
+    Stopping(Rest),
+    Faulted,
+}
+
+/// What happens to the head.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Event {
+    // Requests.
+    Home,
+    Move,
+    /// A measurement or a calibration, moving first when asked to.
+    Measure,
+    Scan,
+    Pause,
+    Continue,
+    Abort,
+    // Ends of operations.
+    /// The operation (or the scan) ended as asked.
+    Done,
+    /// The operation ended with a fault of its own (stall, ADC overrun, ...).
+    Failed,
+    // Stops from outside the operation.
+    LinkLost,
+    HostSilent,
+    EStop,
+    /// The deceleration after a stop has ended.
+    Stopped,
+    /// No request for the idle time: the drivers let go.
+    IdleTimeout,
+    /// The laser's idle time at rest has passed.
+    LaserIdle,
+}
+
+/// The laser enable, as a transition leaves it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Laser {
+    /// Low at once (and the chop stopped).
+    Off,
+    /// As it was: an operation switches it on when it measures.
+    Keep,
+}
+
+/// The motor drivers, as a transition leaves them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Drivers {
+    /// Enabled before anything moves.
+    Enable,
+    /// Disabled: the motors hold by detent (and the worm gears) only.
+    Disable,
+    Keep,
+}
+
+/// The outcome of one event in one state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Transition {
+    pub to: Mode,
+    pub laser: Laser,
+    pub drivers: Drivers,
+    /// The request is refused with this fault (and nothing changes).
+    pub refused: Option<Fault>,
+}
+
+impl Mode {
+    /// Every state, for exhaustive tests.
+    pub const ALL: [Mode; 10] = [
+        Mode::Idle,
+        Mode::Homing,
+        Mode::Moving,
+        Mode::Measuring,
+        Mode::Scanning,
+        Mode::Paused,
+        Mode::Stopping(Rest::Idle),
+        Mode::Stopping(Rest::Paused),
+        Mode::Stopping(Rest::Faulted),
+        Mode::Faulted,
+    ];
+
+    /// An operation is running (and may be moving the stages).
+    pub fn busy(self) -> bool {
+        matches!(
+            self,
+            Mode::Homing | Mode::Moving | Mode::Measuring | Mode::Scanning | Mode::Stopping(_)
+        )
+    }
+
+    /// The laser may be on in this state.
+    pub fn laser_allowed(self) -> bool {
+        matches!(self, Mode::Measuring | Mode::Scanning | Mode::Paused | Mode::Idle)
+    }
+}
+
+impl Event {
+    pub const ALL: [Event; 15] = [
+        Event::Home,
+        Event::Move,
+        Event::Measure,
+        Event::Scan,
+        Event::Pause,
+        Event::Continue,
+        Event::Abort,
+        Event::Done,
+        Event::Failed,
+        Event::LinkLost,
+        Event::HostSilent,
+        Event::EStop,
+        Event::Stopped,
+        Event::IdleTimeout,
+        Event::LaserIdle,
+    ];
+}
+
+const fn go(to: Mode, laser: Laser, drivers: Drivers) -> Transition {
+    Transition {
+        to,
+        laser,
+        drivers,
+        refused: None,
+    }
+}
+
+const fn refuse(state: Mode, why: Fault) -> Transition {
+    Transition {
+        to: state,
+        laser: Laser::Keep,
+        drivers: Drivers::Keep,
+        refused: Some(why),
+    }
+}
+
+/// The table: what `event` does in state `s`.
+pub fn transition(s: Mode, event: Event) -> Transition {
+    use Drivers::{Disable, Enable, Keep as Hold};
+    use Event as E;
+    use Laser::{Keep, Off};
+    use Mode as M;
+    let stay = go(s, Keep, Hold);
+    match (s, event) {
+        // Requests at rest start their operation, drivers on; in a pause the
+        // stages may be visited without leaving it.
+        (M::Idle, E::Home) => go(M::Homing, Keep, Enable),
+        (M::Idle, E::Move) => go(M::Moving, Keep, Enable),
+        (M::Idle, E::Measure) => go(M::Measuring, Keep, Enable),
+        (M::Idle | M::Paused, E::Scan) => go(M::Scanning, Keep, Enable),
+        (M::Paused, E::Move | E::Measure) => go(M::Paused, Keep, Enable),
+        (M::Paused, E::Home) => refuse(s, Fault::Busy),
+        (M::Paused, E::Continue) => go(M::Scanning, Keep, Enable),
+        (M::Idle, E::Pause | E::Continue) => refuse(s, Fault::NotScanning),
+        (M::Faulted, E::Home | E::Move | E::Measure | E::Scan | E::Pause) => refuse(s, Fault::EmergencyStop),
+        // Continue re-arms after an E-STOP (the head checks the input first).
+        (M::Faulted, E::Continue) => go(M::Idle, Off, Disable),
+        (M::Scanning, E::Pause) => go(M::Stopping(Rest::Paused), Off, Hold),
+        (M::Paused | M::Stopping(_), E::Pause) => stay,
+        (_, E::Home | E::Move | E::Measure | E::Scan | E::Pause | E::Continue) => refuse(s, Fault::Busy),
+        // Abort: stop whatever runs and drop a held scan.
+        (M::Homing | M::Moving | M::Measuring | M::Scanning | M::Stopping(Rest::Idle | Rest::Paused), E::Abort) => {
+            go(M::Stopping(Rest::Idle), Off, Hold)
+        }
+        (M::Idle | M::Paused, E::Abort) => go(M::Idle, Off, Disable),
+        (M::Stopping(Rest::Faulted) | M::Faulted, E::Abort) => go(s, Off, Hold),
+        // Link loss and host silence: a scan is held, anything else dropped.
+        (M::Scanning, E::LinkLost | E::HostSilent) => go(M::Stopping(Rest::Paused), Off, Hold),
+        (M::Homing | M::Moving | M::Measuring, E::LinkLost | E::HostSilent) => go(M::Stopping(Rest::Idle), Off, Hold),
+        (M::Idle | M::Paused | M::Faulted, E::LinkLost | E::HostSilent) => go(s, Off, Disable),
+        (M::Stopping(_), E::LinkLost | E::HostSilent) => go(s, Off, Hold),
+        // E-STOP: from anywhere, laser off now, motion braked, then faulted.
+        (M::Idle | M::Paused | M::Faulted, E::EStop) => go(M::Faulted, Off, Disable),
+        (_, E::EStop) => go(M::Stopping(Rest::Faulted), Off, Hold),
+        // Ends of operations.
+        (M::Homing | M::Moving | M::Measuring | M::Scanning, E::Done) => go(M::Idle, Off, Hold),
+        (M::Homing | M::Moving | M::Measuring | M::Scanning, E::Failed) => go(M::Idle, Off, Disable),
+        (M::Paused, E::Failed) => go(M::Paused, Off, Disable),
+        (_, E::Done | E::Failed) => stay,
+        (M::Stopping(Rest::Idle), E::Stopped) => go(M::Idle, Off, Disable),
+        (M::Stopping(Rest::Paused), E::Stopped) => go(M::Paused, Off, Disable),
+        (M::Stopping(Rest::Faulted), E::Stopped) => go(M::Faulted, Off, Disable),
+        (_, E::Stopped) => stay,
+        (M::Idle | M::Paused, E::IdleTimeout) => go(s, Off, Disable),
+        (_, E::IdleTimeout) => stay,
+        (M::Idle | M::Paused, E::LaserIdle) => go(s, Off, Hold),
+        (_, E::LaserIdle) => stay,
+    }
+}

@@ -1,0 +1,148 @@
+//! Simulated time for the firmware's futures, and the executor that polls
+//! them.
+//!
+//! Virtual hardware advances the time in slices of at most [`SLICE_S`],
+//! returning `Pending` after each, so that a watch raced against an
+//! operation (the firmware's serve loop) is polled between slices, as the
+//! chip's executor polls it on every interrupt. Whatever watches for a
+//! moment (a host timeout, a scripted frame, the E-STOP) registers it with
+//! [`World::wake`], and time stops there exactly: a stop is seen when it
+//! happens, not at the end of a slice. When nothing advances the time (the
+//! head at rest), the link waits: for real frames on the in-process and
+//! pseudo-terminal links, with the wall clock standing in for the time to
+//! the next deadline; for the next scripted frame in tests.
+
+use super::world::World;
+use gonio_firmware::hw::{Sentry, Wake};
+use std::cell::RefCell;
+use std::future::Future;
+use std::pin::pin;
+use std::rc::Rc;
+use std::task::{Context, Poll, Waker};
+use std::time::Duration;
+
+type Shared = Rc<RefCell<World>>;
+
+/// Longest stretch of simulated time between two looks at the watch (s).
+pub const SLICE_S: f64 = 1e-3;
+
+/// Where the current slice ends: a slice on, or at the next wake-up.
+pub fn slice_end(w: &World) -> f64 {
+    let end = w.t_s + SLICE_S;
+    w.wake_at.filter(|&t| t > w.t_s).map_or(end, |t| t.min(end))
+}
+
+/// Ends a slice at `t`: the time is there, and the head was busy.
+pub fn advance_to(world: &Shared, t: f64) {
+    let mut w = world.borrow_mut();
+    w.t_s = w.t_s.max(t);
+    if w.wake_at.is_some_and(|at| at <= w.t_s) {
+        w.wake_at = None;
+    }
+    w.busy = true;
+}
+
+/// Lets `dt` seconds pass, slice by slice.
+pub async fn elapse(world: &Shared, dt: f64) {
+    let end = world.borrow().t_s + dt;
+    loop {
+        let to = {
+            let w = world.borrow();
+            if w.t_s >= end {
+                return;
+            }
+            slice_end(&w).min(end)
+        };
+        advance_to(world, to);
+        yield_once().await;
+    }
+}
+
+/// Returns `Pending` once: the executor polls again at once.
+async fn yield_once() {
+    let mut done = false;
+    std::future::poll_fn(|_| {
+        if done {
+            Poll::Ready(())
+        } else {
+            done = true;
+            Poll::Pending
+        }
+    })
+    .await
+}
+
+/// Polls `f` to completion. Nothing in the simulated head sleeps on a
+/// waker: what has nothing to do returns `Pending`, and what waits for the
+/// outside world (a link at rest) blocks inside its poll.
+pub fn run<F: Future>(world: &Shared, f: F) -> F::Output {
+    let mut f = pin!(f);
+    let mut cx = Context::from_waker(Waker::noop());
+    loop {
+        world.borrow_mut().busy = false;
+        if let Poll::Ready(v) = f.as_mut().poll(&mut cx) {
+            return v;
+        }
+    }
+}
+
+/// What a link with nothing to read does next.
+pub enum Idle {
+    /// The head is busy: return `Pending` and look again next poll.
+    Busy,
+    /// At rest: wait (for real) at most this long, or for ever.
+    Wait(Option<Duration>),
+}
+
+/// See [`Idle`]; a wait that times out moves the time on to the wake-up.
+pub fn idle(world: &Shared) -> Idle {
+    let w = world.borrow();
+    if w.busy {
+        return Idle::Busy;
+    }
+    Idle::Wait(w.wake_at.map(|t| Duration::from_secs_f64((t - w.t_s).max(0.0))))
+}
+
+/// The wait of [`idle`] ran out: time jumps to the wake-up.
+pub fn timed_out(world: &Shared) {
+    let mut w = world.borrow_mut();
+    if let Some(t) = w.wake_at.take() {
+        w.t_s = w.t_s.max(t);
+    }
+}
+
+/// The E-STOP input and the head's timer in simulated time.
+pub struct SimSentry {
+    pub(crate) world: Shared,
+}
+
+impl Sentry for SimSentry {
+    fn estop_open(&mut self) -> bool {
+        self.world.borrow().estop_open()
+    }
+
+    fn now_us(&self) -> u64 {
+        (self.world.borrow().t_s * 1e6) as u64
+    }
+
+    async fn until(&mut self, deadline_us: Option<u64>, estop: bool) -> Wake {
+        std::future::poll_fn(|_| {
+            let mut w = self.world.borrow_mut();
+            if estop && w.estop_open() {
+                return Poll::Ready(Wake::EStop);
+            }
+            let deadline = deadline_us.map(|d| d as f64 * 1e-6);
+            if deadline.is_some_and(|d| w.t_s >= d) {
+                return Poll::Ready(Wake::Deadline);
+            }
+            if let Some(d) = deadline {
+                w.wake(d);
+            }
+            if let Some(t) = w.estop_at.filter(|_| estop) {
+                w.wake(t);
+            }
+            Poll::Pending
+        })
+        .await
+    }
+}
