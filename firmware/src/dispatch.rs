@@ -48,25 +48,33 @@ pub fn key_is(key: Key, got: &VarKey) -> bool {
     k == *got
 }
 
-/// Whether a sealed frame asks to stop what runs (abort) or to hold a scan
-/// (pause): the requests the head acts on in the middle of an operation.
-/// Anything that fails its check or its header is neither.
-pub fn stop_request(sealed: &[u8]) -> Option<StopRequest> {
-    let (hdr, _) = crate::check::open(sealed).and_then(VarHeader::take_from_slice)?;
-    if is::<AbortEndpoint>(&hdr.key) {
-        Some(StopRequest::Abort)
-    } else if is::<PauseEndpoint>(&hdr.key) {
-        Some(StopRequest::Pause)
-    } else {
-        None
-    }
+/// What a request that arrives in the middle of an operation asks for,
+/// read from its key alone (a frame that fails its check or its header is
+/// [`Midway::Other`] and meets the full decoder later).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Midway {
+    /// Stop what runs.
+    Abort,
+    /// Hold the running scan.
+    Pause,
+    /// A status request: a heartbeat, or the host's probe for a lost request.
+    Status,
+    Other,
 }
 
-/// See [`stop_request`].
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum StopRequest {
-    Abort,
-    Pause,
+pub fn midway(sealed: &[u8]) -> Midway {
+    let Some((hdr, _)) = crate::check::open(sealed).and_then(VarHeader::take_from_slice) else {
+        return Midway::Other;
+    };
+    if is::<AbortEndpoint>(&hdr.key) {
+        Midway::Abort
+    } else if is::<PauseEndpoint>(&hdr.key) {
+        Midway::Pause
+    } else if is::<StatusEndpoint>(&hdr.key) {
+        Midway::Status
+    } else {
+        Midway::Other
+    }
 }
 
 fn is<E: Endpoint>(key: &VarKey) -> bool {

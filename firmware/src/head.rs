@@ -64,7 +64,7 @@ pub(crate) struct ScanRun {
 
 pub struct Head<B: Board> {
     pub(crate) cfg: HeadConfig,
-    hw: Hardware<B>,
+    pub(crate) hw: Hardware<B>,
     info: HeadInfo,
     pos: Position,
     detector: Detector,
@@ -233,7 +233,7 @@ impl<B: Board> Head<B> {
     }
 
     pub fn status(&self) -> Status {
-        let (next_order, total) = self.scan.as_ref().map_or((0, 0), |s| (s.next_order, s.total));
+        let (run, next_order, total) = self.scan.as_ref().map_or((0, 0, 0), |s| (s.run, s.next_order, s.total));
         Status {
             state: match self.mode {
                 Mode::Idle => HeadState::Idle,
@@ -241,7 +241,7 @@ impl<B: Board> Head<B> {
                 Mode::Moving => HeadState::Moving,
                 Mode::Measuring => HeadState::Measuring,
                 Mode::Scanning => HeadState::Scanning { next_order, total },
-                Mode::Paused => HeadState::Paused { next_order, total },
+                Mode::Paused => HeadState::Paused { run, next_order, total },
                 Mode::Stopping(_) => HeadState::Stopping,
                 Mode::Faulted => HeadState::Faulted,
             },
@@ -451,10 +451,13 @@ impl<B: Board> Head<B> {
         }
     }
 
-    /// Holds the running scan at its next point, with a `Paused` event.
-    pub(crate) fn hold_scan(&mut self, why: Fault) {
+    /// Holds the running scan at its next point, with a `Paused` event: at
+    /// the host's request (`None`) or for a fault.
+    pub(crate) fn hold_scan(&mut self, why: Option<Fault>) {
         if let Some(run) = &self.scan {
-            self.last_fault = Some(why);
+            if why.is_some() {
+                self.last_fault = why;
+            }
             self.pending_event = Some(ScanEvent::Paused {
                 run: run.run,
                 next_order: run.next_order,

@@ -11,13 +11,14 @@
 //! answered when the operation ends.
 
 use crate::check;
-use crate::dispatch::{decode, encode, stop_request, Command, DecodeError, StopRequest};
+use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
 use crate::framing::MAX_FRAME;
 use crate::head::Head;
 use crate::hw::{Board, Sentry, Wake};
 use crate::link::{Link, LinkError};
 use crate::state::{Event, Mode};
 use embassy_futures::select::{select, Either};
+use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint,
     PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
@@ -64,7 +65,7 @@ impl Inbox {
 #[derive(Debug)]
 enum Trip {
     /// An abort or a pause request (answered once the motion stands).
-    Request(StopRequest, Frame),
+    Request(Midway, Frame),
     LinkLost,
     HostSilent,
     EStop,
@@ -72,7 +73,8 @@ enum Trip {
 
 /// Watches the link, the E-STOP input and the host timer while an operation
 /// runs; returns what stops it. Requests other than abort (and pause, when
-/// `pause` trips) are held for later.
+/// `pause` trips) are held for later, except that one status request held
+/// answers for the heartbeats after it (each one still shows the host is there).
 async fn watch<L: Link, S: Sentry>(
     link: &mut L,
     sentry: &mut S,
@@ -96,9 +98,10 @@ async fn watch<L: Link, S: Sentry>(
                 // Any frame, even a damaged one, shows the host is there.
                 *heard = sentry.now_us();
                 let frame = inbox.frame(n);
-                match stop_request(&frame) {
-                    Some(StopRequest::Abort) => return Trip::Request(StopRequest::Abort, frame),
-                    Some(StopRequest::Pause) if pause => return Trip::Request(StopRequest::Pause, frame),
+                match midway(&frame) {
+                    kind @ Midway::Abort => return Trip::Request(kind, frame),
+                    kind @ Midway::Pause if pause => return Trip::Request(kind, frame),
+                    Midway::Status if inbox.held.iter().any(|f| midway(f) == Midway::Status) => {}
                     _ => {
                         let _ = inbox.held.push_back(frame);
                     }
@@ -195,10 +198,9 @@ impl<B: Board> Head<B> {
         let (event, fault) = match trip {
             Trip::Request(kind, frame) => {
                 let _ = inbox.held.push_front(frame);
-                match kind {
-                    StopRequest::Abort => (Event::Abort, Fault::Aborted),
-                    StopRequest::Pause => (Event::Pause, Fault::Aborted),
-                }
+                // Only a scan is paused, and only a scan point trips on it.
+                let event = if kind == Midway::Pause { Event::Pause } else { Event::Abort };
+                (event, Fault::Aborted)
             }
             Trip::LinkLost => (Event::LinkLost, Fault::LinkLost),
             Trip::HostSilent => (Event::HostSilent, Fault::HostSilent),
@@ -209,11 +211,11 @@ impl<B: Board> Head<B> {
         };
         self.stop(event).await;
         if self.mode == Mode::Paused {
-            self.hold_scan(fault);
+            self.hold_scan((event != Event::Pause).then_some(fault));
         } else {
             self.drop_scan(fault);
+            self.last_fault = Some(fault);
         }
-        self.last_fault = Some(fault);
         crate::info!("stopped: E{}", fault.code());
         if event == Event::LinkLost {
             Err(LinkError::Closed)
@@ -240,6 +242,7 @@ impl<B: Board> Head<B> {
     async fn pause(&mut self) -> Reply<Status> {
         if self.mode == Mode::Scanning {
             self.stop(Event::Pause).await;
+            self.hold_scan(None);
             return Ok(self.status());
         }
         self.apply(Event::Pause).map(|()| self.status())
@@ -249,8 +252,13 @@ impl<B: Board> Head<B> {
     /// E-STOP once the input has read closed for [`ESTOP_DEBOUNCE_US`].
     async fn resume<S: Sentry>(&mut self, sentry: &mut S) -> Reply<Status> {
         if self.mode == Mode::Faulted {
-            let settled = sentry.now_us().saturating_add(ESTOP_DEBOUNCE_US);
-            if sentry.estop_open() || sentry.until(Some(settled), true).await == Wake::EStop {
+            // Closed now, and still closed the debounce time later.
+            let bounced = sentry.estop_open()
+                || matches!(
+                    select(self.hw.delay.delay_us(ESTOP_DEBOUNCE_US as u32), sentry.until(None, true)).await,
+                    Either::Second(_)
+                );
+            if bounced {
                 self.estop_open = true;
                 return Err(Fault::EmergencyStop);
             }

@@ -174,8 +174,9 @@ pub fn transition(s: Mode, event: Event) -> Transition {
     match (s, event) {
         // Requests at rest start their operation, drivers on; in a pause the
         // stages may be visited without leaving it.
-        (M::Idle, E::Home) => go(M::Homing, Keep, Enable),
-        (M::Idle, E::Move) => go(M::Moving, Keep, Enable),
+        // A laser left on by its idle time goes off for homing and moves.
+        (M::Idle, E::Home) => go(M::Homing, Off, Enable),
+        (M::Idle, E::Move) => go(M::Moving, Off, Enable),
         (M::Idle, E::Measure) => go(M::Measuring, Keep, Enable),
         (M::Idle | M::Paused, E::Scan) => go(M::Scanning, Keep, Enable),
         (M::Paused, E::Move | E::Measure) => go(M::Paused, Keep, Enable),
@@ -215,5 +216,144 @@ pub fn transition(s: Mode, event: Event) -> Transition {
         (_, E::IdleTimeout) => stay,
         (M::Idle | M::Paused, E::LaserIdle) => go(s, Off, Hold),
         (_, E::LaserIdle) => stay,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn at_rest(s: Mode) -> bool {
+        matches!(s, Mode::Idle | Mode::Paused | Mode::Faulted)
+    }
+
+    fn stop_trigger(e: Event) -> bool {
+        matches!(e, Event::Abort | Event::LinkLost | Event::HostSilent | Event::EStop)
+    }
+
+    /// The table again, written as the rules docs/faults.md states, not as
+    /// a match on pairs: what every pair must give.
+    fn expected(s: Mode, e: Event) -> Transition {
+        use Drivers::{Disable, Enable};
+        use Laser::{Keep, Off};
+        let refuse = |f| Transition {
+            to: s,
+            laser: Keep,
+            drivers: Drivers::Keep,
+            refused: Some(f),
+        };
+        let go = |to, laser, drivers| Transition {
+            to,
+            laser,
+            drivers,
+            refused: None,
+        };
+        let request = matches!(
+            e,
+            Event::Home | Event::Move | Event::Measure | Event::Scan | Event::Pause | Event::Continue
+        );
+        if stop_trigger(e) {
+            // Every stop darkens the laser at once, from any state.
+            let to = match (e, s) {
+                (Event::EStop, _) if at_rest(s) => Mode::Faulted,
+                (Event::EStop, _) => Mode::Stopping(Rest::Faulted),
+                (_, Mode::Faulted | Mode::Stopping(Rest::Faulted)) => s,
+                (Event::Abort, _) if at_rest(s) => Mode::Idle,
+                (Event::Abort, _) => Mode::Stopping(Rest::Idle),
+                (_, Mode::Scanning) => Mode::Stopping(Rest::Paused),
+                (_, Mode::Stopping(_)) => s,
+                (_, _) if at_rest(s) => s,
+                _ => Mode::Stopping(Rest::Idle),
+            };
+            // Drivers let go only where nothing moves; a brake needs them.
+            let drivers = if at_rest(s) && !(e == Event::Abort && s == Mode::Faulted) {
+                Disable
+            } else {
+                Drivers::Keep
+            };
+            return go(to, Off, drivers);
+        }
+        if request {
+            if s == Mode::Faulted {
+                return if e == Event::Continue {
+                    go(Mode::Idle, Off, Disable)
+                } else {
+                    refuse(Fault::EmergencyStop)
+                };
+            }
+            return match (s, e) {
+                (Mode::Idle, Event::Pause | Event::Continue) => refuse(Fault::NotScanning),
+                (Mode::Idle, Event::Home) => go(Mode::Homing, Off, Enable),
+                (Mode::Idle, Event::Move) => go(Mode::Moving, Off, Enable),
+                (Mode::Idle, Event::Measure) => go(Mode::Measuring, Keep, Enable),
+                (Mode::Idle | Mode::Paused, Event::Scan) | (Mode::Paused, Event::Continue) => go(Mode::Scanning, Keep, Enable),
+                (Mode::Paused, Event::Move | Event::Measure) => go(Mode::Paused, Keep, Enable),
+                (Mode::Scanning, Event::Pause) => go(Mode::Stopping(Rest::Paused), Off, Drivers::Keep),
+                (Mode::Paused | Mode::Stopping(_), Event::Pause) => go(s, Keep, Drivers::Keep),
+                _ => refuse(Fault::Busy),
+            };
+        }
+        let running = matches!(s, Mode::Homing | Mode::Moving | Mode::Measuring | Mode::Scanning);
+        match e {
+            Event::Done if running => go(Mode::Idle, Off, Drivers::Keep),
+            Event::Failed if running || s == Mode::Paused => go(if running { Mode::Idle } else { s }, Off, Disable),
+            Event::Stopped => match s {
+                Mode::Stopping(Rest::Idle) => go(Mode::Idle, Off, Disable),
+                Mode::Stopping(Rest::Paused) => go(Mode::Paused, Off, Disable),
+                Mode::Stopping(Rest::Faulted) => go(Mode::Faulted, Off, Disable),
+                _ => go(s, Keep, Drivers::Keep),
+            },
+            Event::IdleTimeout if matches!(s, Mode::Idle | Mode::Paused) => go(s, Off, Disable),
+            Event::LaserIdle if matches!(s, Mode::Idle | Mode::Paused) => go(s, Off, Drivers::Keep),
+            _ => go(s, Keep, Drivers::Keep),
+        }
+    }
+
+    #[test]
+    fn every_state_and_event_gives_the_documented_outcome() {
+        let mut pairs = 0;
+        for s in Mode::ALL {
+            for e in Event::ALL {
+                let t = transition(s, e);
+                assert_eq!(t, expected(s, e), "{s:?} × {e:?}");
+                pairs += 1;
+            }
+        }
+        assert_eq!(pairs, Mode::ALL.len() * Event::ALL.len());
+    }
+
+    #[test]
+    fn invariants_hold_over_the_whole_table() {
+        for s in Mode::ALL {
+            for e in Event::ALL {
+                let t = transition(s, e);
+                if t.refused.is_some() {
+                    assert_eq!(
+                        (t.to, t.laser, t.drivers),
+                        (s, Laser::Keep, Drivers::Keep),
+                        "{s:?} × {e:?}: a refusal changed something"
+                    );
+                }
+                // Motion never loses its drivers: a state that may move keeps them.
+                if t.to.busy() {
+                    assert_ne!(t.drivers, Drivers::Disable, "{s:?} × {e:?}");
+                }
+                // A stop from a state that may be moving goes through Stopping.
+                if stop_trigger(e) && s.busy() {
+                    assert!(matches!(t.to, Mode::Stopping(_)), "{s:?} × {e:?} → {:?}", t.to);
+                }
+                // Only continue leaves an E-STOP, and only the E-STOP enters it.
+                if s == Mode::Faulted && t.to != Mode::Faulted {
+                    assert_eq!(e, Event::Continue);
+                }
+                if t.to == Mode::Faulted && s != Mode::Faulted {
+                    assert!(matches!(e, Event::EStop | Event::Stopped), "{s:?} × {e:?}");
+                }
+                // Where the laser may not be on, the transition into it darkens it.
+                if !t.to.laser_allowed() && t.refused.is_none() && t.to != s {
+                    assert!(t.laser == Laser::Off || !s.laser_allowed(), "{s:?} × {e:?}");
+                }
+            }
+        }
     }
 }

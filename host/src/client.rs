@@ -5,8 +5,8 @@ use crate::link::{self, Workers};
 use crate::sim::SimConfig;
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint, MeasureRequest,
-    MoveEndpoint, MoveReport, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
+    MeasureRequest, MoveEndpoint, MoveReport, PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::{
     AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, SafetySettings, Sample,
@@ -37,6 +37,10 @@ const HOMING: Duration = Duration::from_secs(300);
 const MOTION: Duration = Duration::from_secs(120);
 /// How long a request may go unanswered before the host sends a probe.
 const PROBE_AFTER: Duration = Duration::from_secs(1);
+/// While a long request runs, a status request this often shows the head
+/// that the host is still there (its host watch runs during moves and
+/// homing too: `SafetySettings::host_timeout_s`, 4× this on a real head).
+pub const HEARTBEAT: Duration = Duration::from_secs(5);
 
 pub struct Head {
     client: HostClient<WireError>,
@@ -125,14 +129,36 @@ impl Head {
         Ok(watched::<AbortEndpoint>(&self.client, &(), QUICK).await?)
     }
 
+    /// Holds the running scan at its next position (a move in progress is
+    /// braked); its events end with `ScanEvent::Paused`.
+    pub async fn pause(&self) -> Result<Status> {
+        fault(watched::<PauseEndpoint>(&self.client, &(), MOTION).await?).context("pause refused")
+    }
+
+    /// Continues a held scan where it stopped (its events go on under the
+    /// same run), or re-arms the head after its E-STOP was closed.
+    pub async fn continue_scan(&self) -> Result<Status> {
+        fault(watched::<ContinueEndpoint>(&self.client, &(), QUICK).await?).context("continue refused")
+    }
+
+    /// Subscribes to scan events; opened before a request that starts them.
+    async fn scan_events(&self) -> Result<Subscription<ScanEvent>> {
+        self.client
+            .subscribe_exclusive::<ScanEventTopic>(1024)
+            .await
+            .map_err(|e| anyhow!("cannot subscribe to scan events: {e:?}"))
+    }
+
+    /// Continues a held scan; its further events arrive on the subscription.
+    pub async fn continue_events(&self) -> Result<(Status, Subscription<ScanEvent>)> {
+        let sub = self.scan_events().await?;
+        Ok((self.continue_scan().await?, sub))
+    }
+
     /// Starts a scan; its events arrive on the returned subscription, which is
     /// opened before the request so none is missed.
     pub async fn start_scan(&self, spec: &ScanSpec) -> Result<(ScanAccepted, Subscription<ScanEvent>)> {
-        let sub = self
-            .client
-            .subscribe_exclusive::<ScanEventTopic>(1024)
-            .await
-            .map_err(|e| anyhow!("cannot subscribe to scan events: {e:?}"))?;
+        let sub = self.scan_events().await?;
         // A scan continued from a later position (resume, drift monitor) has
         // the head replay its plan up to there first: seconds, not a quick reply.
         let accepted = fault(watched::<ScanEndpoint>(&self.client, spec, MOTION).await?).context("scan refused")?;
@@ -221,12 +247,29 @@ where
     tokio::pin!(probe);
     // Biased: when both answers have come in, the request's is taken (it
     // was delivered first).
-    tokio::select! {
+    let answer = tokio::select! {
         biased;
-        r = &mut answer => r,
+        r = &mut answer => return r,
         p = &mut probe => match p {
-            Ok(_) => Err(CallError::Lost(E::PATH)),
-            Err(_) => answer.await,
+            Ok(_) => return Err(CallError::Lost(E::PATH)),
+            Err(_) => answer,
         },
+        () = heartbeats(client) => unreachable!("heartbeats never end"),
+    };
+    tokio::select! {
+        r = answer => r,
+        () = heartbeats(client) => unreachable!("heartbeats never end"),
+    }
+}
+
+/// Sends a status request every [`HEARTBEAT`], answers unread (the head
+/// answers them after the operation), for as long as it is polled.
+async fn heartbeats(client: &HostClient<WireError>) {
+    loop {
+        tokio::time::sleep(HEARTBEAT).await;
+        let c = client.clone();
+        tokio::spawn(async move {
+            let _ = tokio::time::timeout(MOTION, c.send_resp::<StatusEndpoint>(&())).await;
+        });
     }
 }

@@ -5,7 +5,7 @@ use crate::client::{is_link_loss, Head};
 use crate::samples_csv::SampleWriter;
 use crate::session::Session;
 use anyhow::{bail, Context, Result};
-use gonio_shared::{Fault, Geometry, HeadState, ScanEvent, ScanSpec};
+use gonio_shared::{Fault, Geometry, HeadState, ScanAccepted, ScanEvent, ScanSpec};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -241,7 +241,28 @@ impl ScanRun<'_> {
                 Err(e)
             }
         };
-        let (accepted, mut events) = match head.start_scan(spec).await {
+        // A scan the head holds where this stretch begins (paused for the
+        // monitor, or after host silence or a lost link) is continued
+        // without replanning; otherwise it starts (or replaces the held one).
+        let held = match head.status().await {
+            Ok(st) => match st.state {
+                HeadState::Paused { run, next_order, total } if next_order == expected && total == spec.len() => Some((run, total)),
+                _ => None,
+            },
+            Err(e) => return lost(e, expected),
+        };
+        let started = match held {
+            Some((run, points)) => head.continue_events().await.map(|(_, sub)| {
+                let accepted = ScanAccepted {
+                    points,
+                    first_order: expected,
+                    run,
+                };
+                (accepted, sub)
+            }),
+            None => head.start_scan(spec).await,
+        };
+        let (accepted, mut events) = match started {
             Ok(x) => x,
             Err(e) => return lost(e, expected),
         };
@@ -278,8 +299,10 @@ impl ScanRun<'_> {
                             return Ok(Stretch::Interrupted(expected, Interruption::Gap));
                         }
                         HeadState::Idle if expected >= outcome.points => return Ok(Stretch::Finished),
-                        // Held (the head stopped hearing us): a new scan from
-                        // the first position not stored replaces it.
+                        HeadState::Paused { .. } if pausing => return Ok(Stretch::Paused(expected)),
+                        // Held (the head stopped hearing us) or ended early:
+                        // the next stretch continues from the first position
+                        // not stored.
                         HeadState::Idle | HeadState::Paused { .. } => return Ok(Stretch::Interrupted(expected, Interruption::Gap)),
                         HeadState::Faulted => bail!("the head's E-STOP is open; close it, then resume from position {expected}"),
                         HeadState::Homing | HeadState::Moving | HeadState::Measuring | HeadState::Stopping => continue,
@@ -333,9 +356,12 @@ impl ScanRun<'_> {
                     }
                     return Ok(Stretch::Finished);
                 }
-                ScanEvent::Stopped { run, reason, .. } | ScanEvent::Paused { run, reason, .. } if run == accepted.run => {
+                ScanEvent::Paused { run, reason: None, .. } if run == accepted.run && pausing => return Ok(Stretch::Paused(expected)),
+                ScanEvent::Stopped { run, reason, .. }
+                | ScanEvent::Paused {
+                    run, reason: Some(reason), ..
+                } if run == accepted.run => {
                     return match reason {
-                        Fault::Aborted if pausing => Ok(Stretch::Paused(expected)),
                         Fault::AdcOverrun | Fault::HostSilent => Ok(Stretch::Interrupted(expected, Interruption::Transient(reason))),
                         Fault::StepTimer(_) => Ok(Stretch::Interrupted(expected, Interruption::Rehome(reason))),
                         _ => bail!("the head stopped the scan: {reason}; resume from position {expected}"),
@@ -346,7 +372,7 @@ impl ScanRun<'_> {
             }
             pb.set_message(format!("{} measured, {} unreachable", outcome.measured, outcome.skipped));
             if !pausing && stop_at.is_some_and(|p| expected >= p && expected < outcome.points) {
-                if let Err(e) = head.abort().await {
+                if let Err(e) = head.pause().await {
                     return lost(e.context("pausing the scan for the laser-drift monitor"), expected);
                 }
                 pausing = true;

@@ -174,7 +174,8 @@ pub enum ScanEvent {
     Finished { run: u32, measured: u32, skipped: u32 },
     /// The scan stopped early; `next_order` resumes it.
     Stopped { run: u32, next_order: u32, reason: Fault },
-    /// The scan is held at `next_order` (pause, host silence): continue
-    /// resumes it there without replanning; a new scan replaces it.
-    Paused { run: u32, next_order: u32, reason: Fault },
+    /// The scan is held at `next_order`, at the host's request (`None`) or
+    /// for a fault (host silence): continue resumes it there without
+    /// replanning; a new scan replaces it.
+    Paused { run: u32, next_order: u32, reason: Option<Fault> },
 }

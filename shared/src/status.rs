@@ -19,8 +19,9 @@ pub enum HeadState {
         next_order: u32,
         total: u32,
     },
-    /// A scan is held at `next_order`; continue resumes it.
+    /// Scan `run` is held at `next_order`; continue resumes it there.
     Paused {
+        run: u32,
         next_order: u32,
         total: u32,
     },

@@ -9,5 +9,6 @@ pub mod frames;
 pub mod fuzz;
 pub mod scanning;
 pub mod step_log;
+pub mod stops;
 pub mod strategies;
 pub mod synthetic;

@@ -169,7 +169,11 @@ pub fn status() -> impl Strategy<Value = Status> {
             Just(HeadState::Stopping),
             Just(HeadState::Faulted),
             (any::<u32>(), any::<u32>()).prop_map(|(n, t)| HeadState::Scanning { next_order: n, total: t }),
-            (any::<u32>(), any::<u32>()).prop_map(|(n, t)| HeadState::Paused { next_order: n, total: t })
+            (any::<u32>(), any::<u32>(), any::<u32>()).prop_map(|(r, n, t)| HeadState::Paused {
+                run: r,
+                next_order: n,
+                total: t
+            })
         ],
         (
             any::<bool>(),

@@ -53,7 +53,13 @@ fn stopped(sent: &[Sent]) -> (Fault, u32, usize) {
         "the laser was on and the drivers enabled while scanning"
     );
     let (ev, at) = events.last().expect("scan events");
-    let (ScanEvent::Stopped { reason, next_order, .. } | ScanEvent::Paused { reason, next_order, .. }) = ev else {
+    let (ScanEvent::Stopped { reason, next_order, .. }
+    | ScanEvent::Paused {
+        reason: Some(reason),
+        next_order,
+        ..
+    }) = ev
+    else {
         panic!("the scan was not stopped: {ev:?}");
     };
     assert!(!at.laser, "{reason}: laser still on when the fault was reported");

@@ -57,7 +57,7 @@ proptest! {
         let mut head = FrameHead::new(&SimConfig::default());
         let before = {
             let w = head.world();
-            Sent { frame: Vec::new(), laser: w.laser, drivers_enabled: w.enable_n.iter().any(|&off| !off), steps: w.steps, laser_ons: w.laser_ons }
+            Sent { frame: Vec::new(), laser: w.laser, drivers_enabled: w.enable_n.iter().any(|&off| !off), steps: w.steps, laser_ons: w.laser_ons, t_s: w.t_s }
         };
         let sent = head.serve(cmds.iter().map(|(f, _)| f.clone()));
         // One reply per command, in order (no scan runs, so no events).

@@ -255,7 +255,7 @@ pub struct SimClock {
 
 impl Clock for SimClock {
     fn now_us(&self) -> u64 {
-        (self.world.borrow().t_s * 1e6) as u64
+        self.world.borrow().now_us()
     }
 }
 

@@ -26,23 +26,37 @@ type Shared = Rc<RefCell<World>>;
 /// Longest stretch of simulated time between two looks at the watch (s).
 pub const SLICE_S: f64 = 1e-3;
 
-/// Where the current slice ends: a slice on, or at the next wake-up.
+/// Where the current slice ends: a slice on, or at the next wake-up; where
+/// the time is, if something has run it in this poll already.
 pub fn slice_end(w: &World) -> f64 {
+    if w.busy {
+        return w.t_s;
+    }
     let end = w.t_s + SLICE_S;
     w.wake_at.filter(|&t| t > w.t_s).map_or(end, |t| t.min(end))
 }
 
-/// Ends a slice at `t`: the time is there, and the head was busy.
+/// Ends a slice at `t`: the time is there, and the head was busy. A paced
+/// head takes the slice on the wall clock too.
 pub fn advance_to(world: &Shared, t: f64) {
     let mut w = world.borrow_mut();
+    let dt = t - w.t_s;
     w.t_s = w.t_s.max(t);
     if w.wake_at.is_some_and(|at| at <= w.t_s) {
         w.wake_at = None;
     }
     w.busy = true;
+    let wall = dt * w.pace;
+    if wall > 0.0 {
+        drop(w);
+        std::thread::sleep(Duration::from_secs_f64(wall));
+    }
 }
 
-/// Lets `dt` seconds pass, slice by slice.
+/// Lets `dt` seconds pass, slice by slice. Raced against something else
+/// that runs the time (a move's stall timeout against the move), it only
+/// watches the time go by: time is advanced once per poll, by whoever is
+/// polled first.
 pub async fn elapse(world: &Shared, dt: f64) {
     let end = world.borrow().t_s + dt;
     loop {
@@ -51,9 +65,11 @@ pub async fn elapse(world: &Shared, dt: f64) {
             if w.t_s >= end {
                 return;
             }
-            slice_end(&w).min(end)
+            (!w.busy).then(|| slice_end(&w).min(end))
         };
-        advance_to(world, to);
+        if let Some(to) = to {
+            advance_to(world, to);
+        }
         yield_once().await;
     }
 }
@@ -72,17 +88,30 @@ async fn yield_once() {
     .await
 }
 
+/// Polls without the time moving before [`run`] calls the head stuck.
+const STUCK_POLLS: u32 = 10_000_000;
+
 /// Polls `f` to completion. Nothing in the simulated head sleeps on a
 /// waker: what has nothing to do returns `Pending`, and what waits for the
-/// outside world (a link at rest) blocks inside its poll.
+/// outside world (a link at rest) blocks inside its poll. A head that waits
+/// for time while nothing runs it (a firmware bug: the chip would sleep for
+/// ever too) is reported instead of spinning.
 pub fn run<F: Future>(world: &Shared, f: F) -> F::Output {
     let mut f = pin!(f);
     let mut cx = Context::from_waker(Waker::noop());
+    let (mut last_t, mut still) = (f64::NAN, 0u32);
     loop {
         world.borrow_mut().busy = false;
         if let Poll::Ready(v) = f.as_mut().poll(&mut cx) {
             return v;
         }
+        let t = world.borrow().t_s;
+        still = if t == last_t { still + 1 } else { 0 };
+        last_t = t;
+        assert!(
+            still < STUCK_POLLS,
+            "simulated head stuck at t = {t} s: it waits for time that nothing runs"
+        );
     }
 }
 
@@ -122,7 +151,7 @@ impl Sentry for SimSentry {
     }
 
     fn now_us(&self) -> u64 {
-        (self.world.borrow().t_s * 1e6) as u64
+        self.world.borrow().now_us()
     }
 
     async fn until(&mut self, deadline_us: Option<u64>, estop: bool) -> Wake {
@@ -131,12 +160,11 @@ impl Sentry for SimSentry {
             if estop && w.estop_open() {
                 return Poll::Ready(Wake::EStop);
             }
-            let deadline = deadline_us.map(|d| d as f64 * 1e-6);
-            if deadline.is_some_and(|d| w.t_s >= d) {
+            if deadline_us.is_some_and(|d| w.now_us() >= d) {
                 return Poll::Ready(Wake::Deadline);
             }
-            if let Some(d) = deadline {
-                w.wake(d);
+            if let Some(d) = deadline_us {
+                w.wake(d as f64 * 1e-6);
             }
             if let Some(t) = w.estop_at.filter(|_| estop) {
                 w.wake(t);

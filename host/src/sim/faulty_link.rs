@@ -29,6 +29,11 @@ pub struct FaultyLink<L> {
 }
 
 impl<L: Link> FaultyLink<L> {
+    /// The link the faults are applied to.
+    pub fn inner(&self) -> &L {
+        &self.inner
+    }
+
     pub fn new(inner: L, faults: Faults) -> Self {
         FaultyLink {
             inner,

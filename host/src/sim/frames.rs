@@ -24,6 +24,95 @@ pub struct Sent {
     /// Stage positions (microsteps) and times the laser was switched on so far.
     pub steps: [i32; 3],
     pub laser_ons: u64,
+    /// Simulated time (s) it was sent at.
+    pub t_s: f64,
+}
+
+impl Sent {
+    /// The head's state as it sends `frame`.
+    fn now(world: &World, frame: &[u8]) -> Sent {
+        Sent {
+            frame: frame.to_vec(),
+            laser: world.laser,
+            drivers_enabled: world.enable_n.iter().any(|&off| !off),
+            steps: world.steps,
+            laser_ons: world.laser_ons,
+            t_s: world.t_s,
+        }
+    }
+}
+
+/// What happens on the link at a moment of simulated time
+/// ([`FrameHead::serve_timed`]).
+#[derive(Debug, Clone)]
+pub enum Cue {
+    /// The host sends this (sealed) frame.
+    Frame(Vec<u8>),
+    /// The cable is pulled.
+    Close,
+}
+
+/// A link that plays cues at their times: the head sees each frame when the
+/// simulated clock reaches it; at rest, time runs on to the next cue (or to
+/// what the head waits for), and the link closes at the end.
+struct Timed {
+    cues: VecDeque<(f64, Cue)>,
+    until: f64,
+    outbound: Vec<Sent>,
+    world: Rc<RefCell<World>>,
+}
+
+impl Timed {
+    /// The cue that is due, as the link delivers it.
+    fn due(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
+        let now = self.world.borrow().t_s;
+        if self.cues.front().is_none_or(|(t, _)| *t > now) {
+            return None;
+        }
+        match self.cues.pop_front()?.1 {
+            Cue::Frame(f) => Some(Ok(take(f, buf))),
+            Cue::Close => {
+                self.cues.clear();
+                self.until = now;
+                Some(Err(LinkError::Closed))
+            }
+        }
+    }
+}
+
+impl Link for Timed {
+    async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
+        std::future::poll_fn(|_| {
+            if let Some(r) = self.due(buf) {
+                return Poll::Ready(r);
+            }
+            let next = self.cues.front().map_or(self.until, |(t, _)| *t);
+            let mut w = self.world.borrow_mut();
+            if w.t_s >= next {
+                return Poll::Ready(Err(LinkError::Closed));
+            }
+            w.wake(next);
+            if !w.busy {
+                // At rest: on to the next cue or to what the head waits for.
+                let to = w.wake_at.map_or(next, |t| t.min(next));
+                w.t_s = w.t_s.max(to);
+                if w.wake_at.is_some_and(|t| t <= w.t_s) {
+                    w.wake_at = None;
+                }
+            }
+            Poll::Pending
+        })
+        .await
+    }
+
+    fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
+        self.due(buf)
+    }
+
+    async fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        self.outbound.push(Sent::now(&self.world.borrow(), frame));
+        Ok(())
+    }
 }
 
 struct Batch {
@@ -67,14 +156,7 @@ impl Link for Batch {
         if self.cut_after.is_some_and(|n| self.outbound.len() >= n) {
             return Err(LinkError::Closed);
         }
-        let w = self.world.borrow();
-        self.outbound.push(Sent {
-            frame: frame.to_vec(),
-            laser: w.laser,
-            drivers_enabled: w.enable_n.iter().any(|&off| !off),
-            steps: w.steps,
-            laser_ons: w.laser_ons,
-        });
+        self.outbound.push(Sent::now(&self.world.borrow(), frame));
         Ok(())
     }
 }
@@ -107,6 +189,25 @@ impl FrameHead {
     /// once the head has sent `n` frames.
     pub fn serve_cut(&mut self, frames: impl IntoIterator<Item = Vec<u8>>, n: usize) -> Vec<Sent> {
         self.run(frames, true, Some(n))
+    }
+
+    /// Serves `cues` at their simulated times (s, absolute: see
+    /// [`FrameHead::now`]); the link closes at `until` or at a
+    /// [`Cue::Close`]. Returns what the head sent.
+    pub fn serve_timed(&mut self, cues: impl IntoIterator<Item = (f64, Cue)>, until: f64) -> Vec<Sent> {
+        let mut link = Timed {
+            cues: cues.into_iter().collect(),
+            until,
+            outbound: Vec::new(),
+            world: self.world.clone(),
+        };
+        clock::run(&self.world, self.head.serve(&mut link, &mut sentry(&self.world)));
+        link.outbound
+    }
+
+    /// The head's clock (s).
+    pub fn now(&self) -> f64 {
+        self.world.borrow().t_s
     }
 
     fn run(&mut self, frames: impl IntoIterator<Item = Vec<u8>>, open: bool, cut_after: Option<usize>) -> Vec<Sent> {

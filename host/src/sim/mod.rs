@@ -14,7 +14,7 @@ mod optics;
 mod pty;
 mod world;
 
-pub use frames::{FrameHead, Sent};
+pub use frames::{Cue, FrameHead, Sent};
 pub use imperfections::Imperfections;
 pub use inproc::spawn_in_process;
 pub use optics::Photodiode;
@@ -51,6 +51,11 @@ pub struct SimConfig {
     /// Angle, gain, stray-light and plate errors the firmware does not know
     /// of (boxed: most heads have none, and `Target` stays small).
     pub imperfections: Box<Imperfections>,
+    /// Wall-clock seconds per simulated second while the head works (1: a
+    /// move takes as long as on the reference head), for tests that act on
+    /// the head from outside in the middle of a move; 0 (the default) runs
+    /// as fast as it can.
+    pub pace: f64,
 }
 
 /// Which target sits on the sample holder. Shared between the host (the
@@ -87,6 +92,7 @@ impl Default for SimConfig {
             mount: Mount::default(),
             faults: faults::Faults::default(),
             imperfections: Box::default(),
+            pace: 0.0,
         }
     }
 }

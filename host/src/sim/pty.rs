@@ -32,18 +32,26 @@ struct PtyLink {
 
 impl PtyLink {
     /// Reads what is available (blocking up to `wait`, for ever for `None`),
-    /// queueing whole frames; false when the wait ran out.
-    fn pump(&mut self, wait: Option<std::time::Duration>) -> bool {
+    /// queueing whole frames; `Ok(false)` when the wait ran out, `Err` when
+    /// the host has closed the port (no process holds the terminal open:
+    /// the pseudo-terminal's hang-up, as a USB host's closing drops DTR).
+    fn pump(&mut self, wait: Option<std::time::Duration>) -> Result<bool, LinkError> {
         let timeout = match wait {
             None => PollTimeout::NONE,
             Some(d) => PollTimeout::try_from(d).unwrap_or(PollTimeout::MAX),
         };
-        let ready = {
+        let revents = {
             let mut fds = [PollFd::new(self.master.as_fd(), PollFlags::POLLIN)];
-            poll(&mut fds, timeout).map(|n| n > 0).unwrap_or(false)
+            match poll(&mut fds, timeout) {
+                Ok(n) if n > 0 => fds[0].revents().unwrap_or(PollFlags::empty()),
+                _ => PollFlags::empty(),
+            }
         };
-        if !ready {
-            return false;
+        if revents.contains(PollFlags::POLLHUP) && !revents.contains(PollFlags::POLLIN) {
+            return Err(LinkError::Closed);
+        }
+        if revents.is_empty() {
+            return Ok(false);
         }
         let mut buf = [0u8; 512];
         match self.master.read(&mut buf) {
@@ -51,10 +59,10 @@ impl PtyLink {
                 let frames = &mut self.frames;
                 self.decoder.feed(&buf[..n], |f| frames.push_back(f.to_vec()));
             }
-            // EIO or a spurious wake-up: wait and look again.
-            Err(_) => std::thread::sleep(std::time::Duration::from_millis(20)),
+            // A spurious wake-up: look again.
+            Err(_) => {}
         }
-        true
+        Ok(true)
     }
 
     fn pop(&mut self, buf: &mut [u8]) -> Option<usize> {
@@ -71,12 +79,11 @@ impl Link for PtyLink {
             if let Some(r) = self.try_recv(buf) {
                 return Poll::Ready(r);
             }
-            match clock::idle(&self.world) {
-                Idle::Busy => {}
-                Idle::Wait(wait) => {
-                    if !self.pump(wait) && wait.is_some() {
-                        clock::timed_out(&self.world);
-                    }
+            if let Idle::Wait(wait) = clock::idle(&self.world) {
+                match self.pump(wait) {
+                    Err(e) => return Poll::Ready(Err(e)),
+                    Ok(false) if wait.is_some() => clock::timed_out(&self.world),
+                    Ok(_) => {}
                 }
             }
             match self.pop(buf) {
@@ -89,7 +96,9 @@ impl Link for PtyLink {
 
     fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
         if self.frames.is_empty() {
-            self.pump(Some(std::time::Duration::ZERO));
+            if let Err(e) = self.pump(Some(std::time::Duration::ZERO)) {
+                return Some(Err(e));
+            }
         }
         self.pop(buf).map(Ok)
     }
@@ -131,9 +140,9 @@ pub fn serve_pty(cfg: SimConfig, link: &Path, on_ready: impl FnOnce(&Path)) -> R
     }
     std::os::unix::fs::symlink(&slave_path, link).with_context(|| format!("creating {}", link.display()))?;
     on_ready(link);
-    // Keep our own slave descriptor open so the master never reads EIO
-    // between two host sessions.
-    let _slave: OwnedFd = pty.slave;
+    // Our own slave descriptor closes: the terminal then hangs up whenever
+    // no host holds it open, which is how the head sees a closed port.
+    drop::<OwnedFd>(pty.slave);
     let flags = fcntl(&pty.master, FcntlArg::F_GETFL).context("reading descriptor flags")?;
     fcntl(&pty.master, FcntlArg::F_SETFL(OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK)).context("setting non-blocking mode")?;
     let (mut head, world) = build(&cfg);
@@ -147,6 +156,25 @@ pub fn serve_pty(cfg: SimConfig, link: &Path, on_ready: impl FnOnce(&Path)) -> R
     let mut l = FaultyLink::new(pty_link, cfg.faults.clone());
     let mut sentry = sentry(&world);
     loop {
+        wait_for_host_on(&l.inner().master, &world);
         clock::run(&world, head.serve(&mut l, &mut sentry));
+    }
+}
+
+/// Waits until a host opens the terminal (it stops hanging up); the time
+/// the head spends at rest meanwhile passes on its clock.
+fn wait_for_host_on(master: &File, world: &Rc<RefCell<World>>) {
+    const LOOK_EVERY: std::time::Duration = std::time::Duration::from_millis(10);
+    loop {
+        let mut fds = [PollFd::new(master.as_fd(), PollFlags::POLLIN)];
+        let hung_up = matches!(poll(&mut fds, PollTimeout::ZERO), Ok(n) if n > 0)
+            && fds[0]
+                .revents()
+                .is_some_and(|r| r.contains(PollFlags::POLLHUP) && !r.contains(PollFlags::POLLIN));
+        if !hung_up {
+            return;
+        }
+        std::thread::sleep(LOOK_EVERY);
+        world.borrow_mut().t_s += LOOK_EVERY.as_secs_f64();
     }
 }

@@ -70,6 +70,8 @@ pub struct World {
     /// laser enable (time, level), when a test records them.
     pub step_log: Option<Vec<(usize, f64)>>,
     pub laser_log: Option<Vec<(f64, bool)>>,
+    /// See [`super::SimConfig::pace`].
+    pub pace: f64,
 }
 
 impl World {
@@ -122,7 +124,14 @@ impl World {
             estop_at: None,
             step_log: None,
             laser_log: None,
+            pace: sim.pace,
         }
+    }
+
+    /// The head's clock (µs), as the firmware reads it: time stopped at a
+    /// deadline of `d` µs reads `d`.
+    pub fn now_us(&self) -> u64 {
+        (self.t_s * 1e6).round() as u64
     }
 
     /// Asks time to stop at `t` (s) on its way.

@@ -1,0 +1,277 @@
+//! Issue #17, stop means stop: the step executor's brake on its own, and
+//! the firmware on the simulated head stopped in the middle of a move, a
+//! measurement and a scan by an abort, the E-STOP and the idle watch; a
+//! paused scan continued. docs/faults.md#stops states what is checked.
+
+use gonio_firmware::board::REFERENCE;
+use gonio_firmware::hw::StepBlock;
+use gonio_firmware::motion::blocks::trapezoid_blocks;
+use gonio_firmware::motion::executor::Executor;
+use gonio_firmware::{motion, units};
+use gonio_host::sim::{Cue, FrameHead, SimConfig};
+use gonio_shared::icd::{
+    ContinueEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, ScanEndpoint, StatusEndpoint,
+};
+use gonio_shared::{Fault, Geometry, HeadState, SafetySettings, ScanEvent};
+use gonio_tests::frames::{replies, scan_events, send};
+use gonio_tests::stops::{accel_steps, decel_s_max, ready, small_scan, speed_jump, trial, Activity, Trigger};
+use std::cell::Cell;
+use std::convert::Infallible;
+use std::rc::Rc;
+
+/// A STEP pin that counts its rising edges.
+struct Counting(Rc<Cell<u32>>);
+
+impl embedded_hal::digital::ErrorType for Counting {
+    type Error = Infallible;
+}
+
+impl embedded_hal::digital::OutputPin for Counting {
+    fn set_low(&mut self) -> Result<(), Infallible> {
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Infallible> {
+        self.0.set(self.0.get() + 1);
+        Ok(())
+    }
+}
+
+/// The arm's full-speed move of `n` steps on a 1 MHz executor, braked at
+/// event `brake_at`; returns the step times (s), the brake's time and the
+/// steps the pin saw.
+fn braked_move(n: u32, brake_at: usize) -> (Vec<f64>, f64, u32, [u32; 3]) {
+    let axis = &REFERENCE.axes[2];
+    let edges = Rc::new(Cell::new(0));
+    let pins = [
+        Counting(Rc::new(Cell::new(0))),
+        Counting(Rc::new(Cell::new(0))),
+        Counting(edges.clone()),
+    ];
+    let mut exec = Executor::new(pins, 3);
+    let t = motion::trapezoid(axis, n, axis.max_speed_dps);
+    let mut blocks: Vec<StepBlock> = Vec::new();
+    assert!(trapezoid_blocks(&t, 1_000_000, |b| {
+        blocks.push(b);
+        true
+    }));
+    for b in blocks {
+        exec.push(gonio_shared::Axis::Arm, b).unwrap();
+    }
+    let brake = [0, 1, 2].map(|i| units::brake_ticks(&REFERENCE.axes[i], 1_000_000));
+    let (mut times, mut braked_s) = (Vec::new(), f64::NAN);
+    let mut next = exec.start();
+    let mut event = 0;
+    while let Some(tick) = next {
+        let before = exec.emitted()[2];
+        next = exec.fire(tick);
+        if exec.emitted()[2] > before {
+            times.push(tick as f64 * 1e-6);
+        }
+        event += 1;
+        if event == brake_at {
+            braked_s = tick as f64 * 1e-6;
+            next = exec.brake(brake);
+        }
+    }
+    (times, braked_s, edges.get(), exec.emitted())
+}
+
+#[test]
+fn a_brake_at_any_moment_of_a_move_slows_at_the_limit_without_skipping_a_step() {
+    let axis = &REFERENCE.axes[2];
+    let a = accel_steps(axis);
+    let n = 40_000; // 100° of the arm: accelerating, cruising, decelerating
+    let (full, _, _, _) = braked_move(n, usize::MAX);
+    assert_eq!(full.len() as u32, n);
+    let events = 2 * n as usize;
+    let v = axis.max_speed_dps as f64 * axis.steps_per_deg() as f64;
+    for k in 1..40 {
+        let at = events * k / 40;
+        let (times, braked_s, edges, emitted) = braked_move(n, at);
+        assert_eq!(edges, emitted[2], "a step counted that the pin did not see");
+        assert!(emitted[2] <= n, "the brake ran past the move's end");
+        let jump = speed_jump(&times, a);
+        assert!(jump <= 1.05, "brake at event {at}: speed jump {jump}");
+        let stop = times.last().unwrap() - braked_s;
+        assert!(stop <= v / a + 0.01, "brake at event {at}: stopped after {stop} s");
+    }
+    // Braked in the cruise, the axis stops within v²/2a steps (plus the one
+    // already scheduled) of where it was.
+    let (times, braked_s, _, emitted) = braked_move(n, events / 2);
+    let before = times.iter().filter(|&&t| t <= braked_s).count() as f64;
+    let after = emitted[2] as f64 - before;
+    assert!((after - v * v / (2.0 * a)).abs() <= 2.0, "{after} steps after the brake");
+}
+
+fn far_move() -> Geometry {
+    Geometry::new(60.0, 60.0, 180.0)
+}
+
+#[test]
+fn an_abort_mid_move_brakes_from_the_current_speed_and_the_head_stays_homed() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let tau = 0.5 * gonio_tests::stops::duration_s(&mut head, Activity::Move(far_move()));
+    ready(&mut head);
+    let back = Geometry::new(5.0, 5.0, 0.0);
+    let s = trial(&mut head, Activity::Move(back), Trigger::Abort, tau.min(1.5));
+    assert_eq!(replies::<MoveEndpoint>(&s.sent).first(), Some(&Err(Fault::Aborted)));
+    assert!(!s.phases.is_empty(), "the trigger came mid-move");
+    assert_eq!(s.position_error_steps, 0);
+    assert!(s.homed, "the abort left the axes un-homed");
+    assert!(s.stop_s > 0.0 && s.stop_s <= decel_s_max() + 0.01, "stopped after {} s", s.stop_s);
+    assert!(s.speed_jump <= 1.05, "speed jump {}", s.speed_jump);
+    assert_eq!(s.status.state, HeadState::Idle);
+    assert!(!s.status.laser_on && !s.status.drivers_enabled);
+    // The next move needs no homing, and ends where it should.
+    ready(&mut head);
+    let t = head.now();
+    let sent = head.serve_timed([(t, Cue::Frame(send::<MoveEndpoint>(&back)))], t + 60.0);
+    let moved = replies::<MoveEndpoint>(&sent);
+    assert!(matches!(moved.first(), Some(Ok(_))), "{moved:?}");
+}
+
+#[test]
+fn the_estop_darkens_a_measurement_at_once_and_rearms_only_once_closed() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let t = head.now();
+    head.serve_timed([(t, Cue::Frame(send::<MoveEndpoint>(&Geometry::new(30.0, 30.0, 180.0))))], t + 60.0);
+    let s = trial(&mut head, Activity::Measurement, Trigger::EStop, 0.04);
+    assert!(
+        s.laser_was_on && s.laser_off_ms <= 1.0,
+        "laser dark after {} ms: {:?}",
+        s.laser_off_ms,
+        replies::<MeasureEndpoint>(&s.sent)
+    );
+    assert_eq!(replies::<MeasureEndpoint>(&s.sent).first(), Some(&Err(Fault::EmergencyStop)));
+    assert_eq!(s.status.state, HeadState::Faulted);
+    assert!(s.status.estop_open && s.status.homed);
+    // Refused while faulted; continue refused while the input is open.
+    head.world_mut().estop = true;
+    let t = head.now();
+    let sent = head.serve_timed(
+        [
+            (t, Cue::Frame(send::<MoveEndpoint>(&Geometry::new(20.0, 20.0, 180.0)))),
+            (t + 0.01, Cue::Frame(send::<ContinueEndpoint>(&()))),
+        ],
+        t + 0.1,
+    );
+    assert_eq!(replies::<MoveEndpoint>(&sent), vec![Err(Fault::EmergencyStop)]);
+    assert!(matches!(replies::<ContinueEndpoint>(&sent).as_slice(), [Err(Fault::EmergencyStop)]));
+    assert!(!head.world().laser && head.world().enable_n.iter().all(|&off| off));
+    // Closed again: continue re-arms after the debounce, and moves work.
+    head.world_mut().estop = false;
+    let t = head.now();
+    let sent = head.serve_timed(
+        [
+            (t, Cue::Frame(send::<ContinueEndpoint>(&()))),
+            (t + 0.1, Cue::Frame(send::<MoveEndpoint>(&Geometry::new(20.0, 20.0, 180.0)))),
+        ],
+        t + 60.0,
+    );
+    let st = replies::<ContinueEndpoint>(&sent);
+    assert!(
+        matches!(st.as_slice(), [Ok(s)] if s.state == HeadState::Idle && !s.estop_open),
+        "{st:?}"
+    );
+    assert!(matches!(replies::<MoveEndpoint>(&sent).as_slice(), [Ok(_)]));
+}
+
+#[test]
+fn the_drivers_let_go_after_the_idle_time_and_are_enabled_again_by_the_next_move() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let t = head.now();
+    let sent = head.serve_timed(
+        [
+            (
+                t,
+                Cue::Frame(send::<SafetyEndpoint>(&SafetySettings {
+                    idle_drivers_s: 30.0,
+                    ..SafetySettings::default()
+                })),
+            ),
+            (t + 0.001, Cue::Frame(send::<MoveEndpoint>(&Geometry::new(30.0, 30.0, 180.0)))),
+        ],
+        t + 60.0,
+    );
+    let moved = sent.iter().find(|s| s.frame.len() > 20).map(|s| s.t_s).unwrap();
+    let status_at = |head: &mut FrameHead, at: f64| {
+        let sent = head.serve_timed([(at, Cue::Frame(send::<StatusEndpoint>(&())))], at + 0.001);
+        *replies::<StatusEndpoint>(&sent).last().unwrap()
+    };
+    // The link was open at rest in between: nothing but time passes.
+    let mut head2 = FrameHead::new(&SimConfig::default());
+    ready(&mut head2);
+    let t2 = head2.now();
+    let cues = [
+        (
+            t2,
+            Cue::Frame(send::<SafetyEndpoint>(&SafetySettings {
+                idle_drivers_s: 30.0,
+                ..SafetySettings::default()
+            })),
+        ),
+        (t2 + 0.001, Cue::Frame(send::<MoveEndpoint>(&Geometry::new(30.0, 30.0, 180.0)))),
+        (t2 + (moved - t) + 20.0, Cue::Frame(send::<StatusEndpoint>(&()))),
+        (t2 + (moved - t) + 40.0, Cue::Frame(send::<StatusEndpoint>(&()))),
+    ];
+    let sent = head2.serve_timed(cues, t2 + (moved - t) + 41.0);
+    let st = replies::<StatusEndpoint>(&sent);
+    assert!(st[0].drivers_enabled, "drivers let go before the idle time");
+    assert!(
+        !st[1].drivers_enabled && st[1].homed && st[1].state == HeadState::Idle,
+        "{:?}",
+        st[1]
+    );
+    drop(head);
+    let at = head2.now();
+    let s = status_at(&mut head2, at);
+    assert!(!s.drivers_enabled);
+    let t = head2.now();
+    let sent = head2.serve_timed([(t, Cue::Frame(send::<MoveEndpoint>(&Geometry::new(40.0, 40.0, 180.0))))], t + 60.0);
+    assert!(matches!(replies::<MoveEndpoint>(&sent).as_slice(), [Ok(_)]));
+    assert!(sent.last().unwrap().drivers_enabled, "the move enabled the drivers");
+}
+
+#[test]
+fn a_paused_scan_continues_where_it_stopped_and_measures_every_point_once() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let t = head.now();
+    let mon = Geometry::new(10.0, 10.0, 180.0);
+    let sent = head.serve_timed(
+        [
+            (t, Cue::Frame(send::<ScanEndpoint>(&small_scan()))),
+            (t + 3.3, Cue::Frame(send::<PauseEndpoint>(&()))),
+            // A monitor visit while the scan is held.
+            (t + 4.0, Cue::Frame(send::<MeasureEndpoint>(&MeasureRequest { at: Some(mon) }))),
+            (t + 9.0, Cue::Frame(send::<StatusEndpoint>(&()))),
+            (t + 9.1, Cue::Frame(send::<ContinueEndpoint>(&()))),
+        ],
+        t + 200.0,
+    );
+    let paused = replies::<PauseEndpoint>(&sent);
+    assert!(
+        matches!(paused.as_slice(), [Ok(s)] if matches!(s.state, HeadState::Paused { .. })),
+        "{paused:?}"
+    );
+    assert!(matches!(replies::<MeasureEndpoint>(&sent).as_slice(), [Ok(_)]));
+    let events = scan_events(&sent);
+    let held = events.iter().position(|(e, _)| matches!(e, ScanEvent::Paused { reason: None, .. }));
+    assert!(held.is_some(), "no Paused event");
+    assert!(matches!(events.last(), Some((ScanEvent::Finished { .. }, _))));
+    let mut seen = std::collections::BTreeSet::new();
+    for (e, _) in &events {
+        let index = match e {
+            ScanEvent::Sample(s) => s.scan.map(|p| p.index),
+            ScanEvent::Skipped { index, .. } => Some(*index),
+            _ => None,
+        };
+        if let Some(i) = index {
+            assert!(seen.insert(i), "point {i} visited twice");
+        }
+    }
+    assert_eq!(seen.len() as u32, small_scan().len(), "every point once");
+}
