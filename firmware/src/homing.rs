@@ -1,9 +1,11 @@
 //! Homing on a switch at the negative end of each axis: fast approach in
 //! chunks until the switch closes, back off until it opens, re-approach
-//! slowly in microstep-sized chunks, and set the position to the switch angle.
-//! The switch is read between chunks, so the fast approach overshoots by at
-//! most one chunk (taken up by the back-off) and the slow one by at most one
-//! fine chunk.
+//! slowly in microstep-sized chunks, then find the switch's edge to the
+//! microstep (off it one microstep at a time, and back on), and set the
+//! position to the switch angle. The switch is read between chunks, so the
+//! fast approach overshoots by at most one chunk (taken up by the back-off);
+//! the last approach does not overshoot, so homing repeats to the
+//! microstep and a stop that re-homes an axis leaves no offset behind.
 
 use crate::board::HeadConfig;
 use crate::hw::{Board, Hardware};
@@ -87,6 +89,19 @@ pub async fn home_axis<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, pos: &m
         limit: 2 * backoff,
     };
     if !sweep(hw, cfg, pos, touch).await? {
+        return Err(Fault::HomeSwitchNotFound(axis));
+    }
+    let edge = |chunk: i32, until: bool| Sweep {
+        axis,
+        chunk,
+        speed_dps: c.home_slow_dps,
+        until,
+        limit: 2 * SLOW_CHUNK_STEPS as u32,
+    };
+    if !sweep(hw, cfg, pos, edge(1, false)).await? {
+        return Err(Fault::HomeSwitchStuck(axis));
+    }
+    if !sweep(hw, cfg, pos, edge(-1, true)).await? {
         return Err(Fault::HomeSwitchNotFound(axis));
     }
     pos.steps[i] = units::deg_to_steps(c, c.home_deg);

@@ -7,6 +7,7 @@ pub mod chop_signal;
 pub mod doubles;
 pub mod frames;
 pub mod fuzz;
+pub mod safety_bench;
 pub mod scanning;
 pub mod step_log;
 pub mod stops;

@@ -10,10 +10,10 @@ use gonio_firmware::board::{AxisConfig, REFERENCE};
 use gonio_firmware::units;
 use gonio_host::sim::{Cue, FrameHead, Sent};
 use gonio_shared::icd::{
-    AbortEndpoint, ContinueEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint, SafetyEndpoint,
-    ScanEndpoint, StatusEndpoint,
+    AbortEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint,
+    SafetyEndpoint, ScanEndpoint, StatusEndpoint,
 };
-use gonio_shared::{Geometry, SafetySettings, ScanEvent, ScanSpec, Status};
+use gonio_shared::{DetectionSettings, Geometry, SafetySettings, ScanEvent, ScanSpec, Status};
 
 /// Largest change of step interval between two consecutive steps, relative
 /// to the change a ramp at the acceleration limit `a` (steps/s²) makes at
@@ -175,24 +175,48 @@ fn request(a: Activity) -> Vec<u8> {
     }
 }
 
+/// The cues that start `activity` at `t0`: the detection settings (a
+/// measurement integrates for 2 s, long enough for every trigger, the host
+/// watch being at least 1 s, to fall inside it), the host watch, the request.
+fn start(activity: Activity, t0: f64, host_timeout_s: f32) -> Vec<(f64, Cue)> {
+    let d = DetectionSettings::default();
+    let detection = match activity {
+        Activity::Measurement => DetectionSettings {
+            periods: d.periods_for(2.0),
+            ..d
+        },
+        _ => d,
+    };
+    let safety = SafetySettings {
+        host_timeout_s,
+        ..SafetySettings::default()
+    };
+    vec![
+        (t0 - 0.0008, Cue::Frame(send::<DetectionEndpoint>(&detection))),
+        (t0 - 0.0005, Cue::Frame(send::<SafetyEndpoint>(&safety))),
+        (t0, Cue::Frame(request(activity))),
+    ]
+}
+
 /// How long an activity takes on this head from its request to its answer
 /// (a scan: to its end), measured by running it once undisturbed, for
 /// choosing moments inside it. A move ends where it went.
 pub fn duration_s(head: &mut FrameHead, a: Activity) -> f64 {
-    let t0 = head.now();
-    let sent = head.serve_timed([(t0, Cue::Frame(request(a)))], t0 + 3600.0);
+    let t0 = head.now() + 0.001;
+    let sent = head.serve_timed(start(a, t0, 0.0), t0 + 3600.0);
     let end = match a {
         Activity::Scan => scan_events(&sent)
             .iter()
             .find(|(e, _)| matches!(e, ScanEvent::Finished { .. }))
             .map(|(_, s)| s.t_s),
-        _ => sent.first().map(|s| s.t_s),
+        // The third answer: after those to the settings.
+        _ => sent.get(2).map(|s| s.t_s),
     };
     end.expect("the activity ended") - t0
 }
 
-/// Makes the head ready for a trial: E-STOP closed and re-armed, homed,
-/// no host watch.
+/// Makes the head ready for a trial: E-STOP closed and re-armed, no scan
+/// held, no host watch, homed.
 pub fn ready(head: &mut FrameHead) {
     {
         let mut w = head.world_mut();
@@ -204,6 +228,10 @@ pub fn ready(head: &mut FrameHead) {
         [
             (t, Cue::Frame(send::<ContinueEndpoint>(&()))),
             (t + 0.05, Cue::Frame(send::<ContinueEndpoint>(&()))),
+            // A scan held by the last stop is dropped.
+            (t + 0.08, Cue::Frame(send::<AbortEndpoint>(&()))),
+            // No host watch left from the last trial.
+            (t + 0.09, Cue::Frame(send::<SafetyEndpoint>(&SafetySettings::default()))),
             (t + 0.1, Cue::Frame(send::<StatusEndpoint>(&()))),
         ],
         t + 0.2,
@@ -253,16 +281,7 @@ pub fn trial(head: &mut FrameHead, activity: Activity, trigger: Trigger, tau: f6
         }
     }
     let host_timeout_s = if trigger == Trigger::HostSilence { tau as f32 } else { 0.0 };
-    let mut cues = vec![
-        (
-            t0 - 0.0005,
-            Cue::Frame(send::<SafetyEndpoint>(&SafetySettings {
-                host_timeout_s,
-                ..SafetySettings::default()
-            })),
-        ),
-        (t0, Cue::Frame(request(activity))),
-    ];
+    let mut cues = start(activity, t0, host_timeout_s);
     match trigger {
         Trigger::Abort => cues.push((tt, Cue::Frame(send::<AbortEndpoint>(&())))),
         Trigger::LinkLoss => cues.push((tt, Cue::Close)),

@@ -275,3 +275,11 @@ fn a_paused_scan_continues_where_it_stopped_and_measures_every_point_once() {
     }
     assert_eq!(seen.len() as u32, small_scan().len(), "every point once");
 }
+
+/// `safety-bench`'s bars, on a few trials of every trigger and activity
+/// (the binary runs 1 000 per trigger).
+#[test]
+fn the_safety_bench_bars_hold_on_a_sample_of_its_trials() {
+    let out = gonio_tests::safety_bench::run(25);
+    assert_eq!(out["all_bars_met"], true, "{out:#}");
+}
