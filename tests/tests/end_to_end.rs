@@ -240,3 +240,69 @@ async fn lost_answers_and_requests_over_a_port_are_recovered_by_reconnecting() {
     assert_eq!(session.reconnections, 2);
     session.close().await;
 }
+
+/// Issue #17 over the pseudo-terminal, as with a real head: the host's port
+/// closes while the head moves between two scan points with the laser on.
+/// The head sees the terminal hang up, darkens the laser and brakes at
+/// once: the stages stand well short of the second point although the
+/// move (paced at 20× real time) had most of its 8 s to go. It holds the
+/// scan, and a new session continues it.
+#[tokio::test]
+async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before_the_move_ends() {
+    let dir = tempfile::tempdir().unwrap();
+    let cfg = SimConfig {
+        pace: 0.05,
+        ..SimConfig::default()
+    };
+    let target = pty_head(cfg, dir.path()).await;
+    // Two points far apart: the move between them takes 8 s.
+    let spec = ScanSpec {
+        theta_o: AngleRange::new(80.0, 80.0, 1.0),
+        dphi: AngleRange::new(90.0, 90.0, 1.0),
+        theta_i_deg: heapless::Vec::from_slice(&[0.0, 80.0]).unwrap(),
+        first_order: 0,
+    };
+    let [a, b] = [0, 1].map(|i| {
+        let axes = kinematics::inverse(&REFERENCE, &spec.point(i).unwrap()).unwrap();
+        gonio_firmware::motion::target_steps(&REFERENCE, &axes)
+    });
+    let move_s = gonio_firmware::motion::move_time(&REFERENCE, [0, 1, 2].map(|i| b[i] - a[i]));
+    assert!(move_s > 8.0, "the move between the points takes {move_s} s");
+    let head = Head::connect(&target).await.unwrap();
+    head.home().await.unwrap();
+    let (_, mut events) = head.start_scan(&spec).await.unwrap();
+    let first = match events.recv().await.unwrap() {
+        ScanEvent::Sample(s) => s,
+        other => panic!("{other:?}"),
+    };
+    // 30 ms of wall clock: 0.6 s into the 8 s move on the head's clock
+    // (a late wake-up here has 370 ms of margin).
+    tokio::time::sleep(Duration::from_millis(30)).await;
+    drop(events);
+    head.close().await;
+    // The operator plugs the cable back a little later (the terminal's
+    // hang-up is a level, not an edge: the head must see it).
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    let again = Head::connect(&target).await.unwrap();
+    let st = again.status().await.unwrap();
+    assert!(matches!(st.state, HeadState::Paused { next_order: 1, .. }), "{:?}", st.state);
+    assert!(!st.laser_on, "laser on after the link was pulled");
+    assert!(!st.drivers_enabled && st.homed);
+    // Stopped, and well short of the second point: the axes no longer move
+    // although the move had most of its 8 s to go.
+    tokio::time::sleep(Duration::from_millis(50)).await;
+    let st2 = again.status().await.unwrap();
+    assert_eq!(st.axes, st2.axes, "the motors still move");
+    let reached = kinematics::forward(&st2.axes);
+    assert!(reached.theta_i_deg < 60.0, "the move nearly reached its end: {reached:?}");
+    assert_eq!(first.scan.unwrap().order, 0);
+    // The held scan continues where it stopped: the second point, then the end.
+    let (_, mut events) = again.continue_events().await.unwrap();
+    match events.recv().await.unwrap() {
+        ScanEvent::Sample(s) => assert_eq!(s.scan.unwrap().order, 1),
+        other => panic!("{other:?}"),
+    }
+    assert!(matches!(events.recv().await.unwrap(), ScanEvent::Finished { run: 1, .. }));
+    drop(events);
+    again.close().await;
+}

@@ -26,6 +26,9 @@ type Shared = Rc<RefCell<World>>;
 /// Longest stretch of simulated time between two looks at the watch (s).
 pub const SLICE_S: f64 = 1e-3;
 
+/// A paced head sleeps once this much wall-clock time is owed (s).
+const PACE_SLEEP_S: f64 = 2e-3;
+
 /// Where the current slice ends: a slice on, or at the next wake-up; where
 /// the time is, if something has run it in this poll already.
 pub fn slice_end(w: &World) -> f64 {
@@ -46,10 +49,13 @@ pub fn advance_to(world: &Shared, t: f64) {
         w.wake_at = None;
     }
     w.busy = true;
-    let wall = dt * w.pace;
-    if wall > 0.0 {
+    // Paced: the wall clock owed is slept in pieces of a few milliseconds
+    // (a sleep per slice would cost more than the slice).
+    w.pace_owed_s += dt.max(0.0) * w.pace;
+    if w.pace_owed_s >= PACE_SLEEP_S {
+        let owed = std::mem::take(&mut w.pace_owed_s);
         drop(w);
-        std::thread::sleep(Duration::from_secs_f64(wall));
+        std::thread::sleep(Duration::from_secs_f64(owed));
     }
 }
 

@@ -70,8 +70,9 @@ pub struct World {
     /// laser enable (time, level), when a test records them.
     pub step_log: Option<Vec<(usize, f64)>>,
     pub laser_log: Option<Vec<(f64, bool)>>,
-    /// See [`super::SimConfig::pace`].
+    /// See [`super::SimConfig::pace`], and the wall-clock time owed to it.
     pub pace: f64,
+    pub pace_owed_s: f64,
 }
 
 impl World {
@@ -125,6 +126,7 @@ impl World {
             step_log: None,
             laser_log: None,
             pace: sim.pace,
+            pace_owed_s: 0.0,
         }
     }
 
