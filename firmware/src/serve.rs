@@ -64,8 +64,9 @@ impl Inbox {
 /// What ended an operation under watch.
 #[derive(Debug)]
 enum Trip {
-    /// An abort or a pause request (answered once the motion stands).
-    Request(Midway, Frame),
+    /// An abort or a pause request, put first among the held requests (it is
+    /// answered once the motion stands).
+    Request(Midway),
     LinkLost,
     HostSilent,
     EStop,
@@ -97,10 +98,13 @@ async fn watch<L: Link, S: Sentry>(
             Either::Second(Ok(n)) => {
                 // Any frame, even a damaged one, shows the host is there.
                 *heard = sentry.now_us();
+                // The link is read only while the inbox has room.
                 let frame = inbox.frame(n);
                 match midway(&frame) {
-                    kind @ Midway::Abort => return Trip::Request(kind, frame),
-                    kind @ Midway::Pause if pause => return Trip::Request(kind, frame),
+                    kind @ (Midway::Abort | Midway::Pause) if pause || kind == Midway::Abort => {
+                        let _ = inbox.held.push_front(frame);
+                        return Trip::Request(kind);
+                    }
                     Midway::Status if inbox.held.iter().any(|f| midway(f) == Midway::Status) => {}
                     _ => {
                         let _ = inbox.held.push_back(frame);
@@ -139,7 +143,7 @@ impl<B: Board> Head<B> {
             };
             if let Err(e) = r {
                 // Laser off and motion braked at once; a scan is held.
-                let _ = self.tripped(Trip::LinkLost, &mut inbox).await;
+                let _ = self.tripped(Trip::LinkLost).await;
                 crate::info!("link lost; head in safe state");
                 return e;
             }
@@ -151,7 +155,7 @@ impl<B: Board> Head<B> {
         let armed = self.mode != Mode::Faulted;
         match select(sentry.until(self.rest_deadline(), armed), link.recv(&mut inbox.rx)).await {
             Either::First(Wake::EStop) => {
-                let _ = self.tripped(Trip::EStop, inbox).await;
+                let _ = self.tripped(Trip::EStop).await;
                 Ok(())
             }
             Either::First(Wake::Deadline) => {
@@ -194,10 +198,9 @@ impl<B: Board> Head<B> {
     /// Stops the head after `trip`, keeps an abort or pause request to be
     /// answered next, holds or drops the scan; returns the fault to answer
     /// the interrupted request with, or the link's error.
-    async fn tripped(&mut self, trip: Trip, inbox: &mut Inbox) -> Result<Fault, LinkError> {
+    async fn tripped(&mut self, trip: Trip) -> Result<Fault, LinkError> {
         let (event, fault) = match trip {
-            Trip::Request(kind, frame) => {
-                let _ = inbox.held.push_front(frame);
+            Trip::Request(kind) => {
                 // Only a scan is paused, and only a scan point trips on it.
                 let event = if kind == Midway::Pause { Event::Pause } else { Event::Abort };
                 (event, Fault::Aborted)
@@ -234,7 +237,7 @@ impl<B: Board> Head<B> {
     ) -> Result<Reply<T>, LinkError> {
         match self.guarded(link, sentry, inbox, false, op).await {
             Ok(r) => Ok(r),
-            Err(trip) => Ok(Err(self.tripped(trip, inbox).await?)),
+            Err(trip) => Ok(Err(self.tripped(trip).await?)),
         }
     }
 
@@ -355,7 +358,7 @@ impl<B: Board> Head<B> {
     /// what happened; holds the scan instead when the host has gone silent.
     async fn scan_step<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
         if self.silence_deadline().is_some_and(|d| sentry.now_us() >= d) {
-            self.tripped(Trip::HostSilent, inbox).await?;
+            self.tripped(Trip::HostSilent).await?;
             return Ok(());
         }
         let Some(run) = self.scan.as_mut() else {
@@ -386,7 +389,7 @@ impl<B: Board> Head<B> {
         };
         let ev = match self.guarded(link, sentry, inbox, true, visit).await {
             Err(trip) => {
-                self.tripped(trip, inbox).await?;
+                self.tripped(trip).await?;
                 return Ok(());
             }
             Ok(Ok(s)) => {

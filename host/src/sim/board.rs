@@ -115,17 +115,30 @@ impl AdcStream for SimAdc {
     }
 
     async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
-        let mut w = self.world.borrow_mut();
-        let Some(timing) = w.chop else {
+        let Some((period_s, lost)) = self.sample_period(out) else {
             out.fill(0);
             return Err(Overrun);
         };
+        elapse(&self.world, period_s).await;
+        if lost {
+            return Err(Overrun);
+        }
+        Ok(())
+    }
+}
+
+impl SimAdc {
+    /// The codes of the chop period starting now, and its length (s) and
+    /// whether a block is lost before it; `None` with the chop stopped.
+    fn sample_period(&mut self, out: &mut [u16]) -> Option<(f64, bool)> {
+        let mut w = self.world.borrow_mut();
+        let timing = w.chop?;
         let (saturated, dead) = (
             w.faults.active(w.moves, |f| *f == HardwareFault::AdcSaturated),
             w.faults.active(w.moves, |f| *f == HardwareFault::LaserDead),
         );
         let lost = w.faults.take_overrun(w.moves);
-        let dt = timing.ticks_per_sample as f64 / Self::TIMER_HZ as f64;
+        let dt = timing.ticks_per_sample as f64 / <Self as AdcStream>::TIMER_HZ as f64;
         let m = out.len();
         let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64 * w.imperfections.gain_scale[w.gain_index()];
         let vref = w.cfg.detector.adc_vref as f64;
@@ -136,7 +149,7 @@ impl AdcStream for SimAdc {
             0.0
         };
         let alpha = 1.0 - (-dt / w.photodiode.tau_s).exp();
-        let full = ((1u32 << Self::BITS) - 1) as f64;
+        let full = ((1u32 << <Self as AdcStream>::BITS) - 1) as f64;
         let World { photodiode, rng, t_s, .. } = &mut *w;
         let t_s = *t_s;
         for (k, o) in out.iter_mut().enumerate() {
@@ -151,12 +164,7 @@ impl AdcStream for SimAdc {
                 (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16
             };
         }
-        drop(w);
-        elapse(&self.world, m as f64 * dt).await;
-        if lost {
-            return Err(Overrun);
-        }
-        Ok(())
+        Some((m as f64 * dt, lost))
     }
 }
 

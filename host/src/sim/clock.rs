@@ -51,7 +51,7 @@ pub fn advance_to(world: &Shared, t: f64) {
     w.busy = true;
     // Paced: the wall clock owed is slept in pieces of a few milliseconds
     // (a sleep per slice would cost more than the slice).
-    w.pace_owed_s += dt.max(0.0) * w.pace;
+    w.pace_owed_s += dt.max(0.0) * w.pace as f64;
     if w.pace_owed_s >= PACE_SLEEP_S {
         let owed = std::mem::take(&mut w.pace_owed_s);
         drop(w);

@@ -55,7 +55,7 @@ pub struct SimConfig {
     /// move takes as long as on the reference head), for tests that act on
     /// the head from outside in the middle of a move; 0 (the default) runs
     /// as fast as it can.
-    pub pace: f64,
+    pub pace: f32,
 }
 
 /// Which target sits on the sample holder. Shared between the host (the

@@ -54,13 +54,10 @@ impl PtyLink {
             return Ok(false);
         }
         let mut buf = [0u8; 512];
-        match self.master.read(&mut buf) {
-            Ok(n) => {
-                let frames = &mut self.frames;
-                self.decoder.feed(&buf[..n], |f| frames.push_back(f.to_vec()));
-            }
-            // A spurious wake-up: look again.
-            Err(_) => {}
+        // An error is a spurious wake-up: look again.
+        if let Ok(n) = self.master.read(&mut buf) {
+            let frames = &mut self.frames;
+            self.decoder.feed(&buf[..n], |f| frames.push_back(f.to_vec()));
         }
         Ok(true)
     }

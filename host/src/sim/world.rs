@@ -71,7 +71,7 @@ pub struct World {
     pub step_log: Option<Vec<(usize, f64)>>,
     pub laser_log: Option<Vec<(f64, bool)>>,
     /// See [`super::SimConfig::pace`], and the wall-clock time owed to it.
-    pub pace: f64,
+    pub pace: f32,
     pub pace_owed_s: f64,
 }
 
