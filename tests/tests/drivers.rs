@@ -31,7 +31,8 @@ fn fast_chunk() -> u32 {
 fn homing_finds_the_switch_backs_off_and_touches_slowly() {
     let mut pins = Pins::idle();
     // Open, open, closed (after two fast chunks); still closed, open (after
-    // one back-off chunk); open, closed (after one slow chunk).
+    // one back-off chunk); open, closed (after one slow chunk); then the
+    // edge: closed, open (one microstep off it); open, closed (one back on).
     expect(
         &mut pins.home[0],
         &[
@@ -42,10 +43,14 @@ fn homing_finds_the_switch_backs_off_and_touches_slowly() {
             Pin::get(State::Low),
             Pin::get(State::Low),
             Pin::get(State::High),
+            Pin::get(State::High),
+            Pin::get(State::Low),
+            Pin::get(State::Low),
+            Pin::get(State::High),
         ],
     );
-    // DIR towards the switch (low) twice, away once, towards once; the
-    // driver enabled (active low) before every chunk.
+    // DIR towards the switch (low) twice, away once, towards once, away and
+    // towards for the edge; the driver enabled (active low) before every chunk.
     expect(
         &mut pins.dir[0],
         &[
@@ -53,10 +58,12 @@ fn homing_finds_the_switch_backs_off_and_touches_slowly() {
             Pin::set(State::Low),
             Pin::set(State::High),
             Pin::set(State::Low),
+            Pin::set(State::High),
+            Pin::set(State::Low),
         ],
     );
-    expect(&mut pins.enable_n[0], &vec![Pin::set(State::Low); 4]);
-    let mut hw = pins.into_hardware(CheckedDelay::new(&moves(4)));
+    expect(&mut pins.enable_n[0], &vec![Pin::set(State::Low); 6]);
+    let mut hw = pins.into_hardware(CheckedDelay::new(&moves(6)));
     let mut pos = Position::default();
     block_on(home_axis(&mut hw, &REFERENCE, &mut pos, Axis::Rotation)).unwrap();
 
@@ -64,7 +71,7 @@ fn homing_finds_the_switch_backs_off_and_touches_slowly() {
     assert!(pos.homed[0] && !pos.homed[1] && !pos.homed[2]);
     assert_eq!(pos.steps[0], units::deg_to_steps(c, c.home_deg));
     let counts: Vec<u32> = hw.steps.runs.iter().map(|r| r.iter().map(|(_, b)| b.count).sum()).collect();
-    assert_eq!(counts, vec![fast_chunk(), fast_chunk(), fast_chunk(), 4]);
+    assert_eq!(counts, vec![fast_chunk(), fast_chunk(), fast_chunk(), 4, 1, 1]);
     assert!(hw.steps.runs.iter().flatten().all(|(a, _)| *a == Axis::Rotation));
     done(&mut hw);
 }

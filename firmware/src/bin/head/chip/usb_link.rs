@@ -15,7 +15,7 @@ use embassy_stm32::Peri;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
-use embassy_usb::class::cdc_acm::{CdcAcmClass, Receiver, Sender, State};
+use embassy_usb::class::cdc_acm::{CdcAcmClass, ControlChanged, Receiver, Sender, State};
 use embassy_usb::{Builder, UsbDevice};
 use gonio_firmware::framing::{self, Decoder, MAX_ENCODED, MAX_FRAME};
 use gonio_firmware::link::{Link, LinkError};
@@ -71,8 +71,9 @@ impl Link for UsbLink {
 }
 
 /// Bus events that end a session: a bus reset, a suspend (the host slept or
-/// the cable is half out), losing the configuration. The core sees the link
-/// close and goes to its safe state.
+/// the cable is half out), losing the configuration; the host closing the
+/// port is seen by `rx_task` (DTR). The core sees the link close, in the
+/// middle of a move too, and stops.
 struct BusWatch;
 
 impl embassy_usb::Handler for BusWatch {
@@ -98,22 +99,34 @@ async fn usb_device(mut dev: UsbDevice<'static, UsbDriver>) -> ! {
     dev.run().await
 }
 
+/// A session is a configured interface with the host's port open: DTR is
+/// raised when a program opens the port (every CDC-ACM driver does) and
+/// dropped when it closes it, the device staying configured. Closing the port
+/// ends the session like a pulled cable.
 #[embassy_executor::task]
-async fn rx_task(mut rx: Receiver<'static, UsbDriver>) -> ! {
+async fn rx_task(mut rx: Receiver<'static, UsbDriver>, control: ControlChanged<'static>) -> ! {
     let mut dec = Decoder::new();
     let mut pkt = [0u8; PACKET as usize];
     loop {
         rx.wait_connection().await;
+        while !rx.dtr() {
+            control.control_changed().await;
+        }
         CONNECTED.signal(());
         DISCONNECTED.reset();
-        while let Ok(n) = rx.read_packet(&mut pkt).await {
-            dec.feed(&pkt[..n], |f| {
-                // A full queue drops the frame; the host's request times out
-                // and is retried.
-                if let Ok(f) = Frame::from_slice(f) {
-                    let _ = RX.try_send(f);
-                }
-            });
+        loop {
+            match select(rx.read_packet(&mut pkt), control.control_changed()).await {
+                Either::First(Ok(n)) => dec.feed(&pkt[..n], |f| {
+                    // A full queue drops the frame; the host's request times
+                    // out and is retried.
+                    if let Ok(f) = Frame::from_slice(f) {
+                        let _ = RX.try_send(f);
+                    }
+                }),
+                Either::First(Err(_)) => break,
+                Either::Second(()) if !rx.dtr() => break,
+                Either::Second(()) => {}
+            }
         }
         dec = Decoder::new();
         DISCONNECTED.signal(());
@@ -168,9 +181,9 @@ pub fn start(spawner: &Spawner, usb: Peri<'static, USB_OTG_FS>, dp: Peri<'static
     );
     builder.handler(BUS_WATCH.init(BusWatch));
     let class = CdcAcmClass::new(&mut builder, STATE.init(State::new()), PACKET);
-    let (tx, rx) = class.split();
+    let (tx, rx, control) = class.split_with_control();
     spawner.must_spawn(usb_device(builder.build()));
-    spawner.must_spawn(rx_task(rx));
+    spawner.must_spawn(rx_task(rx, control));
     spawner.must_spawn(tx_task(tx));
     UsbLink
 }
