@@ -57,8 +57,6 @@ pub enum Midway {
     Abort,
     /// Hold the running scan.
     Pause,
-    /// A status request: a heartbeat, or the host's probe for a lost request.
-    Status,
     Other,
 }
 
@@ -70,8 +68,6 @@ pub fn midway(sealed: &[u8]) -> Midway {
         Midway::Abort
     } else if is::<PauseEndpoint>(&hdr.key) {
         Midway::Pause
-    } else if is::<StatusEndpoint>(&hdr.key) {
-        Midway::Status
     } else {
         Midway::Other
     }

@@ -178,8 +178,10 @@ impl<B: Board> Head<B> {
         Ok(())
     }
 
-    /// Ends an operation in the table: done, or failed (safe state).
+    /// Ends an operation in the table: done, or failed (safe state). The
+    /// idle times count from here (in a pause too).
     fn finish<T>(&mut self, r: Reply<T>) -> Reply<T> {
+        self.rest_since_us = self.hw.clock.now_us();
         match &r {
             Ok(_) => {
                 let _ = self.apply(Event::Done);
@@ -405,14 +407,17 @@ impl<B: Board> Head<B> {
         }
     }
 
+    /// Starts a scan; one held in a pause is replaced (with a `Stopped`
+    /// event for it), once the new one is known to be valid.
     pub fn start_scan(&mut self, spec: ScanSpec) -> Reply<ScanAccepted> {
-        if self.mode != Mode::Idle && self.mode != Mode::Paused {
-            return Err(state::transition(self.mode, Event::Scan).refused.unwrap_or(Fault::Busy));
+        if let Some(f) = state::transition(self.mode, Event::Scan).refused {
+            return Err(f);
         }
         let total = spec.validate()?;
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);
         }
+        self.drop_scan(Fault::Aborted);
         self.apply(Event::Scan)?;
         let first_order = spec.first_order;
         // The plan always starts from the park position, wherever the stages
@@ -464,14 +469,6 @@ impl<B: Board> Head<B> {
                 reason: why,
             });
         }
-    }
-
-    /// Abort at rest (a running operation is stopped by the serve loop first):
-    /// a held scan is dropped, the laser and the drivers go off.
-    pub fn abort(&mut self) -> Status {
-        self.drop_scan(Fault::Aborted);
-        let _ = self.apply(Event::Abort);
-        self.status()
     }
 
     pub fn configure_detection(&mut self, s: DetectionSettings) -> Reply<gonio_shared::DetectionReport> {

@@ -31,10 +31,10 @@ use postcard_rpc::standard_icd::{WireError, ERROR_KEY};
 use postcard_rpc::{Endpoint, Key, Topic};
 use serde::Serialize;
 
-/// Requests kept while an operation runs (status polls, mostly). When they
-/// are full the link is not read until the operation ends: the rest wait in
-/// the link (USB flow control), and the host's timeouts cover them.
-const HELD: usize = 4;
+/// Requests kept while an operation runs (status polls, mostly); beyond
+/// them a request is dropped (the host's timeout covers it), but the link is
+/// still read, so an abort, a pause or a closed link is seen at once.
+const HELD: usize = 16;
 
 /// How long the E-STOP input must read closed before continuing re-arms
 /// the head (µs): a bouncing contact does not re-arm it.
@@ -74,8 +74,7 @@ enum Trip {
 
 /// Watches the link, the E-STOP input and the host timer while an operation
 /// runs; returns what stops it. Requests other than abort (and pause, when
-/// `pause` trips) are held for later, except that one status request held
-/// answers for the heartbeats after it (each one still shows the host is there).
+/// `pause` trips) are held for later; every frame shows the host is there.
 async fn watch<L: Link, S: Sentry>(
     link: &mut L,
     sentry: &mut S,
@@ -86,26 +85,23 @@ async fn watch<L: Link, S: Sentry>(
 ) -> Trip {
     loop {
         let deadline = silence_us.map(|t| heard.saturating_add(t));
-        let woke = if inbox.held.is_full() {
-            Either::First(sentry.until(deadline, true).await)
-        } else {
-            select(sentry.until(deadline, true), link.recv(&mut inbox.rx)).await
-        };
-        match woke {
+        match select(sentry.until(deadline, true), link.recv(&mut inbox.rx)).await {
             Either::First(Wake::EStop) => return Trip::EStop,
             Either::First(Wake::Deadline) => return Trip::HostSilent,
             Either::Second(Err(_)) => return Trip::LinkLost,
             Either::Second(Ok(n)) => {
                 // Any frame, even a damaged one, shows the host is there.
                 *heard = sentry.now_us();
-                // The link is read only while the inbox has room.
                 let frame = inbox.frame(n);
                 match midway(&frame) {
                     kind @ (Midway::Abort | Midway::Pause) if pause || kind == Midway::Abort => {
+                        // Room is made for it: it is answered first.
+                        if inbox.held.is_full() {
+                            inbox.held.pop_back();
+                        }
                         let _ = inbox.held.push_front(frame);
                         return Trip::Request(kind);
                     }
-                    Midway::Status if inbox.held.iter().any(|f| midway(f) == Midway::Status) => {}
                     _ => {
                         let _ = inbox.held.push_back(frame);
                     }
@@ -120,8 +116,10 @@ impl<B: Board> Head<B> {
     /// state (a running scan held at its next point, to be continued).
     pub async fn serve<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S) -> LinkError {
         let mut inbox = Inbox::new();
-        self.estop_open = sentry.estop_open();
+        // An event of a session that ended is not for this one.
+        self.pending_event = None;
         loop {
+            self.estop_open = sentry.estop_open();
             let r = if let Some(f) = inbox.held.pop_front() {
                 self.handle(&f, link, sentry, &mut inbox).await
             } else if self.mode == Mode::Scanning {
@@ -142,8 +140,14 @@ impl<B: Board> Head<B> {
                 (r, _) => r,
             };
             if let Err(e) = r {
-                // Laser off and motion braked at once; a scan is held.
-                let _ = self.tripped(Trip::LinkLost).await;
+                // Laser off and motion braked at once; a scan is held. A
+                // stop that already made the head safe (it found the link
+                // closed) is not reported twice.
+                if self.mode.busy() {
+                    let _ = self.tripped(Trip::LinkLost).await;
+                } else {
+                    self.stop(Event::LinkLost).await;
+                }
                 crate::info!("link lost; head in safe state");
                 return e;
             }
@@ -272,12 +276,12 @@ impl<B: Board> Head<B> {
         Ok(self.status())
     }
 
-    /// Aborts what runs (braking a move in progress) and drops a held scan.
-    async fn abort_now(&mut self) -> Status {
-        if self.mode.busy() {
-            self.stop(Event::Abort).await;
-        }
-        self.abort()
+    /// Aborts what runs (braking a move in progress), drops a held scan, and
+    /// leaves the laser and the drivers off.
+    async fn abort(&mut self) -> Status {
+        self.stop(Event::Abort).await;
+        self.drop_scan(Fault::Aborted);
+        self.status()
     }
 
     /// Checks, decodes and answers one frame. A frame that fails its check
@@ -320,15 +324,11 @@ impl<B: Board> Head<B> {
                 self.reply::<CalibrateEndpoint, L>(seq, &resp, link).await
             }
             Command::Scan(spec) => {
-                // A held scan is replaced, with a `Stopped` event for it.
-                if self.mode == Mode::Paused {
-                    self.drop_scan(Fault::Aborted);
-                }
                 let resp = self.start_scan(spec);
                 self.reply::<ScanEndpoint, L>(seq, &resp, link).await
             }
             Command::Abort => {
-                let resp = self.abort_now().await;
+                let resp = self.abort().await;
                 self.reply::<AbortEndpoint, L>(seq, &resp, link).await
             }
             Command::Pause => {
@@ -362,6 +362,8 @@ impl<B: Board> Head<B> {
             return Ok(());
         }
         let Some(run) = self.scan.as_mut() else {
+            // Nothing to scan (cannot happen: scanning starts with a run).
+            let _ = self.apply(Event::Done);
             return Ok(());
         };
         if run.current.is_none() {

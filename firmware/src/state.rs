@@ -189,22 +189,24 @@ pub fn transition(s: Mode, event: Event) -> Transition {
         (M::Scanning, E::Pause) => go(M::Stopping(Rest::Paused), Off, Hold),
         (M::Paused | M::Stopping(_), E::Pause) => stay,
         (_, E::Home | E::Move | E::Measure | E::Scan | E::Pause | E::Continue) => refuse(s, Fault::Busy),
-        // Abort: stop whatever runs and drop a held scan.
-        (M::Homing | M::Moving | M::Measuring | M::Scanning | M::Stopping(Rest::Idle | Rest::Paused), E::Abort) => {
+        // Abort: stop whatever runs and drop a held scan. A pause may be
+        // moving (a drift-monitor visit): its stops brake like the others.
+        (M::Homing | M::Moving | M::Measuring | M::Scanning | M::Paused | M::Stopping(Rest::Idle | Rest::Paused), E::Abort) => {
             go(M::Stopping(Rest::Idle), Off, Hold)
         }
-        (M::Idle | M::Paused, E::Abort) => go(M::Idle, Off, Disable),
+        (M::Idle, E::Abort) => go(M::Idle, Off, Disable),
         (M::Stopping(Rest::Faulted) | M::Faulted, E::Abort) => go(s, Off, Hold),
         // Link loss and host silence: a scan is held, anything else dropped.
-        (M::Scanning, E::LinkLost | E::HostSilent) => go(M::Stopping(Rest::Paused), Off, Hold),
+        (M::Scanning | M::Paused, E::LinkLost | E::HostSilent) => go(M::Stopping(Rest::Paused), Off, Hold),
         (M::Homing | M::Moving | M::Measuring, E::LinkLost | E::HostSilent) => go(M::Stopping(Rest::Idle), Off, Hold),
-        (M::Idle | M::Paused | M::Faulted, E::LinkLost | E::HostSilent) => go(s, Off, Disable),
+        (M::Idle | M::Faulted, E::LinkLost | E::HostSilent) => go(s, Off, Disable),
         (M::Stopping(_), E::LinkLost | E::HostSilent) => go(s, Off, Hold),
         // E-STOP: from anywhere, laser off now, motion braked, then faulted.
-        (M::Idle | M::Paused | M::Faulted, E::EStop) => go(M::Faulted, Off, Disable),
+        (M::Idle | M::Faulted, E::EStop) => go(M::Faulted, Off, Disable),
         (_, E::EStop) => go(M::Stopping(Rest::Faulted), Off, Hold),
-        // Ends of operations.
-        (M::Homing | M::Moving | M::Measuring | M::Scanning, E::Done) => go(M::Idle, Off, Hold),
+        // Ends of operations; a measurement leaves the laser to its idle time.
+        (M::Measuring, E::Done) => go(M::Idle, Keep, Hold),
+        (M::Homing | M::Moving | M::Scanning, E::Done) => go(M::Idle, Off, Hold),
         (M::Homing | M::Moving | M::Measuring | M::Scanning, E::Failed) => go(M::Idle, Off, Disable),
         (M::Paused, E::Failed) => go(M::Paused, Off, Disable),
         (_, E::Done | E::Failed) => stay,
@@ -223,8 +225,9 @@ pub fn transition(s: Mode, event: Event) -> Transition {
 mod tests {
     use super::*;
 
+    /// Nothing can be moving: a pause may be (a drift-monitor visit).
     fn at_rest(s: Mode) -> bool {
-        matches!(s, Mode::Idle | Mode::Paused | Mode::Faulted)
+        matches!(s, Mode::Idle | Mode::Faulted)
     }
 
     fn stop_trigger(e: Event) -> bool {
@@ -260,7 +263,7 @@ mod tests {
                 (_, Mode::Faulted | Mode::Stopping(Rest::Faulted)) => s,
                 (Event::Abort, _) if at_rest(s) => Mode::Idle,
                 (Event::Abort, _) => Mode::Stopping(Rest::Idle),
-                (_, Mode::Scanning) => Mode::Stopping(Rest::Paused),
+                (_, Mode::Scanning | Mode::Paused) => Mode::Stopping(Rest::Paused),
                 (_, Mode::Stopping(_)) => s,
                 (_, _) if at_rest(s) => s,
                 _ => Mode::Stopping(Rest::Idle),
@@ -295,6 +298,7 @@ mod tests {
         }
         let running = matches!(s, Mode::Homing | Mode::Moving | Mode::Measuring | Mode::Scanning);
         match e {
+            Event::Done if s == Mode::Measuring => go(Mode::Idle, Keep, Drivers::Keep),
             Event::Done if running => go(Mode::Idle, Off, Drivers::Keep),
             Event::Failed if running || s == Mode::Paused => go(if running { Mode::Idle } else { s }, Off, Disable),
             Event::Stopped => match s {
@@ -339,7 +343,7 @@ mod tests {
                     assert_ne!(t.drivers, Drivers::Disable, "{s:?} × {e:?}");
                 }
                 // A stop from a state that may be moving goes through Stopping.
-                if stop_trigger(e) && s.busy() {
+                if stop_trigger(e) && (s.busy() || s == Mode::Paused) {
                     assert!(matches!(t.to, Mode::Stopping(_)), "{s:?} × {e:?} → {:?}", t.to);
                 }
                 // Only continue leaves an E-STOP, and only the E-STOP enters it.

@@ -137,6 +137,9 @@ impl Session {
                     Ok(h) if h.identity().serial.as_str() == self.serial => {
                         self.head = Some(h);
                         self.reconnections += 1;
+                        if self.holds_a_scan().await {
+                            return Ok(());
+                        }
                         match self.prepare().await {
                             Ok(()) => return Ok(()),
                             Err(e) if is_link_loss(&e) => {
@@ -163,6 +166,19 @@ impl Session {
             ))),
             None => bail!("head {} not found again", self.serial),
         }
+    }
+
+    /// Whether the head found again holds this session's scan: it stopped
+    /// when the link went (laser off, motion braked, position kept) and kept
+    /// its settings, so it needs no preparing, and the scan continues where
+    /// it stopped without replanning.
+    async fn holds_a_scan(&self) -> bool {
+        self.detection.is_some()
+            && self
+                .head()
+                .status()
+                .await
+                .is_ok_and(|st| st.homed && matches!(st.state, gonio_shared::HeadState::Paused { .. }))
     }
 
     /// Where to look for the head: its target, and a real head's current port.

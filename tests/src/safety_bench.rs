@@ -176,37 +176,36 @@ pub fn run(per_trigger: u32) -> serde_json::Value {
     let mut unhomed_by_homing_stop = 0u32;
     for trigger in Trigger::ALL {
         let plan = [("move", n_move), ("homing", n_home), ("measurement", n_meas), ("scan", n_scan)];
+        // The host watch cannot be shorter than 1 s: silence trials pick
+        // their moment from 1 s on, in moves that last longer.
+        let lo = if trigger == Trigger::HostSilence { 1.0 } else { 0.005 };
         for (kind, n) in plan {
             for _ in 0..n {
                 ready(&mut head);
                 let (activity, length) = match kind {
                     "move" => {
-                        let g = geometry(&mut rng);
-                        let a = Activity::Move(g);
-                        // The analytical duration of this move from here.
-                        let axes = kinematics::inverse(&REFERENCE, &g).expect("reachable");
-                        let target = gonio_firmware::motion::target_steps(&REFERENCE, &axes);
                         let (st, _) = status(&mut head);
                         let at = [
                             gonio_firmware::units::deg_to_steps(&REFERENCE.axes[0], st.axes.omega_deg),
                             gonio_firmware::units::deg_to_steps(&REFERENCE.axes[1], st.axes.tau_deg),
                             gonio_firmware::units::deg_to_steps(&REFERENCE.axes[2], st.axes.psi_deg),
                         ];
-                        (
-                            a,
-                            gonio_firmware::motion::move_time(&REFERENCE, [0, 1, 2].map(|i| target[i] - at[i])),
-                        )
+                        // A random reachable geometry at least `lo` + 50 ms
+                        // away, and the analytical duration of the move there.
+                        loop {
+                            let g = geometry(&mut rng);
+                            let axes = kinematics::inverse(&REFERENCE, &g).expect("reachable");
+                            let target = gonio_firmware::motion::target_steps(&REFERENCE, &axes);
+                            let length = gonio_firmware::motion::move_time(&REFERENCE, [0, 1, 2].map(|i| target[i] - at[i]));
+                            if length > lo + 0.05 {
+                                break (Activity::Move(g), length);
+                            }
+                        }
                     }
                     "homing" => (Activity::Homing, home_s),
                     "measurement" => (Activity::Measurement, meas_s),
                     _ => (Activity::Scan, scan_s),
                 };
-                // The host watch cannot be shorter than 1 s: silence trials
-                // pick their moment from 1 s on, in activities that last.
-                let lo = if trigger == Trigger::HostSilence { 1.0 } else { 0.005 };
-                if length <= lo + 0.05 {
-                    continue;
-                }
                 let tau = rng.random_range(lo..length * 0.98);
                 let s = trial(&mut head, activity, trigger, tau);
                 for (axis, p) in &s.phases {

@@ -252,7 +252,7 @@ pub fn status(head: &mut FrameHead) -> (Status, Vec<Sent>) {
 }
 
 /// Where the firmware believes the axes are, less where they are (microsteps).
-fn offset(head: &FrameHead, s: &Status) -> [i64; 3] {
+pub fn offset(head: &FrameHead, s: &Status) -> [i64; 3] {
     let fw = [
         units::deg_to_steps(&REFERENCE.axes[0], s.axes.omega_deg),
         units::deg_to_steps(&REFERENCE.axes[1], s.axes.tau_deg),

@@ -283,3 +283,72 @@ fn the_safety_bench_bars_hold_on_a_sample_of_its_trials() {
     let out = gonio_tests::safety_bench::run(25);
     assert_eq!(out["all_bars_met"], true, "{out:#}");
 }
+
+/// A drift-monitor visit moves while a scan is held: an abort in the middle
+/// of that move brakes it like any other, the drivers let go only once the
+/// stages stand, and no step is lost.
+#[test]
+fn an_abort_during_a_move_in_a_pause_brakes_before_the_drivers_let_go() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let (st, _) = gonio_tests::stops::status(&mut head);
+    let before = gonio_tests::stops::offset(&head, &st);
+    let t = head.now();
+    let sent = head.serve_timed(
+        [
+            (t, Cue::Frame(send::<ScanEndpoint>(&small_scan()))),
+            (t + 3.3, Cue::Frame(send::<PauseEndpoint>(&()))),
+            (t + 5.0, Cue::Frame(send::<MoveEndpoint>(&far_move()))),
+            (t + 6.0, Cue::Frame(send::<gonio_shared::icd::AbortEndpoint>(&()))),
+        ],
+        t + 10.0,
+    );
+    assert!(matches!(replies::<PauseEndpoint>(&sent).as_slice(), [Ok(_)]));
+    assert_eq!(replies::<MoveEndpoint>(&sent), vec![Err(Fault::Aborted)]);
+    let (st, _) = gonio_tests::stops::status(&mut head);
+    assert_eq!(gonio_tests::stops::offset(&head, &st), before, "a step lost in the stop");
+    assert_eq!(st.state, HeadState::Idle);
+    assert!(st.homed && !st.drivers_enabled && !st.laser_on);
+    assert!(matches!(
+        scan_events(&sent).last(),
+        Some((
+            ScanEvent::Stopped {
+                reason: Fault::Aborted,
+                ..
+            },
+            _
+        ))
+    ));
+}
+
+#[test]
+fn the_laser_stays_on_for_its_idle_time_after_a_measurement_then_goes_off() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let t = head.now();
+    let safety = SafetySettings {
+        laser_idle_s: 5.0,
+        ..SafetySettings::default()
+    };
+    let sent = head.serve_timed(
+        [
+            (t, Cue::Frame(send::<SafetyEndpoint>(&safety))),
+            (t + 0.001, Cue::Frame(send::<MeasureEndpoint>(&MeasureRequest { at: None }))),
+            (t + 2.0, Cue::Frame(send::<StatusEndpoint>(&()))),
+            (t + 8.0, Cue::Frame(send::<StatusEndpoint>(&()))),
+            // A move switches it off at once.
+            (t + 8.1, Cue::Frame(send::<MeasureEndpoint>(&MeasureRequest { at: None }))),
+            (t + 8.5, Cue::Frame(send::<MoveEndpoint>(&far_move()))),
+        ],
+        t + 30.0,
+    );
+    let st = replies::<StatusEndpoint>(&sent);
+    assert!(st[0].laser_on, "the laser went off before its idle time");
+    assert!(!st[1].laser_on, "the laser stayed on past its idle time");
+    let moved = sent
+        .iter()
+        .rev()
+        .find(|s| replies::<MoveEndpoint>(std::slice::from_ref(s)).len() == 1)
+        .unwrap();
+    assert!(!moved.laser, "the laser stayed on through a move");
+}

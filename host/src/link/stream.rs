@@ -53,9 +53,13 @@ impl WireRx for Rx {
 /// Opens a head's serial port (baud rate is irrelevant on USB CDC-ACM and
 /// on a pseudo-terminal). Must be called within a tokio runtime.
 pub fn serial_client(path: &str) -> Result<(HostClient<WireError>, Workers)> {
-    let port = tokio_serial::new(path, 115_200)
+    let mut port = tokio_serial::new(path, 115_200)
         .open_native_async()
         .with_context(|| format!("cannot open the head's port {path}"))?;
+    // The head serves a session while DTR is up (closing the port drops it).
+    // Most drivers raise it on open; some (Windows without flow control) do
+    // not. A pseudo-terminal has no modem lines: the error is ignored there.
+    let _ = tokio_serial::SerialPort::write_data_terminal_ready(&mut port, true);
     let (rx, tx) = tokio::io::split(port);
     let rx = Rx {
         port: rx,

@@ -34,10 +34,16 @@ fn regs() -> embassy_stm32::pac::timer::TimGp32 {
     embassy_stm32::pac::TIM5
 }
 
+/// Executor ticks since `origin`; 0 before it (`start` sets the origin a
+/// few ticks ahead: an unsigned difference would wrap to ~2³²).
+fn since(origin: u32) -> u64 {
+    (regs().cnt().read().wrapping_sub(origin) as i32).max(0) as u64
+}
+
 /// Arms compare channel 1 at executor tick `t` (at least one tick from now).
 fn arm(origin: u32, t: u64) {
     let r = regs();
-    let now = r.cnt().read().wrapping_sub(origin) as u64;
+    let now = since(origin);
     let at = origin.wrapping_add(t.max(now + 1) as u32);
     r.ccr(0).write_value(at);
     r.dier().modify(|w| w.set_ccie(0, true));
@@ -53,7 +59,7 @@ impl Handler<Tim5Irq> for StepInterrupt {
         STATE.lock(|s| {
             let mut s = s.borrow_mut();
             let Some(st) = s.as_mut() else { return };
-            let now = r.cnt().read().wrapping_sub(st.origin) as u64;
+            let now = since(st.origin);
             match st.exec.fire(now) {
                 Some(t) => arm(st.origin, t),
                 None => {

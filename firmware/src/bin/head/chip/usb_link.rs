@@ -112,8 +112,11 @@ async fn rx_task(mut rx: Receiver<'static, UsbDriver>, control: ControlChanged<'
         while !rx.dtr() {
             control.control_changed().await;
         }
+        // What is queued belongs to the session that ended. A disconnect the
+        // core has not seen yet stays signalled: it ends its serve loop.
+        RX.clear();
+        TX.clear();
         CONNECTED.signal(());
-        DISCONNECTED.reset();
         loop {
             match select(rx.read_packet(&mut pkt), control.control_changed()).await {
                 Either::First(Ok(n)) => dec.feed(&pkt[..n], |f| {
