@@ -242,6 +242,10 @@ pub fn run(per_trigger: u32) -> serde_json::Value {
         "continue_after_abort_ok": continue_after_abort_ok,
         "pause_continue_ok": pause_continue_ok,
         "safe_after_every_stop": all.unsafe_after == 0,
+        // The moments reached every axis in every phase of its moves.
+        "every_axis_phase_stopped": Axis::ALL.iter().all(|a| ["acceleration", "cruise", "deceleration"]
+            .iter()
+            .all(|p| phases.get(&format!("move:{}/{p}", a.name())).is_some_and(|&n| n > 0))),
     });
     let met = bars.as_object().is_some_and(|b| b.values().all(|v| v.as_bool() == Some(true)));
     let out = json!({

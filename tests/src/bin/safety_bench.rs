@@ -22,6 +22,10 @@
 //!   its `Stopped` position, stores every point once, without homing.
 //! - `pause_continue_ok`: the same with pause and continue, the head
 //!   holding the scan (no replanning).
+//! - `every_axis_phase_stopped`: moves were stopped on every axis in its
+//!   acceleration, its cruise and its deceleration (`moments_by_axis_phase`);
+//!   `safe_after_every_stop`: laser off, drivers disabled, nothing running
+//!   after each stop. `all_bars_met` says whether every bar holds.
 
 fn main() {
     let per_trigger: u32 = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(1000);
