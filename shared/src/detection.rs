@@ -39,12 +39,22 @@ pub struct DetectionSettings {
     pub auto_range: bool,
 }
 
+// Every accepted trigger rate is converted (checked when compiling).
+const _: () = assert!(DetectionSettings::ADC_RATE_MAX_HZ < DetectionSettings::ADC_CONVERSIONS_MAX_HZ);
+
 impl DetectionSettings {
-    /// Limits of the reference hardware (ADC rate ≤ 1 MS/s, integration ≤ 10 s).
+    /// Limits of the reference hardware (ADC rate ≤ 200 kS/s, integration ≤ 10 s).
     pub const CHOP_HZ_MIN: f32 = 1.0;
     pub const CHOP_HZ_MAX: f32 = 5_000.0;
     pub const SAMPLES_PER_PERIOD_MAX: u16 = 512;
-    pub const ADC_RATE_MAX_HZ: f32 = 1.0e6;
+    /// Conversions ADC1 completes per second on the reference board: a
+    /// 21 MHz ADC clock (APB2 84 MHz / 4), 84 sampling cycles and 12 of
+    /// conversion, 21 MHz / 96 = 218.75 kS/s. A trigger that comes during a
+    /// conversion is lost without a word, and a chop period then holds
+    /// fewer samples than it should.
+    pub const ADC_CONVERSIONS_MAX_HZ: f32 = 21.0e6 / 96.0;
+    /// Highest trigger rate accepted: the conversions' limit less 8 %.
+    pub const ADC_RATE_MAX_HZ: f32 = 200_000.0;
     pub const INTEGRATION_MAX_S: f32 = 10.0;
     pub const SETTLE_MAX_S: f32 = 60.0;
 

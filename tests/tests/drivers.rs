@@ -256,3 +256,27 @@ fn calibration_refuses_a_weak_or_short_signal() {
     assert_eq!(block_on(det.calibrate(&mut hw, &REFERENCE, 50)), Err(Fault::WeakSignal));
     done(&mut hw);
 }
+
+/// Issue #15 defect 8: a trigger rate the ADC cannot convert (84-cycle
+/// sampling at 21 MHz: 218.75 kS/s) is refused instead of losing samples
+/// silently; the default settings and the highest accepted rate fit.
+#[test]
+fn sample_rates_beyond_the_adc_conversion_rate_are_refused() {
+    let d = DetectionSettings::default();
+    let at = |chop_hz: f32, samples_per_period: u16| DetectionSettings {
+        chop_hz,
+        samples_per_period,
+        ..d
+    };
+    assert!(d.validate().is_ok() && d.sample_rate_hz() < DetectionSettings::ADC_RATE_MAX_HZ);
+    // 390.625 Hz × 512 = 200 kS/s: the highest rate accepted, below what converts.
+    assert!(at(390.625, 512).validate().is_ok());
+    for (chop, m) in [(450.0, 512), (1000.0, 256), (5000.0, 64)] {
+        assert!(at(chop, m).sample_rate_hz() > DetectionSettings::ADC_RATE_MAX_HZ);
+        assert_eq!(
+            at(chop, m).validate(),
+            Err(Fault::InvalidValue(Field::SamplesPerPeriod)),
+            "{chop} Hz × {m}"
+        );
+    }
+}

@@ -73,7 +73,9 @@ impl TimedAdc {
         let chop = Timer::new(tim3);
         chop.set_trigger_source(TriggerSource::ITR1); // TIM2 TRGO
         chop.set_slave_mode(SlaveMode::EXT_CLOCK_MODE);
-        chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::PwmMode1);
+        // Dark until the first measurement.
+        chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::ForceInactive);
+        chop.enable_channel(Channel::Ch1, true);
         let chop_pin = PwmPin::new(chop_pin, OutputType::PushPull);
         TimedAdc {
             ring,
@@ -101,6 +103,7 @@ impl AdcStream for TimedAdc {
         self.chop.set_max_compare_value((m - 1) as u16);
         self.chop.set_compare_value(Channel::Ch1, (m / 2) as u16);
         self.chop.regs_core().cnt().write(|w| w.set_cnt(0));
+        self.chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::PwmMode1);
         self.chop.enable_channel(Channel::Ch1, true);
         self.chop.start();
         self.ring.clear();
@@ -113,8 +116,11 @@ impl AdcStream for TimedAdc {
     fn stop(&mut self) {
         self.sample_clock.stop();
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::DISABLED));
-        // Chop output held low: the laser is dark between measurements.
-        self.chop.enable_channel(Channel::Ch1, false);
+        // Chop output driven low (forced inactive, the channel left enabled):
+        // a disabled channel would leave the pin floating, and the laser's
+        // modulation input must see dark between measurements.
+        self.chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::ForceInactive);
+        self.chop.enable_channel(Channel::Ch1, true);
         self.chop.stop();
         self.ring.request_pause();
         self.running = false;

@@ -14,7 +14,14 @@
 //!
 //! Home switches are normally closed to ground with the internal pull-up, so a
 //! pressed switch and a broken wire both read high: homing then stops at once
-//! instead of driving into the end stop.
+//! instead of driving into the end stop. The E-STOP is wired the same way.
+//!
+//! From reset until `Pins::new` runs (the boot ROM, `embassy_stm32::init`,
+//! the clock start-up) every pin is a floating input. The board must hold the
+//! safe state by itself meanwhile: 10 kΩ pull-downs on the laser enable (PB0)
+//! and on the three STEP lines, 10 kΩ pull-ups on the three active-low EN
+//! lines; the chop output (PA6) also gets a pull-down, since the laser's
+//! modulation input must not see a floating level.
 
 use embassy_stm32::gpio::{Input, Level, Output, Pull, Speed};
 use embassy_stm32::peripherals::*;

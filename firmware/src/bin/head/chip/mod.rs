@@ -2,6 +2,7 @@
 
 mod adc_stream;
 mod board;
+mod cpu;
 mod fault;
 mod sentry;
 mod step_timer;
@@ -66,12 +67,14 @@ fn clocks() -> Config {
     config.rcc.apb2_pre = APBPrescaler::DIV2;
     config.rcc.sys = Sysclk::PLL1_P;
     config.rcc.mux.clk48sel = mux::Clk48sel::PLL1_Q;
+    config.dma_interrupt_priority = cpu::DMA;
     config
 }
 
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
     let p = embassy_stm32::init(clocks());
+    cpu::setup();
     defmt::info!("gonio head {} starting", env!("CARGO_PKG_VERSION"));
     // Read before anything else can hang: the pins come up safe (board.rs),
     // the watchdog then guards the rest.
