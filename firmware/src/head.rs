@@ -505,31 +505,39 @@ impl<B: Board> Head<B> {
 
     /// When the host watch fires, if it is on (µs on the head's clock).
     pub(crate) fn silence_deadline(&self) -> Option<u64> {
-        let t = units::seconds_to_us(self.safety.host_timeout_s) as u64;
-        (t > 0).then(|| self.last_heard_us.saturating_add(t))
+        self.host_timeout_us().map(|t| self.last_heard_us.saturating_add(t))
     }
 
-    /// The next idle deadline at rest: the drivers', then the laser's.
+    /// The host watch (µs), if it is on.
+    pub(crate) fn host_timeout_us(&self) -> Option<u64> {
+        let t = units::seconds_to_us(self.safety.host_timeout_s) as u64;
+        (t > 0).then_some(t)
+    }
+
+    /// When the laser and the drivers let go at rest (µs), for those that
+    /// are on and have an idle time.
+    fn idle_deadlines(&self) -> [Option<u64>; 2] {
+        let after = |on: bool, s: f32| (on && s > 0.0).then(|| self.rest_since_us.saturating_add(units::seconds_to_us(s) as u64));
+        [
+            after(self.laser_on, self.safety.laser_idle_s),
+            after(self.drivers_on, self.safety.idle_drivers_s),
+        ]
+    }
+
+    /// The next idle deadline at rest.
     pub(crate) fn rest_deadline(&self) -> Option<u64> {
-        let after = |s: f32| self.rest_since_us.saturating_add(units::seconds_to_us(s) as u64);
-        let drivers = (self.drivers_on && self.safety.idle_drivers_s > 0.0).then(|| after(self.safety.idle_drivers_s));
-        let laser = (self.laser_on && self.safety.laser_idle_s > 0.0).then(|| after(self.safety.laser_idle_s));
-        match (drivers, laser) {
-            (Some(a), Some(b)) => Some(a.min(b)),
-            (a, b) => a.or(b),
-        }
+        self.idle_deadlines().into_iter().flatten().min()
     }
 
     /// At rest, a deadline has passed: the laser and the drivers let go of
     /// what has been idle long enough.
     pub(crate) fn rest_expired(&mut self) {
         let now = self.hw.clock.now_us();
-        let since = self.rest_since_us;
-        let after = |s: f32| s > 0.0 && now >= since.saturating_add(units::seconds_to_us(s) as u64);
-        if self.laser_on && after(self.safety.laser_idle_s) {
+        let [laser, drivers] = self.idle_deadlines().map(|d| d.is_some_and(|d| now >= d));
+        if laser {
             let _ = self.apply(Event::LaserIdle);
         }
-        if self.drivers_on && after(self.safety.idle_drivers_s) {
+        if drivers {
             let _ = self.apply(Event::IdleTimeout);
         }
     }

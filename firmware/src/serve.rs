@@ -189,7 +189,7 @@ impl<B: Board> Head<B> {
         pause: bool,
         op: impl AsyncFnOnce(&mut Self) -> T,
     ) -> Result<T, Trip> {
-        let silence = self.silence_deadline().map(|d| d - self.last_heard_us);
+        let silence = self.host_timeout_us();
         let mut heard = self.last_heard_us;
         let r = select(op(self), watch(link, sentry, inbox, &mut heard, silence, pause)).await;
         self.last_heard_us = heard;

@@ -3,7 +3,7 @@
 //! each figure is.
 
 use crate::frames::{scan_events, send};
-use crate::stops::{decel_s_max, duration_s, ready, small_scan, status, trial, Activity, Stop, Trigger};
+use crate::stops::{decel_s_max, duration_s, offset, ready, small_scan, status, trial, Activity, Stop, Trigger};
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_host::sim::{Cue, FrameHead, SimConfig};
@@ -98,9 +98,10 @@ fn exactly_the_grid(seen: &BTreeMap<u32, u32>) -> bool {
 /// step lost. Tries later moments until one falls inside a move.
 fn continued(head: &mut FrameHead, pause: bool) -> (bool, f64) {
     ready(head);
-    let before = status(head).0;
-    let w0 = head.world().steps;
-    let fw0 = before.axes;
+    let before = {
+        let (st, _) = status(head);
+        offset(head, &st)
+    };
     for k in 0..40 {
         let tau = 2.0 + 0.137 * k as f64;
         let t0 = head.now() + 0.001;
@@ -144,14 +145,7 @@ fn continued(head: &mut FrameHead, pause: bool) -> (bool, f64) {
         visits(&events, &mut seen);
         let finished = matches!(events.last(), Some((ScanEvent::Finished { .. }, _)));
         let after = status(head).0;
-        let w1 = head.world().steps;
-        let steps = |a: Axis, deg: f32| gonio_firmware::units::deg_to_steps(&REFERENCE.axes[a.index()], deg) as i64;
-        let drift = [
-            (steps(Axis::Rotation, after.axes.omega_deg) - w1[0] as i64) - (steps(Axis::Rotation, fw0.omega_deg) - w0[0] as i64),
-            (steps(Axis::Cradle, after.axes.tau_deg) - w1[1] as i64) - (steps(Axis::Cradle, fw0.tau_deg) - w0[1] as i64),
-            (steps(Axis::Arm, after.axes.psi_deg) - w1[2] as i64) - (steps(Axis::Arm, fw0.psi_deg) - w0[2] as i64),
-        ];
-        let ok = finished && exactly_the_grid(&seen) && after.homed && drift == [0, 0, 0];
+        let ok = finished && exactly_the_grid(&seen) && after.homed && offset(head, &after) == before;
         return (ok, tau);
     }
     (false, f64::NAN)
@@ -185,11 +179,7 @@ pub fn run(per_trigger: u32) -> serde_json::Value {
                 let (activity, length) = match kind {
                     "move" => {
                         let (st, _) = status(&mut head);
-                        let at = [
-                            gonio_firmware::units::deg_to_steps(&REFERENCE.axes[0], st.axes.omega_deg),
-                            gonio_firmware::units::deg_to_steps(&REFERENCE.axes[1], st.axes.tau_deg),
-                            gonio_firmware::units::deg_to_steps(&REFERENCE.axes[2], st.axes.psi_deg),
-                        ];
+                        let at = gonio_firmware::motion::target_steps(&REFERENCE, &st.axes);
                         // A random reachable geometry at least `lo` + 50 ms
                         // away, and the analytical duration of the move there.
                         loop {

@@ -7,7 +7,7 @@
 
 use crate::frames::{replies, scan_events, send};
 use gonio_firmware::board::{AxisConfig, REFERENCE};
-use gonio_firmware::units;
+use gonio_firmware::motion;
 use gonio_host::sim::{Cue, FrameHead, Sent};
 use gonio_shared::icd::{
     AbortEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint,
@@ -253,11 +253,7 @@ pub fn status(head: &mut FrameHead) -> (Status, Vec<Sent>) {
 
 /// Where the firmware believes the axes are, less where they are (microsteps).
 pub fn offset(head: &FrameHead, s: &Status) -> [i64; 3] {
-    let fw = [
-        units::deg_to_steps(&REFERENCE.axes[0], s.axes.omega_deg),
-        units::deg_to_steps(&REFERENCE.axes[1], s.axes.tau_deg),
-        units::deg_to_steps(&REFERENCE.axes[2], s.axes.psi_deg),
-    ];
+    let fw = motion::target_steps(&REFERENCE, &s.axes);
     let w = head.world();
     [0, 1, 2].map(|i| fw[i] as i64 - w.steps[i] as i64)
 }
