@@ -211,7 +211,11 @@ impl Detector {
             Self::period(hw, buf, &mut flags).await;
             it.push(buf);
         }
-        let e = it.estimate();
+        // The two fits of the estimate are the longest computations of a
+        // measurement on the chip: the executor runs between them.
+        let drift = it.drift();
+        embassy_futures::yield_now().await;
+        let e = it.estimate_with(drift);
         self.flag(&e, Self::full_scale::<B>(), &mut flags);
         Ok(self.measurement::<B>(cfg, &e, flags))
     }

@@ -5,9 +5,9 @@
 
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    MeasureRequest, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
-use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, ScanSpec};
+use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, PlanChunk, SafetySettings, SanityConfig, ScanSpec};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::standard_icd::WireError;
 use postcard_rpc::{Endpoint, Key};
@@ -22,6 +22,7 @@ pub enum Command {
     Move(Geometry),
     Measure(MeasureRequest),
     Scan(ScanSpec),
+    Plan(PlanChunk),
     Abort,
     Pause,
     Continue,
@@ -97,6 +98,8 @@ pub fn decode(frame: &[u8]) -> Result<(VarHeader, Command), DecodeError> {
         body(hdr, rest).map(Command::Measure)
     } else if is::<ScanEndpoint>(k) {
         body(hdr, rest).map(Command::Scan)
+    } else if is::<PlanEndpoint>(k) {
+        body(hdr, rest).map(Command::Plan)
     } else if is::<AbortEndpoint>(k) {
         body::<()>(hdr, rest).map(|_| Command::Abort)
     } else if is::<PauseEndpoint>(k) {

@@ -10,8 +10,8 @@ use crate::board::HeadConfig;
 use crate::detector::{Detector, Measurement};
 use crate::hw::{Board, Clock, Hardware, StepTimer};
 use crate::kinematics;
-use crate::motion::plan::Planner;
 use crate::motion::{self, Position};
+use crate::sanity::geometry::FixedGeometry;
 use crate::sanity::Sanity;
 use crate::state::{self, Drivers, Event, Laser, Mode};
 use crate::{homing, units};
@@ -20,9 +20,10 @@ use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
-    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, Reply,
-    SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status,
+    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Field, Geometry, HeadState, Identity, PlanChunk,
+    PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status, PLAN_QUEUE,
 };
+use heapless::Deque;
 use postcard_rpc::header::VarKeyKind;
 
 /// Who this head is; the board and the serial come from the binary.
@@ -52,7 +53,10 @@ pub(crate) struct ScanRun {
     /// Number of the run since power-up (`ScanAccepted::run`).
     pub(crate) run: u32,
     pub(crate) spec: ScanSpec,
-    pub(crate) planner: Planner,
+    /// The visit order the host has sent and the head not yet taken
+    /// (canonical indices), and the visit position after its last.
+    pub(crate) plan: Deque<u32, PLAN_QUEUE>,
+    pub(crate) queued_to: u32,
     pub(crate) total: u32,
     pub(crate) next_order: u32,
     pub(crate) measured: u32,
@@ -382,9 +386,18 @@ impl<B: Board> Head<B> {
                 return Err(f);
             }
         };
-        if let Some(s) = &self.sanity {
-            let expected = s.expected_v(at, m.gain_v_per_a, through_splitter);
-            if expected.is_none_or(|e| s.mismatch(e, m.amplitude_v, m.noise_v)) {
+        if self.sanity.is_some() {
+            // The estimate, the geometry in fixed point and the model are
+            // each a long computation on the chip: yield between them.
+            embassy_futures::yield_now().await;
+            let fg = FixedGeometry::from_degrees(at);
+            embassy_futures::yield_now().await;
+            let expected = self
+                .sanity
+                .as_ref()
+                .zip(fg)
+                .map(|(s, fg)| (s, s.expected_at(&fg, m.gain_v_per_a, through_splitter)));
+            if expected.is_none_or(|(s, e)| s.mismatch(e, m.amplitude_v, m.noise_v)) {
                 m.flags.set(SampleFlags::MODEL_MISMATCH);
             }
         }
@@ -420,17 +433,14 @@ impl<B: Board> Head<B> {
         self.drop_scan(Fault::Aborted);
         self.apply(Event::Scan)?;
         let first_order = spec.first_order;
-        // The plan always starts from the park position, wherever the stages
-        // are, so that the host and a resumed scan replay the same order.
-        let mut planner = Planner::new(&spec, motion::PARK);
-        while planner.order() < first_order && planner.next(&self.cfg, &spec).is_some() {}
         self.suspect = SuspectRuns::default();
         self.last_heard_us = self.hw.clock.now_us();
         self.runs = self.runs.wrapping_add(1);
         self.scan = Some(ScanRun {
             run: self.runs,
             spec,
-            planner,
+            plan: Deque::new(),
+            queued_to: first_order,
             total,
             next_order: first_order,
             measured: 0,
@@ -441,6 +451,30 @@ impl<B: Board> Head<B> {
             points: total,
             first_order,
             run: self.runs,
+        })
+    }
+
+    /// Queues the next stretch of the running or held scan's visit order.
+    /// A chunk that does not start where the queue ends takes nothing, and
+    /// what does not fit is left out: the answer says where to go on.
+    pub fn queue_plan(&mut self, chunk: &PlanChunk) -> Reply<PlanQueued> {
+        let Some(run) = self.scan.as_mut().filter(|r| chunk.run == 0 || r.run == chunk.run) else {
+            return Err(Fault::NotScanning);
+        };
+        if chunk.indices.iter().any(|&i| i >= run.total) {
+            return Err(Fault::InvalidValue(Field::ScanRange));
+        }
+        if chunk.first_order == run.queued_to {
+            for &i in &chunk.indices {
+                if run.queued_to >= run.total || run.plan.push_back(i).is_err() {
+                    break;
+                }
+                run.queued_to += 1;
+            }
+        }
+        Ok(PlanQueued {
+            next_order: run.queued_to,
+            room: (PLAN_QUEUE - run.plan.len()) as u32,
         })
     }
 

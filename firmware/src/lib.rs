@@ -26,6 +26,7 @@ pub mod homing;
 pub mod hw;
 pub mod kinematics;
 pub mod link;
+pub mod math;
 pub mod motion;
 pub mod sanity;
 mod serve;

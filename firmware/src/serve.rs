@@ -21,7 +21,7 @@ use embassy_futures::select::{select, Either};
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint,
-    PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{Fault, Reply, ScanEvent, Status};
@@ -327,6 +327,10 @@ impl<B: Board> Head<B> {
                 let resp = self.start_scan(spec);
                 self.reply::<ScanEndpoint, L>(seq, &resp, link).await
             }
+            Command::Plan(chunk) => {
+                let resp = self.queue_plan(&chunk);
+                self.reply::<PlanEndpoint, L>(seq, &resp, link).await
+            }
             Command::Abort => {
                 let resp = self.abort().await;
                 self.reply::<AbortEndpoint, L>(seq, &resp, link).await
@@ -367,12 +371,13 @@ impl<B: Board> Head<B> {
             return Ok(());
         };
         if run.current.is_none() {
-            run.current = run
-                .planner
-                .next(&self.cfg, &run.spec)
-                .and_then(|i| run.spec.point(i).map(|g| (i, g)));
+            // Indices were checked against the grid when they were queued.
+            run.current = run.plan.pop_front().and_then(|i| run.spec.point(i).map(|g| (i, g)));
         }
         let (order, run_no) = (run.next_order, run.run);
+        if run.current.is_none() && order < run.total {
+            return self.starved(link, sentry, inbox).await;
+        }
         let Some((index, g)) = run.current else {
             let ev = ScanEvent::Finished {
                 run: run_no,
@@ -414,6 +419,25 @@ impl<B: Board> Head<B> {
             }
         };
         self.publish::<ScanEventTopic, L>(&ev, link).await
+    }
+
+    /// A running scan whose plan has run dry: waits for the host's next
+    /// chunk (or any request), the E-STOP, or the host's silence (which the
+    /// next step sees and holds the scan for).
+    async fn starved<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
+        match select(sentry.until(self.silence_deadline(), true), link.recv(&mut inbox.rx)).await {
+            Either::First(Wake::EStop) => {
+                let _ = self.tripped(Trip::EStop).await;
+                Ok(())
+            }
+            Either::First(Wake::Deadline) => Ok(()),
+            Either::Second(Ok(n)) => {
+                self.heard_host(sentry);
+                let f = inbox.frame(n);
+                self.handle(&f, link, sentry, inbox).await
+            }
+            Either::Second(Err(e)) => Err(e),
+        }
     }
 
     fn advance(&mut self, count: impl FnOnce(&mut crate::head::ScanRun)) {

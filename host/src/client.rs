@@ -6,11 +6,12 @@ use crate::sim::SimConfig;
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MoveEndpoint, MoveReport, PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    MeasureRequest, MoveEndpoint, MoveReport, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic,
+    StatusEndpoint,
 };
 use gonio_shared::{
-    AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, SafetySettings, Sample,
-    SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
+    AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, PlanChunk, PlanQueued,
+    SafetySettings, Sample, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
 };
 use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
 use postcard_rpc::standard_icd::WireError;
@@ -159,10 +160,14 @@ impl Head {
     /// opened before the request so none is missed.
     pub async fn start_scan(&self, spec: &ScanSpec) -> Result<(ScanAccepted, Subscription<ScanEvent>)> {
         let sub = self.scan_events().await?;
-        // A scan continued from a later position (resume, drift monitor) has
-        // the head replay its plan up to there first: seconds, not a quick reply.
-        let accepted = fault(watched::<ScanEndpoint>(&self.client, spec, MOTION).await?).context("scan refused")?;
+        let accepted = fault(watched::<ScanEndpoint>(&self.client, spec, QUICK).await?).context("scan refused")?;
         Ok((accepted, sub))
+    }
+
+    /// Queues the next stretch of a scan's visit order on the head (answered
+    /// between two points: as long as a point may take).
+    pub async fn plan(&self, chunk: &PlanChunk) -> Result<PlanQueued> {
+        fault(watched::<PlanEndpoint>(&self.client, chunk, MOTION).await?).context("plan refused")
     }
 
     /// Closes the link: the port is released (another client may open it at

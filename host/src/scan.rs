@@ -3,9 +3,12 @@
 
 use crate::client::{is_link_loss, Head};
 use crate::samples_csv::SampleWriter;
+use crate::scan_order::visit_order;
 use crate::session::Session;
 use anyhow::{bail, Context, Result};
-use gonio_shared::{Fault, Geometry, HeadState, ScanAccepted, ScanEvent, ScanSpec};
+use gonio_firmware::board::REFERENCE;
+use gonio_firmware::motion::PARK;
+use gonio_shared::{Fault, Geometry, HeadState, PlanChunk, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
 use indicatif::{ProgressBar, ProgressStyle};
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -130,6 +133,10 @@ pub async fn run(
         clock: HeadClock::default(),
         recoveries_in_a_row: 0,
         progress: first,
+        // The whole visit order, planned here once (the head keeps only the
+        // next `PLAN_QUEUE` points); the reference board's limits, as the
+        // duration estimate.
+        order: visit_order(&REFERENCE, spec, PARK).collect(),
     };
     pb.set_length((run.outcome.points - first) as u64);
     let mut read_monitor_now = true;
@@ -178,6 +185,8 @@ struct ScanRun<'a> {
     recoveries_in_a_row: u32,
     /// The furthest position reached.
     progress: u32,
+    /// Canonical index per visit position.
+    order: Vec<u32>,
 }
 
 impl ScanRun<'_> {
@@ -232,7 +241,7 @@ impl ScanRun<'_> {
     /// points), or until something interrupts it.
     async fn stretch(&mut self, spec: &ScanSpec, stop_at: Option<u32>) -> Result<Stretch> {
         let head = self.session.head();
-        let (out, pb, outcome, clock) = (&mut *self.out, self.pb, &mut self.outcome, &mut self.clock);
+        let (out, pb, outcome, clock, plan) = (&mut *self.out, self.pb, &mut self.outcome, &mut self.clock, &self.order);
         let mut expected = spec.first_order;
         let lost = |e: anyhow::Error, at: u32| -> Result<Stretch> {
             if is_link_loss(&e) {
@@ -267,6 +276,11 @@ impl ScanRun<'_> {
             Err(e) => return lost(e, expected),
         };
         outcome.points = accepted.points;
+        // The head holds the plan from here on (a held scan may hold more).
+        let mut queued = match feed(head, accepted.run, plan, expected).await {
+            Ok(q) => q,
+            Err(e) => return lost(e, expected),
+        };
         let mut pausing = false;
         let mut beat = Instant::now();
         let mut waiting_since = Instant::now();
@@ -335,6 +349,12 @@ impl ScanRun<'_> {
                 expected += 1;
                 waiting_since = Instant::now();
                 pb.inc(1);
+                if queued < plan.len() as u32 && queued.saturating_sub(expected) < (PLAN_QUEUE / 2) as u32 {
+                    queued = match feed(head, accepted.run, plan, queued).await {
+                        Ok(q) => q,
+                        Err(e) => return lost(e, expected),
+                    };
+                }
             }
             match ev {
                 ScanEvent::Sample(s) => {
@@ -379,6 +399,37 @@ impl ScanRun<'_> {
             }
         }
     }
+}
+
+/// Sends the visit order from position `from` until the head's queue is full
+/// or the order ends; returns the position the head's queue ends at. The
+/// head says where its queue ends, so a guess (a held scan's queue may reach
+/// further) costs one round trip. A plan the head refuses (its scan ended
+/// for a fault) is left to the event stream to explain.
+pub async fn feed(head: &Head, run: u32, order: &[u32], mut from: u32) -> Result<u32> {
+    // Each turn queues a chunk or learns where the queue ends.
+    for _ in 0..2 * PLAN_QUEUE {
+        let Some(rest) = order.get(from as usize..).filter(|r| !r.is_empty()) else {
+            break;
+        };
+        let chunk = PlanChunk {
+            run,
+            first_order: from,
+            indices: rest.iter().copied().take(PLAN_CHUNK).collect(),
+        };
+        match head.plan(&chunk).await {
+            Ok(q) => {
+                let took = q.next_order > from && q.next_order < from + chunk.indices.len() as u32;
+                from = q.next_order;
+                if q.room == 0 || took {
+                    break;
+                }
+            }
+            Err(e) if is_link_loss(&e) => return Err(e),
+            Err(_) => break,
+        }
+    }
+    Ok(from)
 }
 
 /// Tells the operator what is being recovered (stderr; quiet runs hide the bar, not this).

@@ -58,12 +58,13 @@ fn link_and_transient_faults_are_recovered_without_losing_or_repeating_a_sample(
         ("reorder@60", Named("events lost or out of order")),
         ("duplicate@60", Recovery::None),
         ("delay@60:300", Recovery::None),
-        // Frames 1–6 answer the setup, 7 the scan request, 8–150 are the
-        // 143 points' events (150 the last sample), 151 the end of the
-        // scan, whose loss the host notices by asking the head (no recovery
-        // needed).
-        ("drop@150", Named("events lost or out of order")),
-        ("drop@151", Recovery::None),
+        // Frames 1–6 answer the setup, 7 the scan request; then the five
+        // chunks of the plan are answered among the first points' events,
+        // so 8–155 are the 143 points' events and 5 plan replies (155 the
+        // last sample), 156 the end of the scan, whose loss the host
+        // notices by asking the head (no recovery needed).
+        ("drop@155", Named("events lost or out of order")),
+        ("drop@156", Recovery::None),
         ("disconnect@60", Named("link lost")),
         ("stall@30", Named("E402")),
         ("overrun@30:1", Recovery::None),

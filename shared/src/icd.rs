@@ -1,8 +1,9 @@
 //! Endpoints and topics: paths and schema-hashed keys (postcard-rpc).
 //!
-//! Requests are answered in order; a scan is accepted at once and its points
-//! arrive on [`ScanEventTopic`] while the head still answers [`StatusEndpoint`]
-//! and [`AbortEndpoint`]. Wire-level errors (unknown key, undecodable body)
+//! Requests are answered in order; a scan is accepted at once, its visit
+//! order follows in chunks on [`PlanEndpoint`] (the host plans it), and its
+//! points arrive on [`ScanEventTopic`] while the head still answers
+//! [`StatusEndpoint`], [`PlanEndpoint`] and [`AbortEndpoint`]. Wire-level errors (unknown key, undecodable body)
 //! come back on postcard-rpc's standard error path,
 //! [`postcard_rpc::standard_icd::ERROR_PATH`].
 
@@ -13,7 +14,7 @@ use crate::identity::Identity;
 use crate::safety::SafetySettings;
 use crate::sample::Sample;
 use crate::sanity::SanityConfig;
-use crate::scan::{ScanAccepted, ScanEvent, ScanSpec};
+use crate::scan::{PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec};
 use crate::status::Status;
 use crate::Reply;
 use postcard_rpc::{endpoints, topics, TopicDirection};
@@ -65,6 +66,7 @@ pub type CalibrateReply = Reply<CalibrationReport>;
 pub type SafetyReply = Reply<()>;
 pub type PauseReply = Reply<Status>;
 pub type ContinueReply = Reply<Status>;
+pub type PlanReply = Reply<PlanQueued>;
 
 endpoints! {
     list = ENDPOINT_LIST;
@@ -83,6 +85,7 @@ endpoints! {
     | SafetyEndpoint        | SafetySettings    | SafetyReply             | "gonio/safety"       |
     | PauseEndpoint         | ()                | PauseReply              | "gonio/pause"        |
     | ContinueEndpoint      | ()                | ContinueReply           | "gonio/continue"     |
+    | PlanEndpoint          | PlanChunk         | PlanReply               | "gonio/plan"         |
 }
 
 topics! {

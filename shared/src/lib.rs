@@ -27,7 +27,7 @@ pub use identity::{Capabilities, Identity, PROTOCOL_VERSION};
 pub use safety::SafetySettings;
 pub use sample::{Sample, SampleFlags};
 pub use sanity::{SanityConfig, SanityKind, SanityModel};
-pub use scan::{AngleRange, ScanAccepted, ScanEvent, ScanSpec};
+pub use scan::{AngleRange, PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
 pub use status::{HeadState, Status};
 
 /// Every fallible command answers with this: the result or the reason it was

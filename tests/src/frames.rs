@@ -2,10 +2,13 @@
 //! that drive the firmware frame by frame (`gonio_host::sim::FrameHead`):
 //! requests encoded and sealed, the head's scan events and replies decoded.
 
+use gonio_firmware::board::REFERENCE;
+use gonio_firmware::motion::PARK;
 use gonio_firmware::{check, dispatch, framing};
+use gonio_host::scan_order::visit_order;
 use gonio_host::sim::Sent;
-use gonio_shared::icd::ScanEventTopic;
-use gonio_shared::ScanEvent;
+use gonio_shared::icd::{PlanEndpoint, ScanEndpoint, ScanEventTopic};
+use gonio_shared::{PlanChunk, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Key, Topic};
 use serde::de::DeserializeOwned;
@@ -36,6 +39,24 @@ where
     E::Request: Serialize,
 {
     sealed(request::<E>(req))
+}
+
+/// The frames that start `spec` as a script must send them: the scan
+/// request, then its visit order from `spec.first_order` in chunks, as much
+/// as the head's queue takes (the host's scan driver sends the rest as the
+/// scan goes; a script cannot pace it, so its scans fit in one queue). The
+/// chunks name run 0, the scan the head holds.
+pub fn scan_frames(spec: &ScanSpec) -> Vec<Vec<u8>> {
+    let first = spec.first_order as usize;
+    let order: Vec<u32> = visit_order(&REFERENCE, spec, PARK).skip(first).take(PLAN_QUEUE).collect();
+    let chunks = order.chunks(PLAN_CHUNK).enumerate().map(|(j, c)| {
+        send::<PlanEndpoint>(&PlanChunk {
+            run: 0,
+            first_order: (first + j * PLAN_CHUNK) as u32,
+            indices: c.iter().copied().collect(),
+        })
+    });
+    std::iter::once(send::<ScanEndpoint>(spec)).chain(chunks).collect()
 }
 
 /// The body of a frame the head sent under `key`, decoded.

@@ -10,7 +10,7 @@ use gonio_host::formats::{alta, brdf_csv};
 use gonio_host::sim::{FrameHead, SimConfig};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    MeasureRequest, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
 use gonio_shared::{
     AngleRange, CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, SanityKind, SanityModel, ScanSpec,
@@ -108,6 +108,14 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
             }),
         ),
         ("scan", request::<ScanEndpoint>(&scan)),
+        (
+            "plan",
+            request::<PlanEndpoint>(&gonio_shared::PlanChunk {
+                run: 1,
+                first_order: 0,
+                indices: (0..gonio_shared::PLAN_CHUNK as u32).collect(),
+            }),
+        ),
         ("abort", request::<AbortEndpoint>(&())),
         ("pause", request::<PauseEndpoint>(&())),
         ("continue", request::<ContinueEndpoint>(&())),

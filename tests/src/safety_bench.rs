@@ -2,12 +2,12 @@
 //! runs a few of them and checks the same bars; the binary's doc says what
 //! each figure is.
 
-use crate::frames::{scan_events, send};
+use crate::frames::{scan_events, scan_frames, send};
 use crate::stops::{decel_s_max, duration_s, offset, ready, small_scan, status, trial, Activity, Stop, Trigger};
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_host::sim::{Cue, FrameHead, SimConfig};
-use gonio_shared::icd::{AbortEndpoint, ContinueEndpoint, PauseEndpoint, ScanEndpoint};
+use gonio_shared::icd::{AbortEndpoint, ContinueEndpoint, PauseEndpoint};
 use gonio_shared::{Axis, Geometry, HeadState, ScanEvent, ScanSpec};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
@@ -111,10 +111,8 @@ fn continued(head: &mut FrameHead, pause: bool) -> (bool, f64) {
         } else {
             send::<AbortEndpoint>(&())
         };
-        let sent = head.serve_timed(
-            [(t0, Cue::Frame(send::<ScanEndpoint>(&small_scan()))), (t0 + tau, Cue::Frame(stop))],
-            t0 + tau + 1.0,
-        );
+        let scan = scan_frames(&small_scan()).into_iter().map(|f| (t0, Cue::Frame(f)));
+        let sent = head.serve_timed(scan.chain([(t0 + tau, Cue::Frame(stop))]), t0 + tau + 1.0);
         let steps = head.world_mut().step_log.take().unwrap_or_default();
         let mid_move = steps.iter().any(|(_, t)| *t > t0 + tau) && steps.iter().any(|(_, t)| (t0 + tau - 0.01..t0 + tau).contains(t));
         let events = scan_events(&sent);
@@ -133,14 +131,14 @@ fn continued(head: &mut FrameHead, pause: bool) -> (bool, f64) {
         }
         let t = head.now();
         let resume = if pause {
-            send::<ContinueEndpoint>(&())
+            vec![send::<ContinueEndpoint>(&())]
         } else {
-            send::<ScanEndpoint>(&ScanSpec {
+            scan_frames(&ScanSpec {
                 first_order: next,
                 ..small_scan()
             })
         };
-        let sent = head.serve_timed([(t, Cue::Frame(resume))], t + 600.0);
+        let sent = head.serve_timed(resume.into_iter().map(|f| (t, Cue::Frame(f))), t + 600.0);
         let events = scan_events(&sent);
         visits(&events, &mut seen);
         let finished = matches!(events.last(), Some((ScanEvent::Finished { .. }, _)));

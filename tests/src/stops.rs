@@ -5,13 +5,13 @@
 //! intervals changed on the way down, and whether the firmware's position
 //! still matches the motors'. Shared by `safety-bench` and the tests.
 
-use crate::frames::{replies, scan_events, send};
+use crate::frames::{replies, scan_events, scan_frames, send};
 use gonio_firmware::board::{AxisConfig, REFERENCE};
 use gonio_firmware::motion;
 use gonio_host::sim::{Cue, FrameHead, Sent};
 use gonio_shared::icd::{
     AbortEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint,
-    SafetyEndpoint, ScanEndpoint, StatusEndpoint,
+    SafetyEndpoint, StatusEndpoint,
 };
 use gonio_shared::{DetectionSettings, Geometry, SafetySettings, ScanEvent, ScanSpec, Status};
 
@@ -165,13 +165,13 @@ fn phase_at(times: &[f64], t: f64) -> Option<Phase> {
     })
 }
 
-/// The request that starts an activity.
-fn request(a: Activity) -> Vec<u8> {
+/// The requests that start an activity.
+fn request(a: Activity) -> Vec<Vec<u8>> {
     match a {
-        Activity::Move(g) => send::<MoveEndpoint>(&g),
-        Activity::Homing => send::<HomeEndpoint>(&HomeRequest::ALL),
-        Activity::Measurement => send::<MeasureEndpoint>(&MeasureRequest { at: None }),
-        Activity::Scan => send::<ScanEndpoint>(&small_scan()),
+        Activity::Move(g) => vec![send::<MoveEndpoint>(&g)],
+        Activity::Homing => vec![send::<HomeEndpoint>(&HomeRequest::ALL)],
+        Activity::Measurement => vec![send::<MeasureEndpoint>(&MeasureRequest { at: None })],
+        Activity::Scan => scan_frames(&small_scan()),
     }
 }
 
@@ -191,11 +191,14 @@ fn start(activity: Activity, t0: f64, host_timeout_s: f32) -> Vec<(f64, Cue)> {
         host_timeout_s,
         ..SafetySettings::default()
     };
-    vec![
+    let setup = [
         (t0 - 0.0008, Cue::Frame(send::<DetectionEndpoint>(&detection))),
         (t0 - 0.0005, Cue::Frame(send::<SafetyEndpoint>(&safety))),
-        (t0, Cue::Frame(request(activity))),
-    ]
+    ];
+    setup
+        .into_iter()
+        .chain(request(activity).into_iter().map(|f| (t0, Cue::Frame(f))))
+        .collect()
 }
 
 /// How long an activity takes on this head from its request to its answer

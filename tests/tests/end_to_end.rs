@@ -4,8 +4,11 @@
 
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::kinematics;
+use gonio_firmware::motion::PARK;
 use gonio_host::brdf::{Directions, Material, Specimen};
 use gonio_host::client::{Head, Target};
+use gonio_host::scan;
+use gonio_host::scan_order::visit_order;
 use gonio_host::session::{Session, Setup};
 use gonio_host::sim::{serve_pty, SimConfig};
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, Reference, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
@@ -144,8 +147,10 @@ async fn refused_commands_move_nothing() {
 async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() {
     let head = homed(&Target::Sim(SimConfig::default())).await;
     let spec = ScanSpec::belcour();
+    let order: Vec<u32> = visit_order(&REFERENCE, &spec, PARK).collect();
     let (accepted, mut events) = head.start_scan(&spec).await.unwrap();
     assert_eq!(accepted.points, 3441);
+    scan::feed(&head, accepted.run, &order, 0).await.unwrap();
     for _ in 0..5 {
         events.recv().await.unwrap();
     }
@@ -168,6 +173,7 @@ async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() 
     let resumed = ScanSpec { first_order: next, ..spec };
     let (accepted, mut events) = head.start_scan(&resumed).await.unwrap();
     assert_eq!(accepted.first_order, next);
+    scan::feed(&head, accepted.run, &order, next).await.unwrap();
     let first = match events.recv().await.unwrap() {
         ScanEvent::Sample(s) => s.scan.unwrap().order,
         ScanEvent::Skipped { order, .. } => order,
@@ -270,7 +276,8 @@ async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before
     assert!(move_s > 8.0, "the move between the points takes {move_s} s");
     let head = Head::connect(&target).await.unwrap();
     head.home().await.unwrap();
-    let (_, mut events) = head.start_scan(&spec).await.unwrap();
+    let (accepted, mut events) = head.start_scan(&spec).await.unwrap();
+    scan::feed(&head, accepted.run, &[0, 1], 0).await.unwrap();
     let first = match events.recv().await.unwrap() {
         ScanEvent::Sample(s) => s,
         other => panic!("{other:?}"),

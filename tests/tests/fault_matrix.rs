@@ -10,7 +10,7 @@ use gonio_host::sim::faults::Faults;
 use gonio_host::sim::{FrameHead, Sent, SimConfig};
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, MoveEndpoint, SafetyEndpoint, ScanEndpoint};
 use gonio_shared::{AngleRange, Axis, Fault, Geometry, SafetySettings, SampleFlags, ScanEvent, ScanSpec};
-use gonio_tests::frames::{replies, scan_events, send};
+use gonio_tests::frames::{replies, scan_events, scan_frames, send};
 
 /// 143 points at θi = 30°.
 fn spec() -> ScanSpec {
@@ -30,14 +30,14 @@ fn scan(faults: &str, host_timeout_s: f32) -> (FrameHead, Vec<Sent>) {
     };
     let mut head = FrameHead::new(&cfg);
     // The watch is set after homing, as the host does (homing is long).
-    let sent = head.serve_open([
+    let setup = [
         send::<HomeEndpoint>(&HomeRequest::ALL),
         send::<SafetyEndpoint>(&SafetySettings {
             host_timeout_s,
             ..SafetySettings::default()
         }),
-        send::<ScanEndpoint>(&spec()),
-    ]);
+    ];
+    let sent = head.serve_open(setup.into_iter().chain(scan_frames(&spec())));
     (head, sent)
 }
 
@@ -154,7 +154,8 @@ fn host_silence_stops_the_scan_when_watched() {
 #[test]
 fn a_pulled_cable_leaves_the_head_safe() {
     let mut head = FrameHead::new(&SimConfig::default());
-    let sent = head.serve_cut([send::<HomeEndpoint>(&HomeRequest::ALL), send::<ScanEndpoint>(&spec())], 40);
+    let home = send::<HomeEndpoint>(&HomeRequest::ALL);
+    let sent = head.serve_cut(std::iter::once(home).chain(scan_frames(&spec())), 40);
     let (last, at) = scan_events(&sent).pop().unwrap();
     assert!(matches!(last, ScanEvent::Sample(_)) && at.laser, "the cable was pulled mid-scan");
     let w = head.world();

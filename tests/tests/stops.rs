@@ -9,11 +9,9 @@ use gonio_firmware::motion::blocks::trapezoid_blocks;
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::{motion, units};
 use gonio_host::sim::{Cue, FrameHead, SimConfig};
-use gonio_shared::icd::{
-    ContinueEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, ScanEndpoint, StatusEndpoint,
-};
+use gonio_shared::icd::{ContinueEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, StatusEndpoint};
 use gonio_shared::{Fault, Geometry, HeadState, SafetySettings, ScanEvent};
-use gonio_tests::frames::{replies, scan_events, send};
+use gonio_tests::frames::{replies, scan_events, scan_frames, send};
 use gonio_tests::stops::{accel_steps, decel_s_max, ready, small_scan, speed_jump, trial, Activity, Trigger};
 use std::cell::Cell;
 use std::convert::Infallible;
@@ -241,15 +239,15 @@ fn a_paused_scan_continues_where_it_stopped_and_measures_every_point_once() {
     ready(&mut head);
     let t = head.now();
     let mon = Geometry::new(10.0, 10.0, 180.0);
+    let scan = scan_frames(&small_scan()).into_iter().map(|f| (t, Cue::Frame(f)));
     let sent = head.serve_timed(
-        [
-            (t, Cue::Frame(send::<ScanEndpoint>(&small_scan()))),
+        scan.chain([
             (t + 3.3, Cue::Frame(send::<PauseEndpoint>(&()))),
             // A monitor visit while the scan is held.
             (t + 4.0, Cue::Frame(send::<MeasureEndpoint>(&MeasureRequest { at: Some(mon) }))),
             (t + 9.0, Cue::Frame(send::<StatusEndpoint>(&()))),
             (t + 9.1, Cue::Frame(send::<ContinueEndpoint>(&()))),
-        ],
+        ]),
         t + 200.0,
     );
     let paused = replies::<PauseEndpoint>(&sent);
@@ -294,13 +292,13 @@ fn an_abort_during_a_move_in_a_pause_brakes_before_the_drivers_let_go() {
     let (st, _) = gonio_tests::stops::status(&mut head);
     let before = gonio_tests::stops::offset(&head, &st);
     let t = head.now();
+    let scan = scan_frames(&small_scan()).into_iter().map(|f| (t, Cue::Frame(f)));
     let sent = head.serve_timed(
-        [
-            (t, Cue::Frame(send::<ScanEndpoint>(&small_scan()))),
+        scan.chain([
             (t + 3.3, Cue::Frame(send::<PauseEndpoint>(&()))),
             (t + 5.0, Cue::Frame(send::<MoveEndpoint>(&far_move()))),
             (t + 6.0, Cue::Frame(send::<gonio_shared::icd::AbortEndpoint>(&()))),
-        ],
+        ]),
         t + 10.0,
     );
     assert!(matches!(replies::<PauseEndpoint>(&sent).as_slice(), [Ok(_)]));

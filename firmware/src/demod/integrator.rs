@@ -63,11 +63,23 @@ impl<'r> Integrator<'r> {
     }
 
     pub fn estimate(&self) -> Estimate {
+        self.estimate_with(self.drift())
+    }
+
+    /// The offset's drift (codes per sample), from the fit of the period
+    /// sums: the first of the two fits [`Integrator::estimate`] makes, each
+    /// some 150 000 instructions on the chip (soft-float f64), so a caller
+    /// can yield between them.
+    pub fn drift(&self) -> f64 {
         let m = self.r.samples_per_period() as f64;
-        let n = self.periods.max(1) as f64;
         // A drift of d codes per sample raises each period's code sum by d·M²
         // per period and biases every correlation sum by d·Σk·r_k.
-        let drift = self.nuisance.sum_slope_per_period() / (m * m);
+        self.nuisance.sum_slope_per_period() / (m * m)
+    }
+
+    /// The estimate, given the [`Integrator::drift`].
+    pub fn estimate_with(&self, drift: f64) -> Estimate {
+        let n = self.periods.max(1) as f64;
         let (di, dq) = self.r.drift_iq();
         let unit = self.r.unit_i();
         let i = (self.sum_i as f64 / n - drift * di) / unit;

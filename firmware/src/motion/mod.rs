@@ -7,7 +7,7 @@
 
 pub mod blocks;
 pub mod executor;
-pub mod plan;
+pub mod step_irq;
 pub mod trapezoid;
 
 use crate::board::{AxisConfig, HeadConfig};
@@ -21,6 +21,10 @@ use trapezoid::Trapezoid;
 
 /// Slack (ms) beyond twice a move's scheduled duration before it counts as stalled.
 const STALL_MARGIN_MS: u32 = 500;
+/// Blocks planned between two yields to the executor: at most ~5 000
+/// instructions each on the Cortex-M4 (`chip-bench`), so a stretch stays
+/// well under the serve loop's budget of 100 000.
+const YIELD_EVERY_BLOCKS: usize = 8;
 
 /// Where homing leaves the axes (microsteps): 0° on every axis, the retro
 /// direction at normal incidence, inside the travel. Plans start here.
@@ -107,9 +111,16 @@ pub async fn move_by<B: Board>(
     for axis in Axis::ALL {
         let i = axis.index();
         let t = trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), speed_dps[i]);
-        if !blocks::trapezoid_blocks(&t, tick_hz, |b| hw.steps.push(axis, b).is_ok()) {
-            hw.steps.clear();
-            return Err(Fault::StepTimer(axis));
+        for (j, b) in blocks::TrapezoidBlocks::new(&t, tick_hz).enumerate() {
+            if hw.steps.push(axis, b).is_err() {
+                hw.steps.clear();
+                return Err(Fault::StepTimer(axis));
+            }
+            // Planning a long move takes a few million instructions on the
+            // chip: let the executor run the link and the watchdog meanwhile.
+            if j % YIELD_EVERY_BLOCKS == YIELD_EVERY_BLOCKS - 1 {
+                embassy_futures::yield_now().await;
+            }
         }
     }
     // A move that outlasts its schedule by far means a stalled timer: stop it.

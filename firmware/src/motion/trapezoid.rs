@@ -53,6 +53,12 @@ impl Trapezoid {
         }
     }
 
+    /// Last step of the acceleration and last step of the cruise, as
+    /// [`Trapezoid::step_time`] tells the phases apart.
+    pub fn phase_ends(&self) -> (u32, u32) {
+        (self.x1 as u32, (self.n as f64 - self.x1) as u32)
+    }
+
     pub fn duration(&self) -> f64 {
         self.total
     }

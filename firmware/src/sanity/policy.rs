@@ -27,10 +27,16 @@ impl Sanity {
     /// fixed-point model, times the instrument constant, the gain and, in the
     /// retro zone, the beam splitter's factor.
     pub fn expected_v(&self, g: &Geometry, gain_v_per_a: f32, through_splitter: bool) -> Option<f32> {
-        let fg = FixedGeometry::from_degrees(g)?;
-        let f_cos = self.model.eval(&fg).times(fg.cos_o().max(super::Fx::ZERO)).to_f32();
+        Some(self.expected_at(&FixedGeometry::from_degrees(g)?, gain_v_per_a, through_splitter))
+    }
+
+    /// [`Sanity::expected_v`] at a geometry already in fixed point (its
+    /// conversion and the model each cost tens of thousands of instructions
+    /// on the chip: the serve loop yields between them).
+    pub fn expected_at(&self, fg: &FixedGeometry, gain_v_per_a: f32, through_splitter: bool) -> f32 {
+        let f_cos = self.model.eval(fg).times(fg.cos_o().max(super::Fx::ZERO)).to_f32();
         let splitter = if through_splitter { self.cfg.splitter_factor } else { 1.0 };
-        Some(f_cos * self.cfg.current_a_per_sr_inv * gain_v_per_a * splitter)
+        f_cos * self.cfg.current_a_per_sr_inv * gain_v_per_a * splitter
     }
 
     /// True when a measurement lies outside the band around the expectation.

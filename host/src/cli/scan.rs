@@ -11,11 +11,11 @@ use crate::client::Target;
 use crate::run_record::RunRecord;
 use crate::samples_csv::{stored_rows, SampleWriter};
 use crate::scan::{self, Monitor, ScanOutcome};
+use crate::scan_order::{scan_time, visit_order};
 use crate::session::{Session, Setup};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
 use gonio_firmware::board::REFERENCE;
-use gonio_firmware::motion::plan::{scan_time, visit_order};
 use gonio_firmware::motion::PARK;
 use gonio_shared::{DetectionReport, ScanSpec};
 

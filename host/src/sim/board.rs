@@ -4,7 +4,7 @@
 //! watches meanwhile (the link, the E-STOP, the host timer) is looked at
 //! as often as on the chip.
 
-use super::clock::{advance_to, elapse, slice_end};
+use super::clock::{advance_to, elapse, owe, slice_end};
 use super::faults::HardwareFault;
 use super::world::World;
 use gonio_firmware::board::REFERENCE;
@@ -213,7 +213,10 @@ impl StepTimer for SimSteps {
                 // move (its delay runs the time) has to give up on it.
                 return Poll::Pending;
             }
-            let limit = slice_end(&self.world.borrow());
+            let (limit, start) = {
+                let w = self.world.borrow();
+                (slice_end(&w), w.t_s)
+            };
             while let Some(t) = self.next {
                 let at = self.tick_time(t);
                 if at > limit {
@@ -225,6 +228,9 @@ impl StepTimer for SimSteps {
                 }
                 self.next = self.exec.fire(t);
             }
+            // The events ran the time themselves: a paced head owes it.
+            let ran = self.world.borrow().t_s - start;
+            owe(&self.world, ran);
             if self.next.is_none() {
                 return Poll::Ready(self.exec.emitted());
             }

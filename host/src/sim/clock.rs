@@ -49,8 +49,16 @@ pub fn advance_to(world: &Shared, t: f64) {
         w.wake_at = None;
     }
     w.busy = true;
-    // Paced: the wall clock owed is slept in pieces of a few milliseconds
-    // (a sleep per slice would cost more than the slice).
+    drop(w);
+    owe(world, dt);
+}
+
+/// A paced head owes the wall clock `dt` seconds of simulated time that ran
+/// (by [`advance_to`], or by hardware that moved the time itself event by
+/// event within a slice); the debt is slept in pieces of a few milliseconds
+/// (a sleep per slice would cost more than the slice).
+pub fn owe(world: &Shared, dt: f64) {
+    let mut w = world.borrow_mut();
     w.pace_owed_s += dt.max(0.0) * w.pace as f64;
     if w.pace_owed_s >= PACE_SLEEP_S {
         let owed = std::mem::take(&mut w.pace_owed_s);
@@ -97,14 +105,35 @@ async fn yield_once() {
 /// Polls without the time moving before [`run`] calls the head stuck.
 const STUCK_POLLS: u32 = 10_000_000;
 
+thread_local! {
+    /// Set when a future of the head wakes itself (the firmware yields to the
+    /// executor in long computations, `embassy_futures::yield_now`): the head
+    /// has work to go on with, so a link at rest must not block.
+    static WOKEN: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// The waker [`run`] polls with: it records a self-wake in [`WOKEN`].
+struct SelfWake;
+
+impl std::task::Wake for SelfWake {
+    fn wake(self: std::sync::Arc<Self>) {
+        WOKEN.with(|w| w.set(true));
+    }
+    fn wake_by_ref(self: &std::sync::Arc<Self>) {
+        WOKEN.with(|w| w.set(true));
+    }
+}
+
 /// Polls `f` to completion. Nothing in the simulated head sleeps on a
-/// waker: what has nothing to do returns `Pending`, and what waits for the
-/// outside world (a link at rest) blocks inside its poll. A head that waits
+/// waker: what has nothing to do returns `Pending`, what yields wakes itself
+/// (and is polled again at once), and what waits for the outside world (a
+/// link at rest) blocks inside its poll. A head that waits
 /// for time while nothing runs it (a firmware bug: the chip would sleep for
 /// ever too) is reported instead of spinning.
 pub fn run<F: Future>(world: &Shared, f: F) -> F::Output {
     let mut f = pin!(f);
-    let mut cx = Context::from_waker(Waker::noop());
+    let waker = Waker::from(std::sync::Arc::new(SelfWake));
+    let mut cx = Context::from_waker(&waker);
     let (mut last_t, mut still) = (f64::NAN, 0u32);
     loop {
         world.borrow_mut().busy = false;
@@ -121,6 +150,12 @@ pub fn run<F: Future>(world: &Shared, f: F) -> F::Output {
     }
 }
 
+/// Whether the head has work this poll: it ran the time, or a future of it
+/// woke itself (a self-wake counts once).
+pub fn busy(w: &World) -> bool {
+    w.busy || WOKEN.with(|f| f.replace(false))
+}
+
 /// What a link with nothing to read does next.
 pub enum Idle {
     /// The head is busy: return `Pending` and look again next poll.
@@ -132,7 +167,7 @@ pub enum Idle {
 /// See [`Idle`]; a wait that times out moves the time on to the wake-up.
 pub fn idle(world: &Shared) -> Idle {
     let w = world.borrow();
-    if w.busy {
+    if busy(&w) {
         return Idle::Busy;
     }
     Idle::Wait(w.wake_at.map(|t| Duration::from_secs_f64((t - w.t_s).max(0.0))))

@@ -92,7 +92,7 @@ impl Link for Timed {
                 return Poll::Ready(Err(LinkError::Closed));
             }
             w.wake(next);
-            if !w.busy {
+            if !clock::busy(&w) {
                 // At rest: on to the next cue or to what the head waits for.
                 let to = w.wake_at.map_or(next, |t| t.min(next));
                 w.t_s = w.t_s.max(to);
@@ -138,7 +138,7 @@ impl Link for Batch {
     async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
         std::future::poll_fn(|_| match self.inbound.pop_front() {
             Some(f) => Poll::Ready(Ok(take(f, buf))),
-            None if self.world.borrow().busy => Poll::Pending,
+            None if clock::busy(&self.world.borrow()) => Poll::Pending,
             None => Poll::Ready(Err(LinkError::Closed)),
         })
         .await

@@ -16,6 +16,7 @@ use embassy_sync::signal::Signal;
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::hw::{QueueFull, StepBlock, StepTimer};
 use gonio_firmware::motion::executor::Executor;
+use gonio_firmware::motion::step_irq::{self, CompareTimer};
 use gonio_firmware::units;
 use gonio_shared::Axis;
 
@@ -34,38 +35,37 @@ fn regs() -> embassy_stm32::pac::timer::TimGp32 {
     embassy_stm32::pac::TIM5
 }
 
-/// Executor ticks since `origin`; 0 before it (`start` sets the origin a
-/// few ticks ahead: an unsigned difference would wrap to ~2³²).
-fn since(origin: u32) -> u64 {
-    (regs().cnt().read().wrapping_sub(origin) as i32).max(0) as u64
+/// TIM5's counter and compare channel 1, for the core's interrupt logic
+/// ([`step_irq`]), which also closes the races of arming a compare.
+struct Tim5Compare;
+
+impl CompareTimer for Tim5Compare {
+    fn count(&self) -> u32 {
+        regs().cnt().read()
+    }
+    fn set_compare(&mut self, at: u32) {
+        regs().ccr(0).write_value(at);
+    }
+    fn clear_match(&mut self) {
+        regs().sr().modify(|w| w.set_ccif(0, false));
+    }
+    fn enable_interrupt(&mut self, on: bool) {
+        regs().dier().modify(|w| w.set_ccie(0, on));
+    }
 }
 
-/// Arms compare channel 1 at executor tick `t` (at least one tick from now).
-fn arm(origin: u32, t: u64) {
-    let r = regs();
-    let now = since(origin);
-    let at = origin.wrapping_add(t.max(now + 1) as u32);
-    r.ccr(0).write_value(at);
-    r.dier().modify(|w| w.set_ccie(0, true));
-}
-
-/// TIM5 interrupt: one executor event per compare match.
 pub struct StepInterrupt;
 
 impl Handler<Tim5Irq> for StepInterrupt {
     unsafe fn on_interrupt() {
-        let r = regs();
-        r.sr().modify(|w| w.set_ccif(0, false));
         STATE.lock(|s| {
             let mut s = s.borrow_mut();
-            let Some(st) = s.as_mut() else { return };
-            let now = since(st.origin);
-            match st.exec.fire(now) {
-                Some(t) => arm(st.origin, t),
-                None => {
-                    r.dier().modify(|w| w.set_ccie(0, false));
-                    DONE.signal(st.exec.emitted());
-                }
+            let Some(st) = s.as_mut() else {
+                Tim5Compare.clear_match();
+                return;
+            };
+            if let Some(emitted) = step_irq::on_compare(&mut st.exec, &mut Tim5Compare, st.origin) {
+                DONE.signal(emitted);
             }
         });
     }
@@ -116,16 +116,14 @@ impl StepTimer for StepTimer5 {
 
     fn start(&mut self) {
         DONE.reset();
-        let first = Self::with(|s| {
+        let done = Self::with(|s| {
             // Tick 0 a little ahead, so the first step is not already late.
-            s.origin = regs().cnt().read().wrapping_add(10);
-            s.exec.start().map(|t| (s.origin, t))
-        })
-        .flatten();
-        self.running = first.is_some();
-        if let Some((origin, t)) = first {
-            arm(origin, t);
-        }
+            s.origin = Tim5Compare.count().wrapping_add(10);
+            let first = s.exec.start();
+            step_irq::schedule(&mut s.exec, &mut Tim5Compare, s.origin, first)
+        });
+        // An empty move is over at once: `finished` reads its counts.
+        self.running = matches!(done, Some(None));
     }
 
     async fn finished(&mut self) -> [u32; 3] {
@@ -140,17 +138,16 @@ impl StepTimer for StepTimer5 {
     fn brake(&mut self, brake_ticks: [f32; 3]) {
         // In the critical section the interrupt cannot fire between the
         // executor's new schedule and the compare written for it.
-        Self::with(|s| match s.exec.brake(brake_ticks) {
-            Some(t) => arm(s.origin, t),
-            None => {
-                regs().dier().modify(|w| w.set_ccie(0, false));
-                DONE.signal(s.exec.emitted());
+        Self::with(|s| {
+            let next = s.exec.brake(brake_ticks);
+            if let Some(emitted) = step_irq::schedule(&mut s.exec, &mut Tim5Compare, s.origin, next) {
+                DONE.signal(emitted);
             }
         });
     }
 
     fn clear(&mut self) {
-        regs().dier().modify(|w| w.set_ccie(0, false));
+        Tim5Compare.enable_interrupt(false);
         Self::with(|s| s.exec.clear());
     }
 }

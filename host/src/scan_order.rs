@@ -1,19 +1,25 @@
-//! Scan planning and timing. Planning lives on the device: it expands the
-//! grid itself, one point at a time, so a scan needs no list from the host
-//! and survives a slow host. Within each incidence angle, the unreachable
-//! points come first (they cost no motion) and the reachable ones follow in
+//! A scan's visit order, planned on the host and streamed to the head in
+//! chunks (`gonio/plan`). Within each incidence angle, the unreachable points
+//! come first (they cost no motion) and the reachable ones follow in
 //! nearest-neighbour order of *move time* under the axis limits, starting
 //! from where the previous incidence ended. The choice is deterministic, so
-//! the host replays it to estimate the duration and a resumed scan replays
-//! it up to its first position. An incidence with more points than
-//! [`PLAN_CAPACITY`] falls back to the serpentine of `ScanSpec::index_at_order`.
+//! the duration estimate and a resumed scan follow the same order; an
+//! incidence with more points than [`PLAN_CAPACITY`] falls back to the
+//! serpentine of `ScanSpec::index_at_order`.
+//!
+//! Why here and not on the head: measured on the Cortex-M4 (`chip-bench`),
+//! one step of this plan over a 4 096-point incidence costs hundreds of
+//! millions of instructions in soft-float f64 (seconds, past the watchdog),
+//! and a resume would replay the plan up to its position; the host does the
+//! whole Belcour grid in well under a second, and the head only keeps a
+//! bounded queue of the next points (`PLAN_QUEUE`).
 
-use super::{move_time, target_steps};
-use crate::board::HeadConfig;
-use crate::kinematics;
+use gonio_firmware::board::HeadConfig;
+use gonio_firmware::kinematics;
+use gonio_firmware::motion::{move_time, target_steps};
 use gonio_shared::ScanSpec;
 
-/// Points of one incidence angle planned nearest-neighbour (a bitset of 512 bytes).
+/// Points of one incidence angle planned nearest-neighbour.
 pub const PLAN_CAPACITY: usize = 4096;
 
 /// Where a scan is and what it has visited of the current incidence.
@@ -23,7 +29,10 @@ pub struct Planner {
     block: u32,
     block_len: u32,
     done_in_block: u32,
-    visited: [u32; PLAN_CAPACITY / 32],
+    /// Stage targets of the current incidence's points (`None`: unreachable),
+    /// computed once per incidence, and which were visited.
+    targets: Vec<Option<[i32; 3]>>,
+    visited: Vec<bool>,
     /// Stage position (microsteps) after the last reachable point.
     at: [i32; 3],
 }
@@ -37,22 +46,10 @@ impl Planner {
             block: 0,
             block_len: spec.len() / n_ti,
             done_in_block: 0,
-            visited: [0; PLAN_CAPACITY / 32],
+            targets: Vec::new(),
+            visited: Vec::new(),
             at: from,
         }
-    }
-
-    /// Visit position of the point [`Planner::next`] returns next.
-    pub fn order(&self) -> u32 {
-        self.order
-    }
-
-    fn seen(&self, k: u32) -> bool {
-        self.visited[(k / 32) as usize] & (1 << (k % 32)) != 0
-    }
-
-    fn mark(&mut self, k: u32) {
-        self.visited[(k / 32) as usize] |= 1 << (k % 32);
     }
 
     /// The canonical index of the next point to visit, or `None` at the end.
@@ -63,33 +60,40 @@ impl Planner {
         if self.done_in_block == self.block_len {
             self.block += 1;
             self.done_in_block = 0;
-            self.visited = [0; PLAN_CAPACITY / 32];
+            self.targets.clear();
         }
         let base = self.block * self.block_len;
         let index = if self.block_len as usize > PLAN_CAPACITY {
             spec.index_at_order(self.order)?
         } else {
-            let reach = |k: u32| spec.point(base + k).and_then(|g| kinematics::inverse(cfg, &g).ok());
-            let unreachable = (0..self.block_len).find(|&k| !self.seen(k) && reach(k).is_none());
-            let k = match unreachable {
+            if self.targets.is_empty() {
+                self.targets = (0..self.block_len)
+                    .map(|k| {
+                        let g = spec.point(base + k)?;
+                        kinematics::inverse(cfg, &g).ok().map(|axes| target_steps(cfg, &axes))
+                    })
+                    .collect();
+                self.visited = vec![false; self.block_len as usize];
+            }
+            let open = |k: &usize| !self.visited[*k];
+            let k = match (0..self.targets.len()).filter(open).find(|&k| self.targets[k].is_none()) {
                 Some(k) => k,
                 None => {
-                    let mut best: Option<(f64, u32, [i32; 3])> = None;
-                    for k in (0..self.block_len).filter(|&k| !self.seen(k)) {
-                        let Some(axes) = reach(k) else { continue };
-                        let target = target_steps(cfg, &axes);
+                    let mut best: Option<(f64, usize)> = None;
+                    for k in (0..self.targets.len()).filter(open) {
+                        let Some(target) = self.targets[k] else { continue };
                         let t = move_time(cfg, [0, 1, 2].map(|i| target[i] - self.at[i]));
-                        if best.is_none_or(|(bt, _, _)| t < bt) {
-                            best = Some((t, k, target));
+                        if best.is_none_or(|(bt, _)| t < bt) {
+                            best = Some((t, k));
                         }
                     }
-                    let (_, k, target) = best?;
-                    self.at = target;
+                    let (_, k) = best?;
+                    self.at = self.targets[k]?;
                     k
                 }
             };
-            self.mark(k);
-            base + k
+            self.visited[k] = true;
+            base + k as u32
         };
         self.done_in_block += 1;
         self.order += 1;
@@ -142,7 +146,7 @@ pub fn scan_time(
     t
 }
 
-/// The head's visit order of a whole scan, from `from` (the host's replay).
+/// The visit order of a whole scan, from `from`.
 pub fn visit_order<'a>(cfg: &'a HeadConfig, spec: &'a ScanSpec, from: [i32; 3]) -> impl Iterator<Item = u32> + 'a {
     let mut p = Planner::new(spec, from);
     core::iter::from_fn(move || p.next(cfg, spec))

@@ -1,0 +1,199 @@
+#!/usr/bin/env python3
+"""Runs a Cortex-M4F image on the unicorn engine and counts its instructions.
+
+Used by `chip-bench` (tests/src/bin/chip_bench.rs); the unicorn engine comes
+from PyPI (`pip install unicorn`), a prebuilt wheel: the `unicorn-engine`
+crate would build the engine's C sources with cmake on every clean machine.
+
+    emulate.py costs IMAGE     run `gonio-cost` from reset to its `done` mark;
+                               print {name: {count, max, min, total}} as JSON,
+                               instructions between each pair of marks, less
+                               the marks' own cost (the `overhead` bracket).
+
+Instructions are counted per translated block: the first time a block runs,
+its Thumb-2 instructions are decoded for their length (16 or 32 bits) and
+counted; every later run adds that count. Execution is in order and without
+exceptions, so a block always runs to its end.
+"""
+
+import json
+import struct
+import sys
+
+from unicorn import UC_ARCH_ARM, UC_HOOK_BLOCK, UC_HOOK_CODE, UC_MODE_MCLASS, UC_MODE_THUMB, Uc, UcError
+from unicorn import arm_const as arm
+
+FLASH = (0x0800_0000, 1 << 20)
+SRAM = (0x2000_0000, 128 << 10)
+CCM = (0x1000_0000, 64 << 10)
+# Peripherals (APB, AHB1/2) and the core's system control space, as plain
+# memory: the probes touch neither, but cortex-m-rt enables the FPU there.
+PERIPHERALS = (0x4000_0000, 0x1000_0000)
+SYSTEM = (0xE000_0000, 0x0010_0000)
+
+
+class Elf:
+    """The loadable segments and the symbols of a 32-bit little-endian ELF."""
+
+    def __init__(self, path):
+        self.data = open(path, "rb").read()
+        d = self.data
+        if d[:4] != b"\x7fELF" or d[4] != 1 or d[5] != 1:
+            raise SystemExit(f"{path}: not a 32-bit little-endian ELF")
+        (self.entry, phoff, shoff) = struct.unpack_from("<III", d, 24)
+        (phentsize, phnum, shentsize, shnum) = struct.unpack_from("<HHHH", d, 42)
+        self.segments = []
+        for i in range(phnum):
+            p_type, off, _vaddr, paddr, filesz, _memsz = struct.unpack_from("<IIIIII", d, phoff + i * phentsize)
+            if p_type == 1 and filesz:
+                self.segments.append((paddr, d[off : off + filesz]))
+        sections = [struct.unpack_from("<IIIIIIIIII", d, shoff + i * shentsize) for i in range(shnum)]
+        self.symbols = {}
+        self.functions = []
+        for s in sections:
+            if s[1] != 2:  # SHT_SYMTAB
+                continue
+            strtab = sections[s[6]]
+            for k in range(s[5] // 16):
+                name_off, value, size, info, _other, _shndx = struct.unpack_from("<IIIBBH", d, s[4] + k * 16)
+                start = strtab[4] + name_off
+                name = d[start : d.index(b"\0", start)].decode()
+                self.symbols[name] = value
+                if info & 0xF == 2 and size:  # STT_FUNC
+                    self.functions.append((value & ~1, size, name))
+
+
+def thumb_instructions(code):
+    """Number of Thumb-2 instructions in `code` (whole instructions)."""
+    n = i = 0
+    while i + 1 < len(code):
+        hw = code[i] | code[i + 1] << 8
+        i += 4 if (hw >> 11) in (0b11101, 0b11110, 0b11111) else 2
+        n += 1
+    return n
+
+
+class Machine:
+    def __init__(self, elf):
+        self.uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
+        self.uc.ctl_set_cpu_model(arm.UC_CPU_ARM_CORTEX_M4)
+        for base, size in (FLASH, SRAM, CCM, PERIPHERALS, SYSTEM):
+            self.uc.mem_map(base, size)
+        for addr, blob in elf.segments:
+            self.uc.mem_write(addr, blob)
+        self.executed = 0
+        self.block_sizes = {}
+        # Instructions per block address while profiling (None: not profiling).
+        self.profile = None
+        self.uc.hook_add(UC_HOOK_BLOCK, self._block)
+
+    def _block(self, uc, address, size, _user):
+        n = self.block_sizes.get((address, size))
+        if n is None:
+            n = thumb_instructions(uc.mem_read(address, size))
+            self.block_sizes[(address, size)] = n
+        self.executed += n
+        if self.profile is not None:
+            self.profile[address] = self.profile.get(address, 0) + n
+
+    def reset(self):
+        sp, pc = struct.unpack("<II", self.uc.mem_read(FLASH[0], 8))
+        self.uc.reg_write(arm.UC_ARM_REG_SP, sp)
+        return pc
+
+    def read_str(self, ptr, length):
+        return bytes(self.uc.mem_read(ptr, length)).decode()
+
+
+def by_function(elf, profile, top=12):
+    """The functions a profile's instructions ran in, largest first."""
+    funcs = sorted(elf.functions)
+    starts = [f[0] for f in funcs]
+    import bisect
+
+    totals = {}
+    for addr, n in profile.items():
+        i = bisect.bisect_right(starts, addr) - 1
+        name = funcs[i][2] if i >= 0 and addr < funcs[i][0] + funcs[i][1] else f"{addr:#x}"
+        totals[name] = totals.get(name, 0) + n
+    return sorted(totals.items(), key=lambda kv: -kv[1])[:top]
+
+
+def costs(path, profile_name=None):
+    elf = Elf(path)
+    m = Machine(elf)
+    mark = elf.symbols["cost_mark"] & ~1
+    open_at = {}
+    figures = {}
+    state = {"done": False, "panic": None}
+
+    def on_mark(uc, _address, _size, _user):
+        r0, r1, r2 = (uc.reg_read(r) for r in (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2))
+        name = m.read_str(r0, r1)
+        if name in ("done", "panic") or name.endswith(("_failed", "_refused", "_stalled")):
+            state["done"] = name == "done"
+            state["panic"] = None if name == "done" else name
+            uc.emu_stop()
+            return
+        if r2 == 0:
+            open_at[name] = m.executed
+            if name == profile_name:
+                m.profile = {}
+        else:
+            n = m.executed - open_at.pop(name)
+            if name == profile_name:
+                if n > state.get("profiled", 0):
+                    state["profiled"] = n
+                    state["profile"] = m.profile
+                m.profile = None
+            f = figures.setdefault(name, {"count": 0, "max": 0, "min": None, "total": 0})
+            f["count"] += 1
+            f["max"] = max(f["max"], n)
+            f["min"] = n if f["min"] is None else min(f["min"], n)
+            f["total"] += n
+
+    values = {}
+
+    def on_value(uc, _address, _size, _user):
+        r0, r1, r2 = (uc.reg_read(r) for r in (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2))
+        values[m.read_str(r0, r1)] = r2
+
+    m.uc.hook_add(UC_HOOK_CODE, on_mark, begin=mark, end=mark)
+    value = elf.symbols["cost_value"] & ~1
+    m.uc.hook_add(UC_HOOK_CODE, on_value, begin=value, end=value)
+    pc = m.reset()
+    try:
+        m.uc.emu_start(pc, 0xFFFF_FFFF, count=2_000_000_000)
+    except UcError as e:
+        at = m.uc.reg_read(arm.UC_ARM_REG_PC)
+        raise SystemExit(f"emulation failed at pc {at:#010x} after {m.executed} instructions: {e}")
+    if not state["done"]:
+        partial = {k: (v["count"], v["max"]) for k, v in figures.items()}
+        raise SystemExit(f"the image stopped before its end: {state['panic'] or 'no done mark'} (so far: {partial})")
+    if profile_name and "profile" in state:
+        print(f"longest {profile_name}: {state['profiled']} instructions", file=sys.stderr)
+        for name, n in by_function(elf, state["profile"]):
+            print(f"  {n:>9}  {name}", file=sys.stderr)
+    overhead = figures.pop("overhead")["min"]
+    for f in figures.values():
+        for k in ("max", "min", "total"):
+            f[k] -= overhead * (f["count"] if k == "total" else 1)
+    import unicorn
+
+    return {
+        "emulator": f"unicorn {unicorn.__version__} (Cortex-M4, Thumb-2, instructions counted per translated block)",
+        "overhead_instructions": overhead,
+        "executed_instructions": m.executed,
+        "values": values,
+        "probes": figures,
+    }
+
+
+def main():
+    if len(sys.argv) not in (3, 4) or sys.argv[1] != "costs":
+        raise SystemExit(__doc__)
+    print(json.dumps(costs(sys.argv[2], sys.argv[3] if len(sys.argv) == 4 else None)))
+
+
+if __name__ == "__main__":
+    main()

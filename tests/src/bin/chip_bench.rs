@@ -1,0 +1,131 @@
+//! `cargo run --release -p tests --bin chip-bench`: what the STM32F405 pays
+//! for the core's hot paths, in instructions counted on an emulated
+//! Cortex-M4F, as one JSON object on stdout.
+//!
+//! It builds `gonio-cost` (the core's hot paths in the release profile of the
+//! chip image, `firmware/src/bin/cost`) for thumbv7em-none-eabihf and runs it
+//! on the unicorn engine (`tests/chip/emulate.py`, `pip install unicorn`),
+//! which counts the instructions between the image's marks. Cycles are taken
+//! as one per instruction at 168 MHz, plus 24 per interrupt for exception
+//! entry and exit: the M4 needs more for loads, branches and divisions, so
+//! the derived rates are upper bounds.
+//!
+//! Figures and bars (`docs/architecture.md`, "The chip's costs"):
+//! - `step_event_instructions_max` (≤ 250): one `Executor::fire`, the
+//!   worst over a three-axis move at the axes' cruise speeds.
+//! - `step_isr_instructions_max`: the TIM5 handler's logic (critical
+//!   section, counter, compare), braking included.
+//! - `demod_period_instructions`: one chop period of M = 64 codes.
+//! - `sanity_eval_instructions_max`: the fixed-point model per sample.
+//! - `plan_next_instructions_max`: the next point of a scan (queue, geometry,
+//!   inverse kinematics), on the Belcour grid and a 4 096-point incidence.
+//! - `move_plan_instructions`: the blocks of a three-axis move.
+//! - `resume_instructions_max` (≤ 1 000 000): a scan continued near its end.
+//! - `await_free_instructions_max` (≤ 100 000): the longest poll of the serve
+//!   loop during a served Belcour-span scan with a sanity model and a resume.
+//! - `step_rate_hz_3axes_at_50pct_cpu` (≥ 50 000): per-axis step rate that
+//!   three axes sustain on half the CPU, from the mean handler cost.
+
+use anyhow::{bail, Context, Result};
+use serde_json::{json, Value};
+use std::path::PathBuf;
+use std::process::Command;
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+const CPU_HZ: f64 = 168e6;
+/// Exception entry and exit of the Cortex-M4 (cycles, tail-chaining aside).
+const EXCEPTION_CYCLES: f64 = 24.0;
+
+fn main() -> Result<()> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let built = Command::new(cargo)
+        .args([
+            "build",
+            "--release",
+            "--locked",
+            "-p",
+            "gonio-firmware",
+            "--bin",
+            "gonio-cost",
+            "--target",
+            TARGET,
+        ])
+        .current_dir(&root)
+        .status()
+        .context("building gonio-cost")?;
+    if !built.success() {
+        bail!("gonio-cost did not build for {TARGET}");
+    }
+    let target_dir = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
+    let elf = target_dir.join(TARGET).join("release").join("gonio-cost");
+    let out = Command::new("python3")
+        .arg(root.join("tests/chip/emulate.py"))
+        .arg("costs")
+        .arg(&elf)
+        .output()
+        .context("running python3 tests/chip/emulate.py (needs `pip install unicorn`)")?;
+    if !out.status.success() {
+        bail!("emulation failed: {}", String::from_utf8_lossy(&out.stderr));
+    }
+    let run: Value = serde_json::from_slice(&out.stdout).context("reading the emulator's figures")?;
+    let p = &run["probes"];
+    let max = |name: &str| p[name]["max"].as_u64().with_context(|| format!("no figure for {name}"));
+    let mean = |name: &str| -> Result<f64> {
+        Ok(p[name]["total"].as_f64().context(name.to_string())? / p[name]["count"].as_f64().context(name.to_string())?)
+    };
+
+    let step_event = max("step_event")?;
+    let isr_max = max("step_isr")?.max(max("step_isr_braking")?);
+    // The handler runs once per event: a step's start and its pulse's end
+    // (merged when they coincide); the probe's move says how many per step.
+    let events = p["step_isr"]["count"].as_f64().context("step_isr count")?;
+    let steps = run["values"]["step_isr"].as_f64().context("steps of the probe's move")?;
+    let events_per_step = events / steps;
+    let cycles_per_step = events_per_step * (mean("step_isr")? + EXCEPTION_CYCLES);
+    let step_rate = 0.5 * CPU_HZ / (3.0 * cycles_per_step);
+    let await_free = max("await_free")?;
+    let resume = max("resume")?;
+    let figures = json!({
+        "emulator": run["emulator"],
+        "cpu_hz_assumed": CPU_HZ,
+        "step_event_instructions_max": step_event,
+        "step_event_instructions_mean": mean("step_event")?,
+        "step_isr_instructions_max": isr_max,
+        "step_isr_instructions_mean": mean("step_isr")?,
+        "step_isr_events_per_step": events_per_step,
+        "demod_period_instructions": max("demod_square")?.max(max("demod_sine")?),
+        "sanity_eval_instructions_max": {
+            "lambert": max("sanity_lambert")?,
+            "retro-phong": max("sanity_retro_phong")?,
+            "abc-retro (view)": max("sanity_abc_retro_view")?,
+            "abc-retro (back)": max("sanity_abc_retro_back")?,
+        },
+        "inverse_kinematics_instructions_max": max("inverse")?,
+        "plan_next_instructions_max": max("plan_next")?,
+        "move_plan_instructions": max("move_plan")?,
+        "move_block_instructions_max": max("move_block")?,
+        "resume_instructions_max": resume,
+        "await_free_instructions_max": await_free,
+        "await_free_polls": p["await_free"]["count"],
+        "step_rate_hz_3axes_at_50pct_cpu": step_rate.round(),
+        "boot_instructions": Value::Null,
+        "boot_safe_pins": Value::Null,
+        "bars": {
+            "step_event_instructions_max": 250,
+            "resume_instructions_max": 1_000_000,
+            "await_free_instructions_max": 100_000,
+            "step_rate_hz_3axes_at_50pct_cpu": 50_000,
+        },
+        "bars_met": {
+            "step_event_instructions_max": step_event <= 250,
+            "resume_instructions_max": resume <= 1_000_000,
+            "await_free_instructions_max": await_free <= 100_000,
+            "step_rate_hz_3axes_at_50pct_cpu": step_rate >= 50_000.0,
+        },
+    });
+    println!("{figures}");
+    // motion-bench takes its interrupt cost from here.
+    std::fs::write(target_dir.join("chip-bench.json"), figures.to_string()).context("writing target/chip-bench.json")?;
+    Ok(())
+}
