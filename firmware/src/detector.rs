@@ -3,7 +3,7 @@
 //! calibration that learns the electronics' phase and the matched waveform.
 
 use crate::board::HeadConfig;
-use crate::demod::{Estimate, Integrator, Learned, Learner, Reference, MAX_M};
+use crate::demod::{Design, Estimate, Integrator, Learned, Learner, Reference, MAX_M};
 use crate::hw::{AdcStream, Board, ChopTiming, Hardware};
 use crate::units;
 use embedded_hal::digital::OutputPin;
@@ -43,6 +43,8 @@ pub struct Detector {
     timing: ChopTiming,
     chop_hz: f64,
     reference: Reference,
+    /// The regression's design for `settings.periods` at `chop_hz`.
+    design: Design,
     /// The calibration and the chop timing it was taken at.
     learned: Option<(Learned, ChopTiming)>,
     gain: u8,
@@ -63,11 +65,13 @@ impl Detector {
     /// square until a calibration has learned the waveform.
     pub fn new<A: AdcStream>(settings: DetectionSettings) -> Self {
         let timing = units::chop_timing(&settings, A::TIMER_HZ);
+        let chop_hz = units::chop_hz_actual(timing, A::TIMER_HZ) as f64;
         Self {
             settings,
             timing,
-            chop_hz: units::chop_hz_actual(timing, A::TIMER_HZ) as f64,
+            chop_hz,
             reference: Reference::new(settings.reference, settings.samples_per_period as usize, None),
+            design: Design::new(settings.periods as u32, chop_hz),
             learned: None,
             gain: 0,
             running: false,
@@ -95,6 +99,7 @@ impl Detector {
         self.timing = timing;
         self.chop_hz = units::chop_hz_actual(timing, <B::Adc as AdcStream>::TIMER_HZ) as f64;
         self.reference = Reference::new(s.reference, s.samples_per_period as usize, self.learned());
+        self.design = Design::new(s.periods as u32, self.chop_hz);
         self.stop(hw);
         Ok(self.report::<B::Adc>())
     }
@@ -206,7 +211,7 @@ impl Detector {
         let buf = &mut buf[..self.samples_per_period()];
         self.prepare(hw, cfg, buf, &mut flags).await?;
         let periods = self.settings.periods;
-        let mut it = Integrator::new(&self.reference, periods as u32, self.chop_hz);
+        let mut it = Integrator::with(&self.reference, self.design.clone());
         for _ in 0..periods {
             Self::period(hw, buf, &mut flags).await;
             it.push(buf);

@@ -30,6 +30,8 @@ CCM = (0x1000_0000, 64 << 10)
 # memory: the probes touch neither, but cortex-m-rt enables the FPU there.
 PERIPHERALS = (0x4000_0000, 0x1000_0000)
 SYSTEM = (0xE000_0000, 0x0010_0000)
+# `cost_mark`'s phases (firmware/src/bin/cost/probes.rs).
+BEGIN, END, VALUE = 0, 1, 2
 
 
 class Elf:
@@ -125,17 +127,21 @@ def costs(path, profile_name=None):
     mark = elf.symbols["cost_mark"] & ~1
     open_at = {}
     figures = {}
+    values = {}
     state = {"done": False, "panic": None}
 
     def on_mark(uc, _address, _size, _user):
-        r0, r1, r2 = (uc.reg_read(r) for r in (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2))
+        r0, r1, r2, r3 = (uc.reg_read(r) for r in (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2, arm.UC_ARM_REG_R3))
         name = m.read_str(r0, r1)
+        if r2 == VALUE:
+            values[name] = r3
+            return
         if name in ("done", "panic") or name.endswith(("_failed", "_refused", "_stalled")):
             state["done"] = name == "done"
             state["panic"] = None if name == "done" else name
             uc.emu_stop()
             return
-        if r2 == 0:
+        if r2 == BEGIN:
             open_at[name] = m.executed
             if name == profile_name:
                 m.profile = {}
@@ -152,15 +158,7 @@ def costs(path, profile_name=None):
             f["min"] = n if f["min"] is None else min(f["min"], n)
             f["total"] += n
 
-    values = {}
-
-    def on_value(uc, _address, _size, _user):
-        r0, r1, r2 = (uc.reg_read(r) for r in (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2))
-        values[m.read_str(r0, r1)] = r2
-
     m.uc.hook_add(UC_HOOK_CODE, on_mark, begin=mark, end=mark)
-    value = elf.symbols["cost_value"] & ~1
-    m.uc.hook_add(UC_HOOK_CODE, on_value, begin=value, end=value)
     pc = m.reset()
     try:
         m.uc.emu_start(pc, 0xFFFF_FFFF, count=2_000_000_000)

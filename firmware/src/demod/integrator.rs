@@ -1,7 +1,7 @@
 //! One integration: correlation sums over whole chop periods, the nuisance
 //! fit, and the drift-corrected estimate.
 
-use super::nuisance::Nuisance;
+use super::nuisance::{Design, Nuisance};
 use super::reference::{Period, Reference};
 
 /// The result of an integration, in ADC codes of chop amplitude.
@@ -39,9 +39,15 @@ pub struct Integrator<'r> {
 impl<'r> Integrator<'r> {
     /// For `planned` periods at `chop_hz` (the fit of mains aliases needs both).
     pub fn new(r: &'r Reference, planned: u32, chop_hz: f64) -> Self {
+        Self::with(r, Design::new(planned, chop_hz))
+    }
+
+    /// On the regression's design for its planned periods, computed before
+    /// (see [`Design`]: the measurement then pays only for its data).
+    pub fn with(r: &'r Reference, design: Design) -> Self {
         Integrator {
             r,
-            nuisance: Nuisance::new(planned, chop_hz),
+            nuisance: Nuisance::with(design),
             sum_i: 0,
             sum_q: 0,
             periods: 0,

@@ -29,4 +29,5 @@ mod reference;
 
 pub use integrator::{Estimate, Integrator};
 pub use learn::{Learned, Learner};
+pub use nuisance::Design;
 pub use reference::{Period, Reference, MAX_M};

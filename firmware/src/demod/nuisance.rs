@@ -1,7 +1,9 @@
 //! The slow part of the signal, seen one value per chop period: a constant, a
 //! linear drift, and mains pickup (50 and 60 Hz with their second and third
 //! harmonics) as it aliases at the chop rate. Per-period values are regressed
-//! on these by least squares, accumulated period by period in a Gram matrix.
+//! on these by least squares: the right-hand sides are accumulated period by
+//! period; the Gram matrix, which does not depend on the data, is factored
+//! once per settings ([`Design`]).
 //!
 //! The normal equations are solved by a Cholesky factorisation written here:
 //! at most 14 unknowns, fixed size, no heap, no_std; a linear-algebra crate
@@ -17,24 +19,57 @@ const RAMP: usize = 1;
 
 type Mat = [[f64; MAX_REG]; MAX_REG];
 
-/// Per-period regression of a code sum and of the amplitude on the slow terms.
-pub struct Nuisance {
-    n: usize,
-    tones: usize,
-    periods: u32,
-    planned: u32,
-    /// Per-period rotation (cos, sin) of each tone and its current phasor.
-    step: [(f64, f64); MAX_TONES],
-    phasor: [(f64, f64); MAX_TONES],
-    gram: Mat,
-    /// Right-hand sides: the code sum, and the amplitude minus its first value.
-    b_sum: [f64; MAX_REG],
-    b_amp: [f64; MAX_REG],
-    amp0: Option<f64>,
-    amp_sq: f64,
+/// The regressors' column lists: all of them (the slope fit), and all but
+/// the ramp (the amplitude fit: a drift biases all periods alike).
+#[derive(Clone, Copy)]
+struct Columns {
+    idx: [usize; MAX_REG],
+    len: usize,
 }
 
-impl Nuisance {
+impl Columns {
+    fn all(n: usize) -> Self {
+        Columns {
+            idx: core::array::from_fn(|i| i),
+            len: n,
+        }
+    }
+
+    fn without_ramp(n: usize) -> Self {
+        let mut idx = [0usize; MAX_REG];
+        for (j, slot) in idx[1..n - 1].iter_mut().enumerate() {
+            *slot = j + 2;
+        }
+        Columns { idx, len: n - 1 }
+    }
+
+    fn as_slice(&self) -> &[usize] {
+        &self.idx[..self.len]
+    }
+}
+
+/// What the regression depends on but not the data: the tones that alias
+/// clear of DC and of each other at the chop rate, and, for the planned
+/// number of periods, the Cholesky factors of the two Gram matrices. The
+/// regressors are the same in every measurement with the same settings, so
+/// the factors are computed once (`Detector` keeps the design of its
+/// settings): measured on the Cortex-M4 (`chip-bench`), accumulating the Gram
+/// matrix cost some 20 000 instructions a period and each factorisation
+/// about 150 000 at the end of every measurement, in soft-float f64.
+#[derive(Clone)]
+pub struct Design {
+    n: usize,
+    tones: usize,
+    planned: u32,
+    /// Per-period rotation (cos, sin) of each tone.
+    step: [(f64, f64); MAX_TONES],
+    /// Factors of the Gram matrix of `planned` periods, for all regressors
+    /// and for all but the ramp (`None`: not positive definite).
+    full: Option<Factor>,
+    amp: Option<Factor>,
+}
+
+impl Design {
     /// For `planned` periods at `chop_hz`. Tones that alias to (nearly) DC or
     /// Nyquist, or onto another tone, are skipped, as are all tones when the
     /// integration is too short to fit them.
@@ -58,14 +93,93 @@ impl Nuisance {
             let w = 2.0 * core::f64::consts::PI * f / chop_hz;
             *s = (libm::cos(w), libm::sin(w));
         }
-        Nuisance {
+        let mut d = Design {
             n: 2 + 2 * tones,
             tones,
-            periods: 0,
             planned: planned.max(1),
             step,
+            full: None,
+            amp: None,
+        };
+        let gram = d.gram(d.planned);
+        d.full = factor(&gram, Columns::all(d.n).as_slice());
+        d.amp = (d.n > 2).then(|| factor(&gram, Columns::without_ramp(d.n).as_slice())).flatten();
+        d
+    }
+
+    /// The regressors of period `period`, the tones' phasors being `phasor`.
+    fn regressors(&self, period: u32, phasor: &[(f64, f64); MAX_TONES]) -> [f64; MAX_REG] {
+        let mut g = [0.0; MAX_REG];
+        g[0] = 1.0;
+        // Centred and scaled ramp keeps the Gram matrix well conditioned.
+        g[RAMP] = (period as f64 - (self.planned as f64 - 1.0) / 2.0) / self.planned as f64;
+        for t in 0..self.tones {
+            g[2 + 2 * t] = phasor[t].1;
+            g[3 + 2 * t] = phasor[t].0;
+        }
+        g
+    }
+
+    /// The tones' phasors one period on.
+    fn rotate(&self, phasor: &mut [(f64, f64); MAX_TONES]) {
+        for (p, &(dc, ds)) in phasor.iter_mut().zip(&self.step).take(self.tones) {
+            let (c, s) = *p;
+            *p = (c * dc - s * ds, s * dc + c * ds);
+        }
+    }
+
+    /// The Gram matrix of the first `periods` periods.
+    fn gram(&self, periods: u32) -> Mat {
+        let mut gram = [[0.0; MAX_REG]; MAX_REG];
+        let mut phasor = [(1.0, 0.0); MAX_TONES];
+        for p in 0..periods {
+            let g = self.regressors(p, &phasor);
+            for r in 0..self.n {
+                for c in 0..self.n {
+                    gram[r][c] += g[r] * g[c];
+                }
+            }
+            self.rotate(&mut phasor);
+        }
+        gram
+    }
+
+    /// The factor for `cols` after `periods` periods: the cached one for the
+    /// planned count, else computed (an integration cut short).
+    fn factor(&self, periods: u32, cols: Columns, cached: &Option<Factor>) -> Option<Factor> {
+        if periods == self.planned {
+            cached.clone()
+        } else {
+            factor(&self.gram(periods), cols.as_slice())
+        }
+    }
+}
+
+/// Per-period regression of a code sum and of the amplitude on the slow terms.
+pub struct Nuisance {
+    design: Design,
+    periods: u32,
+    /// The tones' current phasors.
+    phasor: [(f64, f64); MAX_TONES],
+    /// Right-hand sides: the code sum, and the amplitude minus its first value.
+    b_sum: [f64; MAX_REG],
+    b_amp: [f64; MAX_REG],
+    amp0: Option<f64>,
+    amp_sq: f64,
+}
+
+impl Nuisance {
+    /// For `planned` periods at `chop_hz` (computes the [`Design`]).
+    pub fn new(planned: u32, chop_hz: f64) -> Self {
+        Self::with(Design::new(planned, chop_hz))
+    }
+
+    /// On a design computed before.
+    pub fn with(design: Design) -> Self {
+        Nuisance {
+            design,
+            periods: 0,
             phasor: [(1.0, 0.0); MAX_TONES],
-            gram: [[0.0; MAX_REG]; MAX_REG],
             b_sum: [0.0; MAX_REG],
             b_amp: [0.0; MAX_REG],
             amp0: None,
@@ -73,46 +187,29 @@ impl Nuisance {
         }
     }
 
-    fn regressors(&self) -> [f64; MAX_REG] {
-        let mut g = [0.0; MAX_REG];
-        g[0] = 1.0;
-        // Centred and scaled ramp keeps the Gram matrix well conditioned.
-        g[RAMP] = (self.periods as f64 - (self.planned as f64 - 1.0) / 2.0) / self.planned as f64;
-        for t in 0..self.tones {
-            g[2 + 2 * t] = self.phasor[t].1;
-            g[3 + 2 * t] = self.phasor[t].0;
-        }
-        g
-    }
-
     /// Adds one period: its code sum and its amplitude.
     pub fn push(&mut self, sum: f64, amplitude: f64) {
-        let g = self.regressors();
+        let d = &self.design;
+        let g = d.regressors(self.periods, &self.phasor);
         let a = amplitude - *self.amp0.get_or_insert(amplitude);
-        for r in 0..self.n {
-            for c in 0..self.n {
-                self.gram[r][c] += g[r] * g[c];
-            }
-            self.b_sum[r] += g[r] * sum;
-            self.b_amp[r] += g[r] * a;
+        for ((bs, ba), gr) in self.b_sum.iter_mut().zip(self.b_amp.iter_mut()).zip(g).take(d.n) {
+            *bs += gr * sum;
+            *ba += gr * a;
         }
         self.amp_sq += a * a;
-        for t in 0..self.tones {
-            let ((c, s), (dc, ds)) = (self.phasor[t], self.step[t]);
-            self.phasor[t] = (c * dc - s * ds, s * dc + c * ds);
-        }
+        d.rotate(&mut self.phasor);
         self.periods += 1;
     }
 
     /// Drift of the code sum per period, or zero when the fit is not
     /// determined (too few periods).
     pub fn sum_slope_per_period(&self) -> f64 {
-        let idx: [usize; MAX_REG] = core::array::from_fn(|i| i);
-        if (self.periods as usize) < self.n + 2 {
+        let d = &self.design;
+        if (self.periods as usize) < d.n + 2 {
             return 0.0;
         }
-        match solve(&self.gram, &idx[..self.n], &self.b_sum) {
-            Some((x, _)) => x[RAMP] / self.planned as f64,
+        match d.factor(self.periods, Columns::all(d.n), &d.full) {
+            Some(f) => f.solve(&self.b_sum)[RAMP] / d.planned as f64,
             None => 0.0,
         }
     }
@@ -121,6 +218,7 @@ impl Nuisance {
     /// from the residual spread; the plain mean and spread when there are too
     /// few periods for the fit.
     pub fn amplitude(&self) -> (f64, f64) {
+        let d = &self.design;
         let n = self.periods as f64;
         let a0 = self.amp0.unwrap_or(0.0);
         let plain = || {
@@ -132,31 +230,33 @@ impl Nuisance {
             };
             (a0 + mean, libm::sqrt(var / n.max(1.0)))
         };
-        // Every regressor but the ramp: a drift biases all periods alike.
-        let mut idx = [0usize; MAX_REG];
-        idx[0] = 0;
-        for (j, slot) in idx[1..self.n - 1].iter_mut().enumerate() {
-            *slot = j + 2;
-        }
-        let m = self.n - 1;
+        let m = d.n - 1;
         if m == 1 || (self.periods as usize) < m + 3 {
             return plain();
         }
-        let b: [f64; MAX_REG] = core::array::from_fn(|j| if j < m { self.b_amp[idx[j]] } else { 0.0 });
-        match solve(&self.gram, &idx[..m], &b) {
-            Some((x, inv00)) => {
+        let cols = Columns::without_ramp(d.n);
+        let b: [f64; MAX_REG] = core::array::from_fn(|j| if j < m { self.b_amp[cols.idx[j]] } else { 0.0 });
+        match d.factor(self.periods, cols, &d.amp) {
+            Some(f) => {
+                let x = f.solve(&b);
                 let fitted: f64 = (0..m).map(|j| x[j] * b[j]).sum();
                 let var = ((self.amp_sq - fitted) / (n - m as f64)).max(0.0);
-                (a0 + x[0], libm::sqrt(var * inv00))
+                (a0 + x[0], libm::sqrt(var * f.inv00()))
             }
             None => plain(),
         }
     }
 }
 
-/// Solves `G[idx,idx]·x = b[..idx.len()]` by Cholesky; returns `x` and
-/// `(G[idx,idx]⁻¹)₀₀`, or `None` when the matrix is not positive definite.
-fn solve(g: &Mat, idx: &[usize], b: &[f64]) -> Option<([f64; MAX_REG], f64)> {
+/// The Cholesky factor `L` of a Gram matrix restricted to some columns.
+#[derive(Clone)]
+struct Factor {
+    l: Mat,
+    n: usize,
+}
+
+/// Factors `G[idx,idx]`, or `None` when it is not positive definite.
+fn factor(g: &Mat, idx: &[usize]) -> Option<Factor> {
     let n = idx.len();
     let mut l = [[0.0f64; MAX_REG]; MAX_REG];
     for r in 0..n {
@@ -172,7 +272,13 @@ fn solve(g: &Mat, idx: &[usize], b: &[f64]) -> Option<([f64; MAX_REG], f64)> {
             }
         }
     }
-    let back = |rhs: &[f64]| -> [f64; MAX_REG] {
+    Some(Factor { l, n })
+}
+
+impl Factor {
+    /// Solves `L·Lᵀ·x = rhs[..n]`.
+    fn solve(&self, rhs: &[f64]) -> [f64; MAX_REG] {
+        let (l, n) = (&self.l, self.n);
         let mut y = [0.0; MAX_REG];
         for r in 0..n {
             y[r] = (rhs[r] - (0..r).map(|k| l[r][k] * y[k]).sum::<f64>()) / l[r][r];
@@ -182,11 +288,14 @@ fn solve(g: &Mat, idx: &[usize], b: &[f64]) -> Option<([f64; MAX_REG], f64)> {
             x[r] = (y[r] - (r + 1..n).map(|k| l[k][r] * x[k]).sum::<f64>()) / l[r][r];
         }
         x
-    };
-    let x = back(b);
-    let mut e0 = [0.0; MAX_REG];
-    e0[0] = 1.0;
-    Some((x, back(&e0)[0]))
+    }
+
+    /// `(G⁻¹)₀₀`: the variance factor of the first unknown.
+    fn inv00(&self) -> f64 {
+        let mut e0 = [0.0; MAX_REG];
+        e0[0] = 1.0;
+        self.solve(&e0)[0]
+    }
 }
 
 #[cfg(test)]

@@ -42,9 +42,10 @@ impl Table {
         &self.v[..self.m]
     }
 
-    /// `Σ k·r_k`: the response of this reference to a unit-slope ramp.
+    /// `Σ k·r_k`: the response of this reference to a unit-slope ramp. Summed
+    /// in integers (exact, as the f64 sum was: |Σ| < 2^32) and converted once.
     pub fn ramp_moment(&self) -> f64 {
-        self.values().iter().enumerate().map(|(k, &r)| k as f64 * r as f64).sum()
+        self.values().iter().enumerate().map(|(k, &r)| k as i64 * r as i64).sum::<i64>() as f64
     }
 
     /// `Σ r_k·w_k` for a waveform in codes.
@@ -78,8 +79,10 @@ pub struct Reference {
     unit_i: f64,
     /// Matched sum per unit of (boxcar-equivalent) chop amplitude.
     unit_matched: f64,
-    /// Calibrated phase of the electronics (radians) for this reference kind.
-    phase_ref: f64,
+    /// Calibrated phase of the electronics for this reference kind, as its
+    /// cosine and sine: every period's amplitude projects on it, and `libm`'s
+    /// f64 cosine and sine cost thousands of instructions each on the chip.
+    phase_ref: (f64, f64),
 }
 
 impl Reference {
@@ -106,10 +109,11 @@ impl Reference {
         };
         let unit_i = i.values()[..m / 2].iter().map(|&v| v as f64).sum();
         let learned = learned.filter(|l| l.samples_per_period() == m);
-        let phase_ref = learned.map_or(0.0, |l| match kind {
+        let phase = learned.map_or(0.0, |l| match kind {
             Kind::Sine => l.phase_sine,
             Kind::Square | Kind::Matched => l.phase_square,
         });
+        let phase_ref = (libm::cos(phase), libm::sin(phase));
         let mut r = Reference {
             kind,
             i,
@@ -149,7 +153,7 @@ impl Reference {
 
     /// In-phase and quadrature sums → chop amplitude along the reference phase.
     pub fn project(&self, i: f64, q: f64) -> f64 {
-        (libm::cos(self.phase_ref) * i + libm::sin(self.phase_ref) * q) / self.unit_i
+        (self.phase_ref.0 * i + self.phase_ref.1 * q) / self.unit_i
     }
 
     /// Per-period amplitude (chop amplitude in codes) from a period's sums.
