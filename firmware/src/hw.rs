@@ -84,6 +84,10 @@ pub trait StepTimer {
     }
 }
 
+/// Longest wait of the serve loop (µs) before it shows it is alive
+/// ([`Sentry::alive`]); the chip's watchdog bites after a second without.
+pub const ALIVE_EVERY_US: u64 = 250_000;
+
 /// Why [`Sentry::until`] returned.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Wake {
@@ -104,6 +108,12 @@ pub trait Sentry {
     /// Resolves when the E-STOP input opens (when `estop`; at once if it is
     /// open), or at `deadline_us` on the head's clock (when given).
     async fn until(&mut self, deadline_us: Option<u64>, estop: bool) -> Wake;
+    /// The serve loop is alive: called on every turn and from every wait, at
+    /// least every [`ALIVE_EVERY_US`]. The chip feeds its
+    /// watchdog only while these keep coming, so a serve loop stuck in a
+    /// future that never ends (a send to a host that stopped reading) resets
+    /// the head into its safe state.
+    fn alive(&mut self) {}
 }
 
 /// Monotonic time since boot.

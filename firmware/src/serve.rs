@@ -14,7 +14,7 @@ use crate::check;
 use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
 use crate::framing::MAX_FRAME;
 use crate::head::Head;
-use crate::hw::{Board, Sentry, Wake};
+use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
 use crate::state::{Event, Mode};
 use embassy_futures::select::{select, Either};
@@ -61,6 +61,13 @@ impl Inbox {
     }
 }
 
+/// `deadline`, or sooner: the serve loop wakes at least every
+/// [`ALIVE_EVERY_US`] (a wake that is not the deadline changes nothing).
+fn alive_by<S: Sentry>(sentry: &S, deadline: Option<u64>) -> Option<u64> {
+    let by = sentry.now_us().saturating_add(ALIVE_EVERY_US);
+    Some(deadline.map_or(by, |d| d.min(by)))
+}
+
 /// What ended an operation under watch.
 #[derive(Debug)]
 enum Trip {
@@ -84,10 +91,15 @@ async fn watch<L: Link, S: Sentry>(
     pause: bool,
 ) -> Trip {
     loop {
+        sentry.alive();
         let deadline = silence_us.map(|t| heard.saturating_add(t));
-        match select(sentry.until(deadline, true), link.recv(&mut inbox.rx)).await {
+        match select(sentry.until(alive_by(sentry, deadline), true), link.recv(&mut inbox.rx)).await {
             Either::First(Wake::EStop) => return Trip::EStop,
-            Either::First(Wake::Deadline) => return Trip::HostSilent,
+            Either::First(Wake::Deadline) => {
+                if deadline.is_some_and(|d| sentry.now_us() >= d) {
+                    return Trip::HostSilent;
+                }
+            }
             Either::Second(Err(_)) => return Trip::LinkLost,
             Either::Second(Ok(n)) => {
                 // Any frame, even a damaged one, shows the host is there.
@@ -119,6 +131,7 @@ impl<B: Board> Head<B> {
         // An event of a session that ended is not for this one.
         self.pending_event = None;
         loop {
+            sentry.alive();
             self.estop_open = sentry.estop_open();
             let r = if let Some(f) = inbox.held.pop_front() {
                 self.handle(&f, link, sentry, &mut inbox).await
@@ -157,7 +170,12 @@ impl<B: Board> Head<B> {
     /// At rest: waits for a request, the E-STOP or an idle deadline.
     async fn rest<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
         let armed = self.mode != Mode::Faulted;
-        match select(sentry.until(self.rest_deadline(), armed), link.recv(&mut inbox.rx)).await {
+        match select(
+            sentry.until(alive_by(sentry, self.rest_deadline()), armed),
+            link.recv(&mut inbox.rx),
+        )
+        .await
+        {
             Either::First(Wake::EStop) => {
                 let _ = self.tripped(Trip::EStop).await;
                 Ok(())
@@ -425,7 +443,12 @@ impl<B: Board> Head<B> {
     /// chunk (or any request), the E-STOP, or the host's silence (which the
     /// next step sees and holds the scan for).
     async fn starved<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
-        match select(sentry.until(self.silence_deadline(), true), link.recv(&mut inbox.rx)).await {
+        match select(
+            sentry.until(alive_by(sentry, self.silence_deadline()), true),
+            link.recv(&mut inbox.rx),
+        )
+        .await
+        {
             Either::First(Wake::EStop) => {
                 let _ = self.tripped(Trip::EStop).await;
                 Ok(())

@@ -274,6 +274,34 @@ fn a_paused_scan_continues_where_it_stopped_and_measures_every_point_once() {
     assert_eq!(seen.len() as u32, small_scan().len(), "every point once");
 }
 
+/// The serve loop shows it is alive at least every 250 ms of head time —
+/// homing, a scan with long moves, a pause with a move, a minute at rest —
+/// or, braking a move to a stop (which nothing may interrupt), within the
+/// longest stop (0.5 s on the reference axes); the chip's watchdog, fed only
+/// while the last sign is under 750 ms old, bites only when the loop is stuck.
+#[test]
+fn the_serve_loop_shows_it_is_alive_every_quarter_second() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let t = head.now();
+    let scan = scan_frames(&small_scan()).into_iter().map(|f| (t, Cue::Frame(f)));
+    let sent = head.serve_timed(
+        scan.chain([
+            (t + 3.3, Cue::Frame(send::<PauseEndpoint>(&()))),
+            (t + 4.0, Cue::Frame(send::<MoveEndpoint>(&far_move()))),
+            (t + 30.0, Cue::Frame(send::<ContinueEndpoint>(&()))),
+            (t + 200.0, Cue::Frame(send::<StatusEndpoint>(&()))),
+        ]),
+        t + 260.0,
+    );
+    assert!(matches!(scan_events(&sent).last(), Some((ScanEvent::Finished { .. }, _))));
+    let w = head.world();
+    assert!(w.t_s > t + 250.0, "the head rested a minute after the scan");
+    let stop_s = REFERENCE.axes.iter().map(|a| (a.max_speed_dps / a.max_accel_dps2) as f64).fold(0.0, f64::max);
+    let gap = w.alive_gap_max_s;
+    assert!(gap > 0.2 && gap <= stop_s + 0.01, "longest time without a sign of life: {gap} s");
+}
+
 /// `safety-bench`'s bars, on a few trials of every trigger and activity
 /// (the binary runs 1 000 per trigger).
 #[test]

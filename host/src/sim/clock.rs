@@ -195,6 +195,15 @@ impl Sentry for SimSentry {
         self.world.borrow().now_us()
     }
 
+    fn alive(&mut self) {
+        let mut w = self.world.borrow_mut();
+        let t = w.t_s;
+        if let Some(last) = w.alive_at_s {
+            w.alive_gap_max_s = w.alive_gap_max_s.max(t - last);
+        }
+        w.alive_at_s = Some(t);
+    }
+
     async fn until(&mut self, deadline_us: Option<u64>, estop: bool) -> Wake {
         std::future::poll_fn(|_| {
             let mut w = self.world.borrow_mut();

@@ -73,6 +73,10 @@ pub struct World {
     /// See [`super::SimConfig::pace`], and the wall-clock time owed to it.
     pub pace: f32,
     pub pace_owed_s: f64,
+    /// When the serve loop last showed it was alive, and the longest time
+    /// it went without (s): what the chip's watchdog watches.
+    pub alive_at_s: Option<f64>,
+    pub alive_gap_max_s: f64,
 }
 
 impl World {
@@ -127,6 +131,8 @@ impl World {
             laser_log: None,
             pace: sim.pace,
             pace_owed_s: 0.0,
+            alive_at_s: None,
+            alive_gap_max_s: 0.0,
         }
     }
 

@@ -11,7 +11,9 @@ mod watchdog;
 
 use adc_stream::TimedAdc;
 use embassy_executor::Spawner;
+use embassy_futures::select::{select, Either};
 use embassy_stm32::{bind_interrupts, peripherals, usb, Config};
+use embassy_time::Timer;
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::hw::{Board, Clock, Hardware};
 use gonio_firmware::Head;
@@ -114,6 +116,9 @@ async fn main(spawner: Spawner) {
         // Serve until the host goes away (the head is then in its safe
         // state), then wait for the next connection.
         head.serve(&mut link, &mut sentry).await;
-        link.wait_connection().await;
+        // Between sessions the head is alive too: it waits, safe.
+        while let Either::Second(()) = select(link.wait_connection(), Timer::after_millis(250)).await {
+            sentry::alive();
+        }
     }
 }

@@ -7,10 +7,20 @@
 //! input to read closed for 20 ms of the embassy timer (TIM4, 1 MHz) before
 //! a continue is accepted (`serve::ESTOP_DEBOUNCE_US`).
 
+use core::sync::atomic::{AtomicU32, Ordering};
 use embassy_futures::select::{select, Either};
 use embassy_stm32::exti::ExtiInput;
 use embassy_time::{Instant, Timer};
 use gonio_firmware::hw::{Sentry, Wake};
+
+/// When the serve loop last showed it was alive (ms of uptime, wrapping):
+/// the watchdog's pet task reads it (`watchdog.rs`).
+pub static ALIVE_MS: AtomicU32 = AtomicU32::new(0);
+
+/// Records that the serve loop (or the wait between sessions) is alive.
+pub fn alive() {
+    ALIVE_MS.store(Instant::now().as_millis() as u32, Ordering::Relaxed);
+}
 
 pub struct ChipSentry {
     pub estop: ExtiInput<'static>,
@@ -23,6 +33,10 @@ impl Sentry for ChipSentry {
 
     fn now_us(&self) -> u64 {
         Instant::now().as_micros()
+    }
+
+    fn alive(&mut self) {
+        alive();
     }
 
     async fn until(&mut self, deadline_us: Option<u64>, estop: bool) -> Wake {

@@ -15,6 +15,7 @@ use embassy_stm32::Peri;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
+use embassy_time::Timer;
 use embassy_usb::class::cdc_acm::{CdcAcmClass, ControlChanged, Receiver, Sender, State};
 use embassy_usb::{Builder, UsbDevice};
 use gonio_firmware::framing::{self, Decoder, MAX_ENCODED, MAX_FRAME};
@@ -26,6 +27,9 @@ type UsbDriver = Driver<'static, USB_OTG_FS>;
 type Frame = heapless::Vec<u8, MAX_FRAME>;
 
 const PACKET: u16 = 64;
+/// How long a frame may wait for room in the transmit queue (ms): eight
+/// frames ahead of it at 64 bytes a millisecond take far less.
+const SEND_TIMEOUT_MS: u64 = 500;
 
 static RX: Channel<CriticalSectionRawMutex, Frame, 4> = Channel::new();
 static TX: Channel<CriticalSectionRawMutex, Frame, 8> = Channel::new();
@@ -63,10 +67,17 @@ impl Link for UsbLink {
         RX.try_receive().ok().map(|f| Ok(copy(f, buf)))
     }
 
+    /// A host that stops reading (its port closed while the device stays
+    /// configured: `write_packet` never completes and the queue fills) is a
+    /// host gone: after [`SEND_TIMEOUT_MS`] the link counts as closed and the
+    /// serve loop makes the head safe, instead of waiting in this send for
+    /// ever with the laser on.
     async fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
         let f = Frame::from_slice(frame).map_err(|_| LinkError::Closed)?;
-        TX.send(f).await;
-        Ok(())
+        match select(TX.send(f), Timer::after_millis(SEND_TIMEOUT_MS)).await {
+            Either::First(()) => Ok(()),
+            Either::Second(()) => Err(LinkError::Closed),
+        }
     }
 }
 
