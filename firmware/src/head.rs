@@ -321,6 +321,11 @@ impl<B: Board> Head<B> {
     pub(crate) async fn acquire(&mut self, at: Option<Geometry>, scan: Option<ScanPosition>) -> Reply<Sample> {
         let target = match at {
             Some(g) => {
+                // The conversions stop for the move: on the chip the DMA ring
+                // (two chop periods) would overrun within milliseconds and
+                // lose its alignment with the chop; the next measurement
+                // restarts it aligned, and settles first.
+                self.detector.stop(&mut self.hw);
                 self.goto(&g).await?;
                 let settle = units::seconds_to_us(self.detector.settings().settle_s);
                 self.hw.delay.delay_us(settle).await;

@@ -85,6 +85,10 @@ class Machine:
             self.uc.mem_write(addr, blob)
         self.executed = 0
         self.block_sizes = {}
+        # The deepest the stack went (its lowest address).
+        self.lowest_sp = 0xFFFF_FFFF
+        # The lowest since the innermost open stretch began.
+        self.stretch_lowest = 0xFFFF_FFFF
         # Instructions per block address while profiling (None: not profiling).
         self.profile = None
         self.uc.hook_add(UC_HOOK_BLOCK, self._block)
@@ -95,12 +99,18 @@ class Machine:
             n = thumb_instructions(uc.mem_read(address, size))
             self.block_sizes[(address, size)] = n
         self.executed += n
+        sp = uc.reg_read(arm.UC_ARM_REG_SP)
+        if sp < self.stretch_lowest:
+            self.stretch_lowest = sp
+            if sp < self.lowest_sp:
+                self.lowest_sp = sp
         if self.profile is not None:
             self.profile[address] = self.profile.get(address, 0) + n
 
     def reset(self):
         sp, pc = struct.unpack("<II", self.uc.mem_read(FLASH[0], 8))
         self.uc.reg_write(arm.UC_ARM_REG_SP, sp)
+        self.stack_top = sp
         return pc
 
     def read_str(self, ptr, length):
@@ -143,10 +153,16 @@ def costs(path, profile_name=None):
             return
         if r2 == BEGIN:
             open_at[name] = m.executed
+            # The stack a stretch uses: from its start to its deepest point.
+            m.lowest_sp = min(m.lowest_sp, uc.reg_read(arm.UC_ARM_REG_SP))
+            state.setdefault("depth", {})[name] = (uc.reg_read(arm.UC_ARM_REG_SP), m.lowest_sp)
+            m.stretch_lowest = uc.reg_read(arm.UC_ARM_REG_SP)
             if name == profile_name:
                 m.profile = {}
         else:
             n = m.executed - open_at.pop(name)
+            start_sp, _ = state["depth"][name]
+            stack = start_sp - m.stretch_lowest
             if name == profile_name:
                 if n > state.get("profiled", 0):
                     state["profiled"] = n
@@ -157,6 +173,7 @@ def costs(path, profile_name=None):
             f["max"] = max(f["max"], n)
             f["min"] = n if f["min"] is None else min(f["min"], n)
             f["total"] += n
+            f["stack_max"] = max(f.get("stack_max", 0), stack)
 
     m.uc.hook_add(UC_HOOK_CODE, on_mark, begin=mark, end=mark)
     pc = m.reset()
@@ -164,7 +181,9 @@ def costs(path, profile_name=None):
         m.uc.emu_start(pc, 0xFFFF_FFFF, count=2_000_000_000)
     except UcError as e:
         at = m.uc.reg_read(arm.UC_ARM_REG_PC)
-        raise SystemExit(f"emulation failed at pc {at:#010x} after {m.executed} instructions: {e}")
+        sp = m.uc.reg_read(arm.UC_ARM_REG_SP)
+        inside = ", ".join(open_at) or "no stretch"
+        raise SystemExit(f"emulation failed at pc {at:#010x}, sp {sp:#010x}, after {m.executed} instructions, in {inside}: {e}")
     if not state["done"]:
         partial = {k: (v["count"], v["max"]) for k, v in figures.items()}
         raise SystemExit(f"the image stopped before its end: {state['panic'] or 'no done mark'} (so far: {partial})")
@@ -182,6 +201,7 @@ def costs(path, profile_name=None):
         "emulator": f"unicorn {unicorn.__version__} (Cortex-M4, Thumb-2, instructions counted per translated block)",
         "overhead_instructions": overhead,
         "executed_instructions": m.executed,
+        "stack_bytes_max": m.stack_top - m.lowest_sp,
         "values": values,
         "probes": figures,
     }

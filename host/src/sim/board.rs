@@ -200,6 +200,9 @@ impl StepTimer for SimSteps {
         if w.laser {
             w.moves += 1;
         }
+        if w.chop.is_some() {
+            w.moves_with_conversions += 1;
+        }
         self.stalled = w.faults.take_stall(w.moves);
         self.origin_s = w.t_s;
         drop(w);

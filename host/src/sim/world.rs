@@ -76,6 +76,9 @@ pub struct World {
     /// When the serve loop last showed it was alive, and the longest time
     /// it went without (s): what the chip's watchdog watches.
     pub alive_at_s: Option<f64>,
+    /// Moves started while the chop and the conversions ran: on the chip the
+    /// ADC's DMA ring overruns during them.
+    pub moves_with_conversions: u32,
     pub alive_gap_max_s: f64,
 }
 
@@ -132,6 +135,7 @@ impl World {
             pace: sim.pace,
             pace_owed_s: 0.0,
             alive_at_s: None,
+            moves_with_conversions: 0,
             alive_gap_max_s: 0.0,
         }
     }

@@ -25,6 +25,9 @@
 //!   loop during a served Belcour-span scan with a sanity model and a resume.
 //! - `step_rate_hz_3axes_at_50pct_cpu` (≥ 50 000): per-axis step rate that
 //!   three axes sustain on half the CPU, from the mean handler cost.
+//! - `await_free_stack_bytes_max`: the stack the serve loop's deepest poll
+//!   takes (the chip's stack is the 64 KiB CCM RAM, `memory.x`);
+//!   `probe_stack_bytes_max`: the probe image's own deepest point.
 
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
@@ -108,6 +111,8 @@ fn main() -> Result<()> {
         "resume_instructions_max": resume,
         "await_free_instructions_max": await_free,
         "await_free_polls": p["await_free"]["count"],
+        "await_free_stack_bytes_max": p["await_free"]["stack_max"],
+        "probe_stack_bytes_max": run["stack_bytes_max"],
         "step_rate_hz_3axes_at_50pct_cpu": step_rate.round(),
         "boot_instructions": Value::Null,
         "boot_safe_pins": Value::Null,

@@ -9,7 +9,7 @@
 use core::cell::{Cell, RefCell};
 use core::convert::Infallible;
 use core::future::Future;
-use core::pin::pin;
+use core::pin::Pin as Pinned;
 use core::task::{Context, Poll, Waker};
 use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
 use embedded_hal_async::delay::DelayNs;
@@ -267,10 +267,39 @@ impl Link for Script {
     }
 }
 
+/// Room for the serve loop's future, which the chip keeps in its task arena
+/// (a static), not on its 64 KiB stack.
+const ARENA: usize = 48 * 1024;
+
+#[repr(C, align(8))]
+struct Arena([core::mem::MaybeUninit<u8>; ARENA]);
+
+static mut SERVE_ARENA: Arena = Arena([core::mem::MaybeUninit::uninit(); ARENA]);
+
+/// [`run`], with the future kept in a static arena as the chip keeps it.
+pub fn run_in_arena<F: Future>(name: &'static str, f: F, stop: impl FnMut() -> bool) -> Option<F::Output> {
+    if core::mem::size_of::<F>() > ARENA || core::mem::align_of::<F>() > 8 {
+        super::mark("arena_refused", 0);
+        return None;
+    }
+    // SAFETY: the arena is large and aligned enough (checked), used by one
+    // future at a time (the probes run one after another on one core); the
+    // future is pinned there until it is dropped in place below, before
+    // anything it borrows goes away.
+    unsafe {
+        let slot = (&raw mut SERVE_ARENA).cast::<F>();
+        slot.write(f);
+        let out = run(name, Pinned::new_unchecked(&mut *slot), stop);
+        slot.drop_in_place();
+        out
+    }
+}
+
 /// Polls `f` until it is ready or `stop` (called between polls) says so;
-/// every poll is measured as one stretch named `name`.
-pub fn run<F: Future>(name: &'static str, f: F, mut stop: impl FnMut() -> bool) -> Option<F::Output> {
-    let mut f = pin!(f);
+/// every poll is measured as one stretch named `name`. The future is pinned
+/// by the caller, where it was made: the serve loop's future is some 20 KiB,
+/// and every move of it would be a copy on the stack.
+pub fn run<F: Future>(name: &'static str, mut f: Pinned<&mut F>, mut stop: impl FnMut() -> bool) -> Option<F::Output> {
     let mut cx = Context::from_waker(Waker::noop());
     loop {
         if let Poll::Ready(v) = super::measure(name, || f.as_mut().poll(&mut cx)) {

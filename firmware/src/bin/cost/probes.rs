@@ -7,6 +7,7 @@ use core::convert::Infallible;
 use core::hint::black_box;
 use cortex_m_rt::entry;
 use defmt_rtt as _;
+use static_cell::StaticCell;
 // The vector table (the image is the chip's: cortex-m-rt wants its interrupts).
 use embassy_stm32 as _;
 use embedded_hal::digital::{ErrorType, OutputPin};
@@ -54,7 +55,7 @@ extern "C" fn cost_mark(name: *const u8, len: usize, phase: u32, value: u32) {
     black_box((name, len, phase, value));
 }
 
-fn mark(name: &'static str, phase: u32) {
+pub(crate) fn mark(name: &'static str, phase: u32) {
     cost_mark(name.as_ptr(), name.len(), phase, 0);
 }
 
@@ -358,7 +359,7 @@ fn serve(head: &mut Head<board::Rigged>, spec: &ScanSpec, started: bool, mut fed
     let mut link = board::Script;
     let mut sentry = board::Calm;
     let mut idle = 0;
-    board::run("await_free", head.serve(&mut link, &mut sentry), || {
+    board::run_in_arena("await_free", head.serve(&mut link, &mut sentry), || {
         let before = done;
         if look(&mut done) {
             board::HOST.closed.set(true);
@@ -390,7 +391,9 @@ fn scan_and_resume() {
         simulated: true,
         protocol_version: gonio_shared::PROTOCOL_VERSION,
     };
-    let mut head = Head::new(REFERENCE, board::hardware(), info);
+    // In a static, as the chip's task arena holds it: 13 KiB.
+    static HEAD: StaticCell<Head<board::Rigged>> = StaticCell::new();
+    let head = HEAD.init(Head::new(REFERENCE, board::hardware(), info));
     let sanity = SanityConfig {
         model: abc_retro(true),
         current_a_per_sr_inv: 1.0e-7,
@@ -414,7 +417,7 @@ fn scan_and_resume() {
         dphi: AngleRange::new(-180.0, 180.0, 45.0),
         ..ScanSpec::belcour()
     };
-    serve(&mut head, &spec, false, 0);
+    serve(head, &spec, false, 0);
 
     let resumed = ScanSpec {
         first_order: spec.len() - 2 * PLAN_CHUNK as u32,
@@ -431,7 +434,7 @@ fn scan_and_resume() {
     if started.is_err() {
         mark("resume_refused", BEGIN);
     }
-    serve(&mut head, &resumed, true, resumed.first_order + PLAN_CHUNK as u32);
+    serve(head, &resumed, true, resumed.first_order + PLAN_CHUNK as u32);
 }
 
 #[entry]

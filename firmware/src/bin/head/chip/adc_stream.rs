@@ -21,6 +21,9 @@ use static_cell::StaticCell;
 
 /// ADC1 external trigger selection for TIM2 TRGO (RM0090, ADC_CR2.EXTSEL).
 const EXTSEL_TIM2_TRGO: u8 = 0b0110;
+/// Core cycles (168 MHz) that outlast one conversion: 84 sampling and 12
+/// conversion cycles of the 21 MHz ADC clock, 4.6 µs, with margin.
+const CONVERSION_CYCLES: u32 = 1_000;
 /// Photodiode input: ADC123_IN1 on PA1.
 const CHANNEL: usize = 1;
 
@@ -106,6 +109,21 @@ impl AdcStream for TimedAdc {
         self.chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::PwmMode1);
         self.chop.enable_channel(Channel::Ch1, true);
         self.chop.start();
+        // A code left in the data register, or an overrun, would be the first
+        // thing the DMA moves when it resumes, and would open this
+        // measurement with a code of the last one, one sample out of phase
+        // with the chop: read it out, clear the flags, re-arm the ADC's DMA
+        // requests (an overrun stops them), then resynchronise the ring to
+        // where the DMA writes next.
+        let adc = pac::ADC1;
+        let _ = adc.dr().read();
+        adc.sr().modify(|w| {
+            w.set_ovr(false);
+            w.set_eoc(false);
+            w.set_strt(false);
+        });
+        adc.cr2().modify(|w| w.set_dma(false));
+        adc.cr2().modify(|w| w.set_dma(true));
         self.ring.clear();
         self.ring.start();
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::RISING_EDGE));
@@ -116,6 +134,10 @@ impl AdcStream for TimedAdc {
     fn stop(&mut self) {
         self.sample_clock.stop();
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::DISABLED));
+        // A conversion already triggered ends 96 ADC clocks (4.6 µs) later;
+        // its transfer lands while the stream still runs rather than waiting
+        // in the data register for the next measurement.
+        cortex_m::asm::delay(CONVERSION_CYCLES);
         // Chop output driven low (forced inactive, the channel left enabled):
         // a disabled channel would leave the pin floating, and the laser's
         // modulation input must see dark between measurements.

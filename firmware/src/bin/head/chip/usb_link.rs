@@ -92,9 +92,18 @@ impl embassy_usb::Handler for BusWatch {
         DISCONNECTED.signal(());
     }
 
+    /// A suspend ends the session (the head goes safe); a resume without a
+    /// bus reset (the host woke, the device still configured and its port
+    /// still open) starts the next one: nothing else would, `rx_task` never
+    /// having left its session, and the head would stay silent until
+    /// replugged. What was queued belongs to the session that ended.
     fn suspended(&mut self, suspended: bool) {
         if suspended {
             DISCONNECTED.signal(());
+        } else {
+            RX.clear();
+            TX.clear();
+            CONNECTED.signal(());
         }
     }
 
