@@ -23,6 +23,11 @@
 //! - `resume_instructions_max` (≤ 1 000 000): a scan continued near its end.
 //! - `await_free_instructions_max` (≤ 100 000): the longest poll of the serve
 //!   loop during a served Belcour-span scan with a sanity model and a resume.
+//! - `boot_instructions`, `boot_safe_pins`: the unmodified `gonio-head` image
+//!   run from reset to the executor's first idle wait, the registers it polls
+//!   answering as the reference manual says (`emulate.py boot`); the laser
+//!   enable and STEP driven low and the drivers' EN driven high there. Not
+//!   reaching it, or another pin state, fails the run (and `.ci/run`).
 //! - `step_rate_hz_3axes_at_50pct_cpu` (≥ 50 000): per-axis step rate that
 //!   three axes sustain on half the CPU, from the mean handler cost.
 //! - `await_free_stack_bytes_max`: the stack the serve loop's deepest poll
@@ -51,14 +56,16 @@ fn main() -> Result<()> {
             "gonio-firmware",
             "--bin",
             "gonio-cost",
+            "--bin",
+            "gonio-head",
             "--target",
             TARGET,
         ])
         .current_dir(&root)
         .status()
-        .context("building gonio-cost")?;
+        .context("building gonio-cost and gonio-head")?;
     if !built.success() {
-        bail!("gonio-cost did not build for {TARGET}");
+        bail!("gonio-cost and gonio-head did not build for {TARGET}");
     }
     let target_dir = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
     let elf = target_dir.join(TARGET).join("release").join("gonio-cost");
@@ -72,6 +79,18 @@ fn main() -> Result<()> {
         bail!("emulation failed: {}", String::from_utf8_lossy(&out.stderr));
     }
     let run: Value = serde_json::from_slice(&out.stdout).context("reading the emulator's figures")?;
+    // The unmodified image, from reset to the executor's first idle wait.
+    let image = target_dir.join(TARGET).join("release").join("gonio-head");
+    let booted = Command::new("python3")
+        .arg(root.join("tests/chip/emulate.py"))
+        .arg("boot")
+        .arg(&image)
+        .output()
+        .context("booting gonio-head on the emulator")?;
+    if !booted.status.success() {
+        bail!("the image did not boot: {}", String::from_utf8_lossy(&booted.stderr));
+    }
+    let boot: Value = serde_json::from_slice(&booted.stdout).context("reading the boot's figures")?;
     let p = &run["probes"];
     let max = |name: &str| p[name]["max"].as_u64().with_context(|| format!("no figure for {name}"));
     let mean = |name: &str| -> Result<f64> {
@@ -114,8 +133,9 @@ fn main() -> Result<()> {
         "await_free_stack_bytes_max": p["await_free"]["stack_max"],
         "probe_stack_bytes_max": run["stack_bytes_max"],
         "step_rate_hz_3axes_at_50pct_cpu": step_rate.round(),
-        "boot_instructions": Value::Null,
-        "boot_safe_pins": Value::Null,
+        "boot_instructions": boot["boot_instructions"],
+        "boot_safe_pins": boot["boot_safe_pins"],
+        "boot_pins": boot["pins"],
         "bars": {
             "step_event_instructions_max": 250,
             "resume_instructions_max": 1_000_000,
@@ -130,6 +150,9 @@ fn main() -> Result<()> {
         },
     });
     println!("{figures}");
+    if boot["boot_safe_pins"] != Value::Bool(true) {
+        bail!("the image does not reach its idle wait in the safe state: {boot}");
+    }
     // motion-bench takes its interrupt cost from here.
     std::fs::write(target_dir.join("chip-bench.json"), figures.to_string()).context("writing target/chip-bench.json")?;
     Ok(())
