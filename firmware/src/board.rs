@@ -77,6 +77,9 @@ impl HeadConfig {
     }
 }
 
+/// Core clock of the reference board (Hz): the PLL's 168 MHz.
+pub const CPU_HZ: f64 = 168e6;
+
 /// 200-step motors at 16 microsteps: rotation stage on a 90:1 worm (800 µsteps/°),
 /// cradle on a 180:1 worm (1600 µsteps/°), arm on a 45:1 reduction (400 µsteps/°).
 pub const REFERENCE: HeadConfig = HeadConfig {

@@ -16,7 +16,11 @@
 
 use gonio_firmware::board::HeadConfig;
 use gonio_firmware::kinematics;
-use gonio_firmware::motion::{move_time, target_steps};
+use gonio_firmware::motion::blocks::plan_s;
+use gonio_firmware::motion::{move_blocks, move_time, target_steps};
+
+/// The step timer's tick rate on the reference board (chip/step_timer.rs).
+const STEP_TICK_HZ: u32 = 1_000_000;
 use gonio_shared::ScanSpec;
 
 /// Points of one incidence angle planned nearest-neighbour.
@@ -105,6 +109,8 @@ impl Planner {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct ScanTime {
     pub moves_s: f64,
+    /// The chip's planning of the moves ([`gonio_firmware::motion::blocks::plan_s`]).
+    pub planning_s: f64,
     pub settle_s: f64,
     pub integration_s: f64,
     pub measured: u32,
@@ -113,7 +119,7 @@ pub struct ScanTime {
 
 impl ScanTime {
     pub fn total_s(&self) -> f64 {
-        self.moves_s + self.settle_s + self.integration_s
+        self.moves_s + self.planning_s + self.settle_s + self.integration_s
     }
 }
 
@@ -134,7 +140,9 @@ pub fn scan_time(
         match kinematics::inverse(cfg, &g) {
             Ok(axes) => {
                 let target = target_steps(cfg, &axes);
-                t.moves_s += move_time(cfg, [0, 1, 2].map(|i| target[i] - at[i]));
+                let delta = [0, 1, 2].map(|i| target[i] - at[i]);
+                t.moves_s += move_time(cfg, delta);
+                t.planning_s += plan_s(move_blocks(cfg, delta, STEP_TICK_HZ));
                 at = target;
                 t.settle_s += settle_s;
                 t.integration_s += integration_s;

@@ -5,7 +5,7 @@
 
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::hw::StepBlock;
-use gonio_firmware::motion::blocks::trapezoid_blocks;
+use gonio_firmware::motion::blocks::{self, trapezoid_blocks};
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::{motion, units};
 use gonio_host::sim::{Cue, FrameHead, SimConfig};
@@ -308,6 +308,36 @@ fn the_serve_loop_shows_it_is_alive_every_quarter_second() {
         .fold(0.0, f64::max);
     let gap = w.alive_gap_max_s;
     assert!(gap > 0.2 && gap <= stop_s + 0.01, "longest time without a sign of life: {gap} s");
+}
+
+/// A move's first step waits for the chip to have planned it: the simulated
+/// head charges what `chip-bench` measures per block (the duration estimate
+/// counts the same), so it cannot hide a cost the chip pays.
+#[test]
+fn a_move_starts_once_the_chip_has_planned_it() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let before = head.world().steps;
+    let t = head.now();
+    head.world_mut().step_log = Some(Vec::new());
+    let sent = head.serve_timed([(t, Cue::Frame(send::<MoveEndpoint>(&far_move())))], t + 60.0);
+    assert!(matches!(replies::<MoveEndpoint>(&sent).first(), Some(Ok(_))));
+    let steps = head.world_mut().step_log.take().unwrap_or_default();
+    let first = steps.iter().map(|(_, at)| *at).fold(f64::INFINITY, f64::min);
+    let delta = [0, 1, 2].map(|i| head.world().steps[i] - before[i]);
+    let planning = blocks::plan_s(motion::move_blocks(&REFERENCE, delta, 1_000_000));
+    assert!(planning > 5e-4, "{planning} s to plan a long move");
+    // The first step of the profile itself, on the axis that steps first.
+    let profile = (0..3)
+        .filter(|&i| delta[i] != 0)
+        .map(|i| motion::trapezoid(&REFERENCE.axes[i], delta[i].unsigned_abs(), REFERENCE.axes[i].max_speed_dps).step_time(1))
+        .fold(f64::INFINITY, f64::min);
+    let lag = first - t - profile;
+    // Planning, then the driver's DIR setup time (5 µs) and the timer's tick.
+    assert!(
+        lag >= planning && lag <= planning + 1e-4,
+        "the first step comes {lag} s late; planning takes {planning} s"
+    );
 }
 
 /// `safety-bench`'s bars, on a few trials of every trigger and activity

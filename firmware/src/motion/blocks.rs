@@ -30,6 +30,19 @@ const TOLERANCE_TICKS: f32 = 0.45;
 const BOUND_MARGIN: f32 = 0.98;
 const Q32: f64 = 4_294_967_296.0;
 
+/// What the chip spends planning one block (instructions): `chip-bench`'s
+/// `move_block_instructions_max` (4 805 measured), rounded up; chip-bench
+/// fails should it ever measure more. The simulated head waits this long per
+/// block before a move starts, and the host's duration estimate counts it, so
+/// neither hides a cost the chip pays.
+pub const BLOCK_PLAN_INSTRUCTIONS: u32 = 5_000;
+
+/// Time (s) the chip spends planning `blocks` blocks, one instruction a
+/// cycle at [`crate::board::CPU_HZ`].
+pub fn plan_s(blocks: usize) -> f64 {
+    blocks as f64 * BLOCK_PLAN_INSTRUCTIONS as f64 / crate::board::CPU_HZ
+}
+
 /// Emitted tick of the `k`-th step (1-based) of a block starting at `start`
 /// (Q32 ticks): the executor's exact integer arithmetic.
 pub fn block_step_q32(start: u64, b: &StepBlock, k: u32) -> u64 {

@@ -77,6 +77,17 @@ pub fn move_time(cfg: &HeadConfig, delta: [i32; 3]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Blocks the move of every axis by `delta` microsteps at cruise speed takes
+/// on a `tick_hz` step timer (what the chip plans before it starts).
+pub fn move_blocks(cfg: &HeadConfig, delta: [i32; 3], tick_hz: u32) -> usize {
+    (0..3)
+        .map(|i| {
+            let t = trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), cfg.axes[i].max_speed_dps);
+            blocks::TrapezoidBlocks::new(&t, tick_hz).count()
+        })
+        .sum()
+}
+
 /// Sets DIR and enables the drivers of the axes about to move, then waits the
 /// driver's DIR setup time once for all of them.
 async fn prepare<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, dirs: [Option<bool>; 3]) -> Result<(), Fault> {

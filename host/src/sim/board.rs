@@ -9,6 +9,7 @@ use super::faults::HardwareFault;
 use super::world::World;
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::hw::{AdcStream, Board, ChopTiming, Clock, Hardware, Overrun, QueueFull, StepBlock, StepTimer};
+use gonio_firmware::motion::blocks;
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::units;
 use gonio_shared::Axis;
@@ -180,6 +181,9 @@ pub struct SimSteps {
     next: Option<u64>,
     /// This move never ends (an injected stall).
     stalled: bool,
+    /// Blocks queued for the next move: the chip plans them before it
+    /// starts ([`blocks::plan_s`]).
+    queued: usize,
 }
 
 impl SimSteps {
@@ -192,6 +196,7 @@ impl StepTimer for SimSteps {
     const TICK_HZ: u32 = 1_000_000;
 
     fn push(&mut self, axis: Axis, block: StepBlock) -> Result<(), QueueFull> {
+        self.queued += 1;
         self.exec.push(axis, block)
     }
 
@@ -204,7 +209,8 @@ impl StepTimer for SimSteps {
             w.moves_with_conversions += 1;
         }
         self.stalled = w.faults.take_stall(w.moves);
-        self.origin_s = w.t_s;
+        // The first step waits for the chip to have planned the move.
+        self.origin_s = w.t_s + blocks::plan_s(std::mem::take(&mut self.queued));
         drop(w);
         self.next = self.exec.start();
     }
@@ -304,6 +310,7 @@ pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
             origin_s: 0.0,
             next: None,
             stalled: false,
+            queued: 0,
         },
         delay: SimDelay { world: world.clone() },
         clock: SimClock { world: world.clone() },

@@ -19,7 +19,10 @@
 //! - `sanity_eval_instructions_max`: the fixed-point model per sample.
 //! - `plan_next_instructions_max`: the next point of a scan (queue, geometry,
 //!   inverse kinematics), on the Belcour grid and a 4 096-point incidence.
-//! - `move_plan_instructions`: the blocks of a three-axis move.
+//! - `move_plan_instructions`: the blocks of a three-axis move;
+//!   `move_block_instructions_max`: one block, which the simulated head and
+//!   the duration estimate charge as `BLOCK_PLAN_INSTRUCTIONS` (the run fails
+//!   should the chip pay more).
 //! - `resume_instructions_max` (≤ 1 000 000): a scan continued near its end.
 //! - `await_free_instructions_max` (≤ 100 000): the longest poll of the serve
 //!   loop during a served Belcour-span scan with a sanity model and a resume.
@@ -35,12 +38,13 @@
 //!   `probe_stack_bytes_max`: the probe image's own deepest point.
 
 use anyhow::{bail, Context, Result};
+use gonio_firmware::board::CPU_HZ;
+use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
 use serde_json::{json, Value};
 use std::path::PathBuf;
 use std::process::Command;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
-const CPU_HZ: f64 = 168e6;
 /// Exception entry and exit of the Cortex-M4 (cycles, tail-chaining aside).
 const EXCEPTION_CYCLES: f64 = 24.0;
 
@@ -150,6 +154,11 @@ fn main() -> Result<()> {
         },
     });
     println!("{figures}");
+    // The simulated head and the duration estimate charge this per block.
+    let block = max("move_block")?;
+    if block > BLOCK_PLAN_INSTRUCTIONS as u64 {
+        bail!("a block costs {block} instructions to plan, more than the {BLOCK_PLAN_INSTRUCTIONS} the simulated head and the estimate charge");
+    }
     if boot["boot_safe_pins"] != Value::Bool(true) {
         bail!("the image does not reach its idle wait in the safe state: {boot}");
     }
