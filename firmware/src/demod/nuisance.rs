@@ -64,10 +64,19 @@ pub struct Design {
     /// Per-period rotation (cos, sin) of each tone.
     step: [(f64, f64); MAX_TONES],
     /// Factors of the Gram matrix of `planned` periods, for all regressors
-    /// and for all but the ramp (`None`: not positive definite).
+    /// and for all but the ramp (`None`: not positive definite), when
+    /// `factored`.
     full: Option<Factor>,
     amp: Option<Factor>,
+    factored: bool,
 }
+
+/// Longest integration (periods) whose Gram matrix is factored up front: its
+/// accumulation costs some 20 000 instructions a period on the chip, so 256
+/// periods are 30 ms once per settings; a longer integration (up to 50 000
+/// periods, seconds of work, past the watchdog) accumulates its own Gram
+/// matrix over its periods, as every integration used to.
+const PRECOMPUTE_MAX_PERIODS: u32 = 256;
 
 impl Design {
     /// For `planned` periods at `chop_hz`. Tones that alias to (nearly) DC or
@@ -100,10 +109,14 @@ impl Design {
             step,
             full: None,
             amp: None,
+            factored: false,
         };
-        let gram = d.gram(d.planned);
-        d.full = factor(&gram, Columns::all(d.n).as_slice());
-        d.amp = (d.n > 2).then(|| factor(&gram, Columns::without_ramp(d.n).as_slice())).flatten();
+        if d.planned <= PRECOMPUTE_MAX_PERIODS {
+            let gram = d.gram(d.planned);
+            d.full = factor(&gram, Columns::all(d.n).as_slice());
+            d.amp = (d.n > 2).then(|| factor(&gram, Columns::without_ramp(d.n).as_slice())).flatten();
+            d.factored = true;
+        }
         d
     }
 
@@ -145,12 +158,13 @@ impl Design {
     }
 
     /// The factor for `cols` after `periods` periods: the cached one for the
-    /// planned count, else computed (an integration cut short).
-    fn factor(&self, periods: u32, cols: Columns, cached: &Option<Factor>) -> Option<Factor> {
-        if periods == self.planned {
-            cached.clone()
-        } else {
-            factor(&self.gram(periods), cols.as_slice())
+    /// planned count, else from the Gram matrix the integration accumulated,
+    /// else computed (an integration cut short).
+    fn factor(&self, periods: u32, cols: Columns, cached: &Option<Factor>, gram: Option<&Mat>) -> Option<Factor> {
+        match gram {
+            _ if self.factored && periods == self.planned => cached.clone(),
+            Some(g) => factor(g, cols.as_slice()),
+            None => factor(&self.gram(periods), cols.as_slice()),
         }
     }
 }
@@ -158,6 +172,8 @@ impl Design {
 /// Per-period regression of a code sum and of the amplitude on the slow terms.
 pub struct Nuisance {
     design: Design,
+    /// The Gram matrix, accumulated when the design has no factors.
+    gram: Option<Mat>,
     periods: u32,
     /// The tones' current phasors.
     phasor: [(f64, f64); MAX_TONES],
@@ -177,6 +193,7 @@ impl Nuisance {
     /// On a design computed before.
     pub fn with(design: Design) -> Self {
         Nuisance {
+            gram: (!design.factored).then_some([[0.0; MAX_REG]; MAX_REG]),
             design,
             periods: 0,
             phasor: [(1.0, 0.0); MAX_TONES],
@@ -192,6 +209,13 @@ impl Nuisance {
         let d = &self.design;
         let g = d.regressors(self.periods, &self.phasor);
         let a = amplitude - *self.amp0.get_or_insert(amplitude);
+        if let Some(gram) = self.gram.as_mut() {
+            for (row, gr) in gram.iter_mut().zip(g).take(d.n) {
+                for (x, gc) in row.iter_mut().zip(g).take(d.n) {
+                    *x += gr * gc;
+                }
+            }
+        }
         for ((bs, ba), gr) in self.b_sum.iter_mut().zip(self.b_amp.iter_mut()).zip(g).take(d.n) {
             *bs += gr * sum;
             *ba += gr * a;
@@ -208,7 +232,7 @@ impl Nuisance {
         if (self.periods as usize) < d.n + 2 {
             return 0.0;
         }
-        match d.factor(self.periods, Columns::all(d.n), &d.full) {
+        match d.factor(self.periods, Columns::all(d.n), &d.full, self.gram.as_ref()) {
             Some(f) => f.solve(&self.b_sum)[RAMP] / d.planned as f64,
             None => 0.0,
         }
@@ -236,7 +260,7 @@ impl Nuisance {
         }
         let cols = Columns::without_ramp(d.n);
         let b: [f64; MAX_REG] = core::array::from_fn(|j| if j < m { self.b_amp[cols.idx[j]] } else { 0.0 });
-        match d.factor(self.periods, cols, &d.amp) {
+        match d.factor(self.periods, cols, &d.amp, self.gram.as_ref()) {
             Some(f) => {
                 let x = f.solve(&b);
                 let fitted: f64 = (0..m).map(|j| x[j] * b[j]).sum();
@@ -314,6 +338,32 @@ mod tests {
                 900.0 * libm::sin(2.0 * core::f64::consts::PI * 50.0 * t + 0.3) + 90.0 * libm::cos(2.0 * core::f64::consts::PI * 150.0 * t);
             n.push(1000.0 + 3.0 * p as f64 + mains, 7.0 + 0.5 * mains);
         }
+        assert!((n.sum_slope_per_period() - 3.0).abs() < 1e-9, "{}", n.sum_slope_per_period());
+        let (a, se) = n.amplitude();
+        assert!((a - 7.0).abs() < 1e-9 && se < 1e-6, "{a} {se}");
+    }
+
+    #[test]
+    fn a_long_integration_accumulates_its_own_gram_matrix() {
+        // Past the up-front limit the design has no factors: the integration
+        // accumulates its Gram matrix and factors it, as a design would.
+        let (k, fc) = (PRECOMPUTE_MAX_PERIODS + 1, 230.0);
+        let design = Design::new(k, fc);
+        assert!(!design.factored);
+        let mut n = Nuisance::with(design);
+        let mut reference = n.design.gram(0);
+        let mut phasor = [(1.0, 0.0); MAX_TONES];
+        for p in 0..k {
+            let g = n.design.regressors(p, &phasor);
+            n.design.rotate(&mut phasor);
+            for r in 0..n.design.n {
+                for c in 0..n.design.n {
+                    reference[r][c] += g[r] * g[c];
+                }
+            }
+            n.push(1000.0 + 3.0 * p as f64, 7.0);
+        }
+        assert_eq!(n.gram, Some(reference));
         assert!((n.sum_slope_per_period() - 3.0).abs() < 1e-9, "{}", n.sum_slope_per_period());
         let (a, se) = n.amplitude();
         assert!((a - 7.0).abs() < 1e-9 && se < 1e-6, "{a} {se}");

@@ -196,8 +196,9 @@ impl StepTimer for SimSteps {
     const TICK_HZ: u32 = 1_000_000;
 
     fn push(&mut self, axis: Axis, block: StepBlock) -> Result<(), QueueFull> {
-        self.queued += 1;
-        self.exec.push(axis, block)
+        self.exec.push(axis, block)?;
+        self.queued += usize::from(block.count > 0);
+        Ok(())
     }
 
     fn start(&mut self) {
@@ -257,6 +258,7 @@ impl StepTimer for SimSteps {
 
     fn clear(&mut self) {
         self.exec.clear();
+        self.queued = 0;
         self.next = None;
         self.stalled = false;
     }

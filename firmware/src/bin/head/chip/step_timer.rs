@@ -115,8 +115,10 @@ impl StepTimer for StepTimer5 {
     }
 
     fn start(&mut self) {
-        DONE.reset();
         let done = Self::with(|s| {
+            // In the critical section: an interrupt of the last move cannot
+            // signal between this reset and the new move's compare.
+            DONE.reset();
             // Tick 0 a little ahead, so the first step is not already late.
             s.origin = Tim5Compare.count().wrapping_add(10);
             let first = s.exec.start();
@@ -147,7 +149,10 @@ impl StepTimer for StepTimer5 {
     }
 
     fn clear(&mut self) {
-        Tim5Compare.enable_interrupt(false);
-        Self::with(|s| s.exec.clear());
+        Self::with(|s| {
+            Tim5Compare.enable_interrupt(false);
+            Tim5Compare.clear_match();
+            s.exec.clear();
+        });
     }
 }
