@@ -170,24 +170,33 @@ impl<B: Board> Head<B> {
     /// At rest: waits for a request, the E-STOP or an idle deadline.
     async fn rest<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
         let armed = self.mode != Mode::Faulted;
-        match select(
-            sentry.until(alive_by(sentry, self.rest_deadline()), armed),
-            link.recv(&mut inbox.rx),
-        )
-        .await
-        {
+        if self.wait(link, sentry, inbox, self.rest_deadline(), armed).await? {
+            self.rest_expired();
+        }
+        Ok(())
+    }
+
+    /// Waits for a request (and serves it), the E-STOP (when `armed`) or
+    /// `deadline`, waking at least every [`ALIVE_EVERY_US`]; true when it
+    /// woke for the time (the deadline, or only to show it is alive).
+    async fn wait<L: Link, S: Sentry>(
+        &mut self,
+        link: &mut L,
+        sentry: &mut S,
+        inbox: &mut Inbox,
+        deadline: Option<u64>,
+        armed: bool,
+    ) -> Result<bool, LinkError> {
+        match select(sentry.until(alive_by(sentry, deadline), armed), link.recv(&mut inbox.rx)).await {
             Either::First(Wake::EStop) => {
                 let _ = self.tripped(Trip::EStop).await;
-                Ok(())
+                Ok(false)
             }
-            Either::First(Wake::Deadline) => {
-                self.rest_expired();
-                Ok(())
-            }
+            Either::First(Wake::Deadline) => Ok(true),
             Either::Second(Ok(n)) => {
                 self.heard_host(sentry);
                 let f = inbox.frame(n);
-                self.handle(&f, link, sentry, inbox).await
+                self.handle(&f, link, sentry, inbox).await.map(|()| false)
             }
             Either::Second(Err(e)) => Err(e),
         }
@@ -443,24 +452,7 @@ impl<B: Board> Head<B> {
     /// chunk (or any request), the E-STOP, or the host's silence (which the
     /// next step sees and holds the scan for).
     async fn starved<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
-        match select(
-            sentry.until(alive_by(sentry, self.silence_deadline()), true),
-            link.recv(&mut inbox.rx),
-        )
-        .await
-        {
-            Either::First(Wake::EStop) => {
-                let _ = self.tripped(Trip::EStop).await;
-                Ok(())
-            }
-            Either::First(Wake::Deadline) => Ok(()),
-            Either::Second(Ok(n)) => {
-                self.heard_host(sentry);
-                let f = inbox.frame(n);
-                self.handle(&f, link, sentry, inbox).await
-            }
-            Either::Second(Err(e)) => Err(e),
-        }
+        self.wait(link, sentry, inbox, self.silence_deadline(), true).await.map(drop)
     }
 
     fn advance(&mut self, count: impl FnOnce(&mut crate::head::ScanRun)) {

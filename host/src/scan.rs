@@ -418,10 +418,10 @@ pub async fn feed(head: &Head, run: u32, order: &[u32], mut from: u32) -> Result
             indices: rest.iter().copied().take(PLAN_CHUNK).collect(),
         };
         match head.plan(&chunk).await {
+            // A chunk taken in part filled the queue: room is then 0.
             Ok(q) => {
-                let took = q.next_order > from && q.next_order < from + chunk.indices.len() as u32;
                 from = q.next_order;
-                if q.room == 0 || took {
+                if q.room == 0 {
                     break;
                 }
             }

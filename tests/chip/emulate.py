@@ -97,8 +97,9 @@ class Machine:
         self.block_sizes = {}
         # The deepest the stack went (its lowest address).
         self.lowest_sp = 0xFFFF_FFFF
-        # The lowest since the innermost open stretch began.
-        self.stretch_lowest = 0xFFFF_FFFF
+        # Per open stretch, innermost last: its start and its lowest SP.
+        self.open_start = []
+        self.open_lowest = []
         # Instructions per block address while profiling (None: not profiling).
         self.profile = None
         self.uc.hook_add(UC_HOOK_BLOCK, self._block)
@@ -110,10 +111,10 @@ class Machine:
             self.block_sizes[(address, size)] = n
         self.executed += n
         sp = uc.reg_read(arm.UC_ARM_REG_SP)
-        if sp < self.stretch_lowest:
-            self.stretch_lowest = sp
-            if sp < self.lowest_sp:
-                self.lowest_sp = sp
+        if sp < self.lowest_sp:
+            self.lowest_sp = sp
+        if self.open_lowest and sp < self.open_lowest[-1]:
+            self.open_lowest[-1] = sp
         if self.profile is not None:
             self.profile[address] = self.profile.get(address, 0) + n
 
@@ -163,16 +164,19 @@ def costs(path, profile_name=None):
             return
         if r2 == BEGIN:
             open_at[name] = m.executed
-            # The stack a stretch uses: from its start to its deepest point.
-            m.lowest_sp = min(m.lowest_sp, uc.reg_read(arm.UC_ARM_REG_SP))
-            state.setdefault("depth", {})[name] = (uc.reg_read(arm.UC_ARM_REG_SP), m.lowest_sp)
-            m.stretch_lowest = uc.reg_read(arm.UC_ARM_REG_SP)
+            # The stack a stretch uses: from its start to its deepest point
+            # (stretches nest: an inner one's depth is its outer one's too).
+            sp = uc.reg_read(arm.UC_ARM_REG_SP)
+            m.open_start.append(sp)
+            m.open_lowest.append(sp)
             if name == profile_name:
                 m.profile = {}
         else:
             n = m.executed - open_at.pop(name)
-            start_sp, _ = state["depth"][name]
-            stack = start_sp - m.stretch_lowest
+            start, lowest = m.open_start.pop(), m.open_lowest.pop()
+            if m.open_lowest:
+                m.open_lowest[-1] = min(m.open_lowest[-1], lowest)
+            stack = start - lowest
             if name == profile_name:
                 if n > state.get("profiled", 0):
                     state["profiled"] = n

@@ -3,6 +3,7 @@
 //! the simulator, one scan read back, the host model of the step-timer
 //! interrupt, and the chopped signal of the lock-in benchmark.
 
+pub mod chip_costs;
 pub mod chop_signal;
 pub mod doubles;
 pub mod frames;

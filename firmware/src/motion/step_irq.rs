@@ -84,6 +84,20 @@ mod tests {
         enabled: bool,
     }
 
+    impl Counter {
+        /// At `now`, advancing `per_read` ticks per read, nothing armed.
+        fn at(now: u32, per_read: u32) -> Self {
+            Counter {
+                now: core::cell::Cell::new(now),
+                per_read,
+                compare: 0,
+                reachable: false,
+                pending: false,
+                enabled: false,
+            }
+        }
+    }
+
     impl CompareTimer for Counter {
         fn count(&self) -> u32 {
             let t = self.now.get();
@@ -159,14 +173,7 @@ mod tests {
         // 3 ticks, so the pulse ends are passed before their compare lands:
         // without the re-read the move would wait for the counter to wrap.
         let mut exec = executor(50, 7);
-        let mut timer = Counter {
-            now: core::cell::Cell::new(1000),
-            per_read: 3,
-            compare: 0,
-            reachable: false,
-            pending: false,
-            enabled: false,
-        };
+        let mut timer = Counter::at(1000, 3);
         assert_eq!(run(&mut exec, &mut timer, 1000), Some([50, 0, 0]));
         assert!(!timer.enabled, "the interrupt is off after the move");
     }
@@ -175,12 +182,8 @@ mod tests {
     fn a_stale_match_is_cleared_before_the_interrupt_is_enabled() {
         let mut exec = executor(5, 100);
         let mut timer = Counter {
-            now: core::cell::Cell::new(0),
-            per_read: 0,
-            compare: 0,
-            reachable: false,
             pending: true,
-            enabled: false,
+            ..Counter::at(0, 0)
         };
         let first = exec.start();
         assert_eq!(schedule(&mut exec, &mut timer, 0, first), None);
@@ -190,14 +193,7 @@ mod tests {
 
     #[test]
     fn the_origin_is_read_signed() {
-        let timer = Counter {
-            now: core::cell::Cell::new(u32::MAX - 4),
-            per_read: 0,
-            compare: 0,
-            reachable: false,
-            pending: false,
-            enabled: false,
-        };
+        let timer = Counter::at(u32::MAX - 4, 0);
         assert_eq!(since(&timer, 5), 0, "10 ticks before the origin");
         assert_eq!(since(&timer, u32::MAX - 10), 6);
     }

@@ -15,7 +15,10 @@
 //!   worst over a three-axis move at the axes' cruise speeds.
 //! - `step_isr_instructions_max`: the TIM5 handler's logic (critical
 //!   section, counter, compare), braking included.
-//! - `demod_period_instructions`: one chop period of M = 64 codes.
+//! - `demod_period_instructions`: one chop period of M = 64 codes
+//!   (`_long_integration`: past 256 periods, which accumulates its own Gram
+//!   matrix); `design_instructions`: the regression's design a configure
+//!   computes (one stretch of the serve loop, at configure only).
 //! - `sanity_eval_instructions_max`: the fixed-point model per sample.
 //! - `plan_next_instructions_max`: the next point of a scan (queue, geometry,
 //!   inverse kinematics), on the Belcour grid and a 4 096-point incidence.
@@ -40,13 +43,30 @@
 use anyhow::{bail, Context, Result};
 use gonio_firmware::board::CPU_HZ;
 use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
+use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
 use serde_json::{json, Value};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 const TARGET: &str = "thumbv7em-none-eabihf";
-/// Exception entry and exit of the Cortex-M4 (cycles, tail-chaining aside).
-const EXCEPTION_CYCLES: f64 = 24.0;
+
+/// Runs `tests/chip/emulate.py MODE IMAGE` and reads the JSON it prints.
+fn emulate(root: &Path, mode: &str, image: &Path) -> Result<Value> {
+    let out = Command::new("python3")
+        .arg(root.join("tests/chip/emulate.py"))
+        .arg(mode)
+        .arg(image)
+        .output()
+        .with_context(|| format!("running python3 tests/chip/emulate.py {mode} (needs `pip install unicorn`)"))?;
+    if !out.status.success() {
+        bail!(
+            "emulate.py {mode} {} failed: {}",
+            image.display(),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    serde_json::from_slice(&out.stdout).with_context(|| format!("reading what emulate.py {mode} printed"))
+}
 
 fn main() -> Result<()> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
@@ -71,30 +91,10 @@ fn main() -> Result<()> {
     if !built.success() {
         bail!("gonio-cost and gonio-head did not build for {TARGET}");
     }
-    let target_dir = std::env::var_os("CARGO_TARGET_DIR").map_or_else(|| root.join("target"), PathBuf::from);
-    let elf = target_dir.join(TARGET).join("release").join("gonio-cost");
-    let out = Command::new("python3")
-        .arg(root.join("tests/chip/emulate.py"))
-        .arg("costs")
-        .arg(&elf)
-        .output()
-        .context("running python3 tests/chip/emulate.py (needs `pip install unicorn`)")?;
-    if !out.status.success() {
-        bail!("emulation failed: {}", String::from_utf8_lossy(&out.stderr));
-    }
-    let run: Value = serde_json::from_slice(&out.stdout).context("reading the emulator's figures")?;
+    let images = chip_costs::target_dir().join(TARGET).join("release");
+    let run = emulate(&root, "costs", &images.join("gonio-cost"))?;
     // The unmodified image, from reset to the executor's first idle wait.
-    let image = target_dir.join(TARGET).join("release").join("gonio-head");
-    let booted = Command::new("python3")
-        .arg(root.join("tests/chip/emulate.py"))
-        .arg("boot")
-        .arg(&image)
-        .output()
-        .context("booting gonio-head on the emulator")?;
-    if !booted.status.success() {
-        bail!("the image did not boot: {}", String::from_utf8_lossy(&booted.stderr));
-    }
-    let boot: Value = serde_json::from_slice(&booted.stdout).context("reading the boot's figures")?;
+    let boot = emulate(&root, "boot", &images.join("gonio-head"))?;
     let p = &run["probes"];
     let max = |name: &str| p[name]["max"].as_u64().with_context(|| format!("no figure for {name}"));
     let mean = |name: &str| -> Result<f64> {
@@ -108,7 +108,7 @@ fn main() -> Result<()> {
     let events = p["step_isr"]["count"].as_f64().context("step_isr count")?;
     let steps = run["values"]["step_isr"].as_f64().context("steps of the probe's move")?;
     let events_per_step = events / steps;
-    let cycles_per_step = events_per_step * (mean("step_isr")? + EXCEPTION_CYCLES);
+    let cycles_per_step = events_per_step * (mean("step_isr")? + EXCEPTION_CYCLES as f64);
     let step_rate = 0.5 * CPU_HZ / (3.0 * cycles_per_step);
     let await_free = max("await_free")?;
     let resume = max("resume")?;
@@ -121,6 +121,11 @@ fn main() -> Result<()> {
         "step_isr_instructions_mean": mean("step_isr")?,
         "step_isr_events_per_step": events_per_step,
         "demod_period_instructions": max("demod_square")?.max(max("demod_sine")?),
+        "demod_period_instructions_long_integration": max("demod_long")?,
+        "design_instructions": {
+            "23 periods": max("design_23_periods")?,
+            "256 periods": max("design_256_periods")?,
+        },
         "sanity_eval_instructions_max": {
             "lambert": max("sanity_lambert")?,
             "retro-phong": max("sanity_retro_phong")?,
@@ -163,6 +168,6 @@ fn main() -> Result<()> {
         bail!("the image does not reach its idle wait in the safe state: {boot}");
     }
     // motion-bench takes its interrupt cost from here.
-    std::fs::write(target_dir.join("chip-bench.json"), figures.to_string()).context("writing target/chip-bench.json")?;
+    std::fs::write(chip_costs::report_path(), figures.to_string()).context("writing target/chip-bench.json")?;
     Ok(())
 }

@@ -27,22 +27,17 @@ use gonio_firmware::motion::{target_steps, trapezoid, Position, PARK};
 use gonio_firmware::units;
 use gonio_host::scan_order::{scan_time, visit_order};
 use gonio_shared::{Axis, Geometry, ScanSpec};
+use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
 use gonio_tests::step_log::{executor, run, Scope};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use std::time::Instant;
 
 const TICK_HZ: u32 = 1_000_000;
-/// Exception entry and exit of the Cortex-M4 (cycles).
-const EXCEPTION_CYCLES: u64 = 24;
 
 /// The worst step interrupt chip-bench measured, in cycles (see the header).
 fn measured_isr_cycles() -> Option<u64> {
-    let target = std::env::var_os("CARGO_TARGET_DIR").map_or_else(
-        || std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../target"),
-        Into::into,
-    );
-    let text = std::fs::read_to_string(target.join("chip-bench.json")).ok()?;
+    let text = std::fs::read_to_string(chip_costs::report_path()).ok()?;
     let v: serde_json::Value = serde_json::from_str(&text).ok()?;
     Some(v["step_isr_instructions_max"].as_u64()? + EXCEPTION_CYCLES)
 }

@@ -11,6 +11,8 @@ use core::convert::Infallible;
 use core::future::Future;
 use core::pin::Pin as Pinned;
 use core::task::{Context, Poll, Waker};
+// A wait of the hardware: `Pending` once, as the core's own yields.
+use embassy_futures::yield_now as wait;
 use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
 use embedded_hal_async::delay::DelayNs;
 use gonio_firmware::board::REFERENCE;
@@ -45,20 +47,6 @@ pub fn place_near_home(deg: f32) {
     for (i, a) in REFERENCE.axes.iter().enumerate() {
         RIG.steps[i].set(((a.home_deg + deg) * a.steps_per_deg()) as i32);
     }
-}
-
-/// Returns `Pending` once (a wait of the hardware).
-async fn wait() {
-    let mut once = false;
-    core::future::poll_fn(|_| {
-        if once {
-            Poll::Ready(())
-        } else {
-            once = true;
-            Poll::Pending
-        }
-    })
-    .await
 }
 
 pub struct Pin(usize);

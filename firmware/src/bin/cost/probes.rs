@@ -13,7 +13,7 @@ use embassy_stm32 as _;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::check;
-use gonio_firmware::demod::{Integrator, Reference};
+use gonio_firmware::demod::{Design, Integrator, Reference};
 use gonio_firmware::dispatch;
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::kinematics;
@@ -154,6 +154,7 @@ const TICK_HZ: u32 = 1_000_000;
 /// (`step_event`), then the same move again through the interrupt's logic
 /// in a critical section, as TIM5's handler runs it (`step_isr`), braked
 /// half-way (`step_isr_braking`: the brake's f32 steps).
+#[inline(never)]
 fn step_events() {
     let mut exec = queued_move();
     let mut next = exec.start();
@@ -189,6 +190,7 @@ fn step_events() {
 }
 
 /// Inverse kinematics over the reachable Belcour grid's first incidence.
+#[inline(never)]
 fn inverse() {
     let spec = ScanSpec::belcour();
     for i in (0..spec.len() / 3).step_by(7) {
@@ -202,6 +204,7 @@ fn inverse() {
 /// geometry and its stage targets, over the Belcour grid and over a
 /// 4 096-point incidence (`plan_next`); the order is the host's, so the cost
 /// does not grow with the incidence.
+#[inline(never)]
 fn plan_next() {
     let big = ScanSpec {
         theta_i_deg: heapless::Vec::from_slice(&[30.0]).unwrap_or_default(),
@@ -238,6 +241,7 @@ fn abc_retro(back: bool) -> SanityModel {
 }
 
 /// The fixed-point sanity model, per sample, over a spread of geometries.
+#[inline(never)]
 fn sanity() {
     let models: [(&'static str, SanityModel); 4] = [
         ("sanity_lambert", SanityModel::Lambert { kd: 0.8 }),
@@ -271,6 +275,7 @@ fn sanity() {
 
 /// One chop period of M = 64 codes through the integrator (correlation,
 /// extremes, the drift and mains nuisance fit), per reference kind.
+#[inline(never)]
 fn demod() {
     const M: usize = 64;
     let mut codes = [0u16; M];
@@ -278,18 +283,30 @@ fn demod() {
         // A chopped signal with an offset and a little ripple.
         *c = 1800 + if k < M / 2 { 600 } else { 0 } + (k as u16 * 7) % 5;
     }
+    // The regression's design, as a configure computes it: factored up
+    // front for a default integration and for the longest that is.
+    let design = measure("design_23_periods", || Design::new(23, 230.0));
+    black_box(measure("design_256_periods", || Design::new(256, 230.0)));
     for (name, kind) in [("demod_square", Kind::Square), ("demod_sine", Kind::Sine)] {
         let r = Reference::new(kind, M, None);
-        let mut integ = Integrator::new(&r, 23, 230.0);
+        let mut integ = Integrator::with(&r, design.clone());
         for _ in 0..23 {
             measure(name, || integ.push(&codes));
         }
         black_box(integ.estimate());
     }
+    // A longer integration accumulates its own Gram matrix, period by period.
+    let r = Reference::new(Kind::Square, M, None);
+    let mut integ = Integrator::new(&r, 1_000, 230.0);
+    for _ in 0..23 {
+        measure("demod_long", || integ.push(&codes));
+    }
+    black_box(integ.estimate());
 }
 
 /// A request frame as the link hands it over: checked, its key matched and
 /// its body decoded.
+#[inline(never)]
 fn dispatch_frame() {
     let mut buf = [0u8; 64];
     let Some(n) = dispatch::encode(StatusEndpoint::REQ_KEY, VarKeyKind::Key8, VarSeq::Seq2(7), &(), &mut buf) else {
@@ -383,6 +400,7 @@ fn serve(head: &mut Head<board::Rigged>, spec: &ScanSpec, started: bool, mut fed
 /// A Belcour scan served, with a sanity model loaded (the costliest
 /// kind), then a resume near its end: the start of the resumed scan with its
 /// first chunk measured on its own (`resume`), and its points served.
+#[inline(never)]
 fn scan_and_resume() {
     board::place_near_home(3.0);
     let info = HeadInfo {
@@ -437,6 +455,8 @@ fn scan_and_resume() {
     serve(head, &resumed, true, resumed.first_order + PLAN_CHUNK as u32);
 }
 
+// Every probe is out of line (`#[inline(never)]`): inlined here, their
+// locals would share one frame, more than the 64 KiB stack.
 #[entry]
 fn main() -> ! {
     for _ in 0..8 {
