@@ -9,16 +9,25 @@ crate would build the engine's C sources with cmake on every clean machine.
                                print {name: {count, max, min, total}} as JSON,
                                instructions between each pair of marks, less
                                the marks' own cost (the `overhead` bracket).
+    emulate.py costs IMAGE NAME  the same, and on stderr the functions the
+                               longest stretch called NAME ran in.
+    emulate.py boot IMAGE      run `gonio-head` from reset to its first idle
+                               wait; print its instruction count and pins.
 
-Instructions are counted per translated block: the first time a block runs,
-its Thumb-2 instructions are decoded for their length (16 or 32 bits) and
-counted; every later run adds that count. Execution is in order and without
-exceptions, so a block always runs to its end.
+Instructions are counted per translated block by a hook in C (count.c, built
+here with `cc`): the first time a block runs, its Thumb-2 instructions are
+decoded for their length (16 or 32 bits) and counted; every later run adds
+that count. Execution is in order and without exceptions, so a block always
+runs to its end.
 """
 
+import ctypes
 import json
+import os
 import struct
+import subprocess
 import sys
+import tempfile
 
 from unicorn import (
     UC_ARCH_ARM,
@@ -32,6 +41,7 @@ from unicorn import (
     UcError,
 )
 from unicorn import arm_const as arm
+from unicorn.unicorn_py3.unicorn import uc_hook_h, uclib
 
 FLASH = (0x0800_0000, 1 << 20)
 SRAM = (0x2000_0000, 128 << 10)
@@ -40,6 +50,8 @@ CCM = (0x1000_0000, 64 << 10)
 # memory: the probes touch neither, but cortex-m-rt enables the FPU there.
 PERIPHERALS = (0x4000_0000, 0x1000_0000)
 SYSTEM = (0xE000_0000, 0x0010_0000)
+# A run that has not reached its end after this long is stuck.
+TIME_LIMIT_US = 1800 * 1_000_000
 # `cost_mark`'s phases (firmware/src/bin/cost/probes.rs).
 BEGIN, END, VALUE = 0, 1, 2
 
@@ -85,6 +97,29 @@ def thumb_instructions(code):
     return n
 
 
+class Counter(ctypes.Structure):
+    """`struct counter` of count.c."""
+
+    _fields_ = [
+        ("executed", ctypes.c_uint64),
+        ("lowest_sp", ctypes.c_uint32),
+        ("stretch_lowest", ctypes.c_uint32),
+        ("reg_read", ctypes.c_void_p),
+        ("mem_read", ctypes.c_void_p),
+        ("sp_reg", ctypes.c_int32),
+        ("profiling", ctypes.c_int32),
+    ]
+
+
+def counter_library():
+    """count.c built with the system's C compiler (the one Rust links with)."""
+    source = os.path.join(os.path.dirname(os.path.abspath(__file__)), "count.c")
+    with tempfile.TemporaryDirectory() as tmp:
+        lib = os.path.join(tmp, "count.so")
+        subprocess.run([os.environ.get("CC", "cc"), "-O2", "-shared", "-fPIC", "-o", lib, source], check=True)
+        return ctypes.CDLL(lib)
+
+
 class Machine:
     def __init__(self, elf):
         self.uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
@@ -93,30 +128,66 @@ class Machine:
             self.uc.mem_map(base, size)
         for addr, blob in elf.segments:
             self.uc.mem_write(addr, blob)
-        self.executed = 0
-        self.block_sizes = {}
-        # The deepest the stack went (its lowest address).
-        self.lowest_sp = 0xFFFF_FFFF
-        # Per open stretch, innermost last: its start and its lowest SP.
+        self.lib = counter_library()
+        self.counter = Counter(
+            executed=0,
+            lowest_sp=0xFFFF_FFFF,
+            stretch_lowest=0xFFFF_FFFF,
+            reg_read=ctypes.cast(uclib.uc_reg_read, ctypes.c_void_p),
+            mem_read=ctypes.cast(uclib.uc_mem_read, ctypes.c_void_p),
+            sp_reg=arm.UC_ARM_REG_SP,
+            profiling=0,
+        )
+        hook = uc_hook_h()
+        status = uclib.uc_hook_add(
+            self.uc._uch,
+            ctypes.byref(hook),
+            UC_HOOK_BLOCK,
+            ctypes.cast(self.lib.count_block, ctypes.c_void_p),
+            ctypes.cast(ctypes.pointer(self.counter), ctypes.c_void_p),
+            1,
+            0,
+        )
+        if status != 0:
+            raise SystemExit(f"uc_hook_add failed: {status}")
+        # Per open stretch, innermost last: its start SP and the lowest SP
+        # of the stretch outside it (count.c follows the innermost one).
         self.open_start = []
-        self.open_lowest = []
-        # Instructions per block address while profiling (None: not profiling).
-        self.profile = None
-        self.uc.hook_add(UC_HOOK_BLOCK, self._block)
+        self.open_outer = []
 
-    def _block(self, uc, address, size, _user):
-        n = self.block_sizes.get((address, size))
-        if n is None:
-            n = thumb_instructions(uc.mem_read(address, size))
-            self.block_sizes[(address, size)] = n
-        self.executed += n
-        sp = uc.reg_read(arm.UC_ARM_REG_SP)
-        if sp < self.lowest_sp:
-            self.lowest_sp = sp
-        if self.open_lowest and sp < self.open_lowest[-1]:
-            self.open_lowest[-1] = sp
-        if self.profile is not None:
-            self.profile[address] = self.profile.get(address, 0) + n
+    @property
+    def executed(self):
+        return self.counter.executed
+
+    def start_profile(self):
+        """Counts instructions per block from here until `stop_profile`."""
+        self.lib.profile_reset()
+        self.counter.profiling = 1
+
+    def stop_profile(self):
+        self.counter.profiling = 0
+
+    def profile(self):
+        """{block address: instructions} from `start_profile` to `stop_profile`."""
+        n = ctypes.c_uint32.in_dll(self.lib, "profile_len").value
+        used = (ctypes.c_uint32 * n).in_dll(self.lib, "profile_used")
+        address = (ctypes.c_uint64 * (1 << 16)).in_dll(self.lib, "profile_address")
+        count = (ctypes.c_uint64 * (1 << 16)).in_dll(self.lib, "profile_instructions")
+        return {address[i]: count[i] for i in used}
+
+    def open_stretch(self):
+        sp = self.uc.reg_read(arm.UC_ARM_REG_SP)
+        self.open_start.append(sp)
+        self.open_outer.append(self.counter.stretch_lowest)
+        self.counter.stretch_lowest = sp
+
+    def close_stretch(self):
+        """The stack the stretch just closed used: from its start to its
+        deepest point (stretches nest: an inner one's depth is its outer
+        one's too)."""
+        lowest = self.counter.stretch_lowest
+        self.counter.stretch_lowest = min(self.open_outer.pop(), lowest)
+        return self.open_start.pop() - lowest
 
     def reset(self):
         sp, pc = struct.unpack("<II", self.uc.mem_read(FLASH[0], 8))
@@ -128,7 +199,7 @@ class Machine:
         return bytes(self.uc.mem_read(ptr, length)).decode()
 
 
-def by_function(elf, profile, top=12):
+def by_function(elf, profile, top=40):
     """The functions a profile's instructions ran in, largest first."""
     funcs = sorted(elf.functions)
     starts = [f[0] for f in funcs]
@@ -164,24 +235,17 @@ def costs(path, profile_name=None):
             return
         if r2 == BEGIN:
             open_at[name] = m.executed
-            # The stack a stretch uses: from its start to its deepest point
-            # (stretches nest: an inner one's depth is its outer one's too).
-            sp = uc.reg_read(arm.UC_ARM_REG_SP)
-            m.open_start.append(sp)
-            m.open_lowest.append(sp)
+            m.open_stretch()
             if name == profile_name:
-                m.profile = {}
+                m.start_profile()
         else:
             n = m.executed - open_at.pop(name)
-            start, lowest = m.open_start.pop(), m.open_lowest.pop()
-            if m.open_lowest:
-                m.open_lowest[-1] = min(m.open_lowest[-1], lowest)
-            stack = start - lowest
+            stack = m.close_stretch()
             if name == profile_name:
+                m.stop_profile()
                 if n > state.get("profiled", 0):
                     state["profiled"] = n
-                    state["profile"] = m.profile
-                m.profile = None
+                    state["profile"] = m.profile()
             f = figures.setdefault(name, {"count": 0, "max": 0, "min": None, "total": 0})
             f["count"] += 1
             f["max"] = max(f["max"], n)
@@ -192,7 +256,10 @@ def costs(path, profile_name=None):
     m.uc.hook_add(UC_HOOK_CODE, on_mark, begin=mark, end=mark)
     pc = m.reset()
     try:
-        m.uc.emu_start(pc, 0xFFFF_FFFF, count=2_000_000_000)
+        # No instruction limit (unicorn would count with a hook of its own
+        # on every instruction): the image ends at its `done` mark, a stall
+        # or a panic at theirs, anything else at the time limit.
+        m.uc.emu_start(pc, 0xFFFF_FFFF, timeout=TIME_LIMIT_US)
     except UcError as e:
         at = m.uc.reg_read(arm.UC_ARM_REG_PC)
         sp = m.uc.reg_read(arm.UC_ARM_REG_SP)
@@ -215,7 +282,7 @@ def costs(path, profile_name=None):
         "emulator": f"unicorn {unicorn.__version__} (Cortex-M4, Thumb-2, instructions counted per translated block)",
         "overhead_instructions": overhead,
         "executed_instructions": m.executed,
-        "stack_bytes_max": m.stack_top - m.lowest_sp,
+        "stack_bytes_max": m.stack_top - m.counter.lowest_sp,
         "values": values,
         "probes": figures,
     }

@@ -99,9 +99,9 @@ pub fn executor(scope: &Scope, pulse_ticks: u64) -> Executor<LogPin> {
 pub fn run(exec: &mut Executor<LogPin>, scope: &Scope, origin: u64, tick_scale: u64, isr_ticks: u64) -> u64 {
     let (mut next, mut busy_until, mut fires) = (exec.start(), 0u64, 0u64);
     while let Some(t) = next {
-        let now = t.max(busy_until);
+        let now = (t as u64).max(busy_until);
         scope.clock.set(origin + now * tick_scale);
-        next = exec.fire(now);
+        next = exec.fire(now as u32);
         busy_until = now + isr_ticks;
         fires += 1;
     }

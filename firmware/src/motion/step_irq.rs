@@ -27,8 +27,8 @@ pub trait CompareTimer {
 
 /// Ticks since `origin` (a move's tick 0), read as signed so that a count
 /// just before the origin is 0, not 2³² ticks.
-pub fn since(timer: &impl CompareTimer, origin: u32) -> u64 {
-    (timer.count().wrapping_sub(origin) as i32).max(0) as u64
+pub fn since(timer: &impl CompareTimer, origin: u32) -> u32 {
+    (timer.count().wrapping_sub(origin) as i32).max(0) as u32
 }
 
 /// Arms the compare for `next` (ticks since `origin`), running at once the
@@ -38,14 +38,14 @@ pub fn schedule<P: OutputPin, T: CompareTimer>(
     exec: &mut Executor<P>,
     timer: &mut T,
     origin: u32,
-    mut next: Option<u64>,
+    mut next: Option<u32>,
 ) -> Option<[u32; 3]> {
     loop {
         let Some(at) = next else {
             timer.enable_interrupt(false);
             return Some(exec.emitted());
         };
-        timer.set_compare(origin.wrapping_add(at as u32));
+        timer.set_compare(origin.wrapping_add(at));
         timer.clear_match();
         timer.enable_interrupt(true);
         let now = since(timer, origin);

@@ -178,7 +178,7 @@ pub struct SimSteps {
     exec: Executor<SimPin>,
     /// Simulated time (s) of the executor's tick 0, and its next event.
     origin_s: f64,
-    next: Option<u64>,
+    next: Option<u32>,
     /// This move never ends (an injected stall).
     stalled: bool,
     /// Blocks queued for the next move: the chip plans them before it
@@ -187,7 +187,7 @@ pub struct SimSteps {
 }
 
 impl SimSteps {
-    fn tick_time(&self, tick: u64) -> f64 {
+    fn tick_time(&self, tick: u32) -> f64 {
         self.origin_s + tick as f64 / Self::TICK_HZ as f64
     }
 }

@@ -10,7 +10,8 @@
 //! entry and exit: the M4 needs more for loads, branches and divisions, so
 //! the derived rates are upper bounds.
 //!
-//! Figures and bars (`docs/architecture.md`, "The chip's costs"):
+//! Figures and bars (`docs/architecture.md`, "The chip's costs"; a bar
+//! missed fails the run, as the counts are exact on every machine):
 //! - `step_event_instructions_max` (≤ 250): one `Executor::fire`, the
 //!   worst over a three-axis move at the axes' cruise speeds.
 //! - `step_isr_instructions_max`: the TIM5 handler's logic (critical
@@ -28,7 +29,10 @@
 //!   should the chip pay more).
 //! - `resume_instructions_max` (≤ 1 000 000): a scan continued near its end.
 //! - `await_free_instructions_max` (≤ 100 000): the longest poll of the serve
-//!   loop during a served Belcour-span scan with a sanity model and a resume.
+//!   loop while it serves the full Belcour grid (all 3 441 points, with a
+//!   sanity model, its plan fed as the host feeds it) and a resume near its
+//!   end (`await_free_scan_points`, `await_free_resume_points`: the points
+//!   served; fewer than the grid's fails the run).
 //! - `boot_instructions`, `boot_safe_pins`: the unmodified `gonio-head` image
 //!   run from reset to the executor's first idle wait, the registers it polls
 //!   answering as the reference manual says (`emulate.py boot`); the laser
@@ -111,6 +115,7 @@ fn main() -> Result<()> {
     let cycles_per_step = events_per_step * (mean("step_isr")? + EXCEPTION_CYCLES as f64);
     let step_rate = 0.5 * CPU_HZ / (3.0 * cycles_per_step);
     let await_free = max("await_free")?;
+    let scan_points = run["values"]["scan_points"].as_u64().context("points of the served scan")?;
     let resume = max("resume")?;
     let figures = json!({
         "emulator": run["emulator"],
@@ -139,6 +144,8 @@ fn main() -> Result<()> {
         "resume_instructions_max": resume,
         "await_free_instructions_max": await_free,
         "await_free_polls": p["await_free"]["count"],
+        "await_free_scan_points": scan_points,
+        "await_free_resume_points": run["values"]["resume_points"],
         "await_free_stack_bytes_max": p["await_free"]["stack_max"],
         "probe_stack_bytes_max": run["stack_bytes_max"],
         "step_rate_hz_3axes_at_50pct_cpu": step_rate.round(),
@@ -159,6 +166,10 @@ fn main() -> Result<()> {
         },
     });
     println!("{figures}");
+    let grid = gonio_shared::ScanSpec::belcour().len() as u64;
+    if scan_points != grid {
+        bail!("the served scan ended after {scan_points} of the Belcour grid's {grid} points");
+    }
     // The simulated head and the duration estimate charge this per block.
     let block = max("move_block")?;
     if block > BLOCK_PLAN_INSTRUCTIONS as u64 {
@@ -169,5 +180,17 @@ fn main() -> Result<()> {
     }
     // motion-bench takes its interrupt cost from here.
     std::fs::write(chip_costs::report_path(), figures.to_string()).context("writing target/chip-bench.json")?;
+    // The counts are exact and the same on every machine: a bar missed is
+    // a regression of the code, and fails the run (and `.ci/run`).
+    let missed: Vec<&String> = figures["bars_met"]
+        .as_object()
+        .context("bars_met")?
+        .iter()
+        .filter(|(_, met)| **met != Value::Bool(true))
+        .map(|(name, _)| name)
+        .collect();
+    if !missed.is_empty() {
+        bail!("bars missed: {missed:?}");
+    }
     Ok(())
 }

@@ -365,7 +365,7 @@ fn look(done: &mut u32) -> bool {
 /// Serves `spec` from `spec.first_order` (already started when `started`),
 /// feeding its plan as the host does; every poll of the serve loop is a
 /// measured stretch (`await_free`).
-fn serve(head: &mut Head<board::Rigged>, spec: &ScanSpec, started: bool, mut fed: u32) {
+fn serve(head: &mut Head<board::Rigged>, spec: &ScanSpec, started: bool, mut fed: u32, points: &'static str) {
     let mut inbox = board::HOST.inbox.borrow_mut();
     if !started {
         let _ = inbox.push_back(request::<ScanEndpoint>(spec));
@@ -395,6 +395,7 @@ fn serve(head: &mut Head<board::Rigged>, spec: &ScanSpec, started: bool, mut fed
         }
         false
     });
+    report(points, done - spec.first_order);
 }
 
 /// A Belcour scan served, with a sanity model loaded (the costliest
@@ -426,16 +427,9 @@ fn scan_and_resume() {
         let _ = inbox.push_back(request::<HomeEndpoint>(&HomeRequest::ALL));
         let _ = inbox.push_back(request::<SanityEndpoint>(&sanity));
     }
-    // Belcour's incidences and spans at a coarser step (189 of its 3 441
-    // points: the emulator counts some 10 M instructions a second, and every
-    // point costs a few million); the moves between them are longer, not
-    // shorter, than the full grid's.
-    let spec = ScanSpec {
-        theta_o: AngleRange::new(0.0, 90.0, 15.0),
-        dphi: AngleRange::new(-180.0, 180.0, 45.0),
-        ..ScanSpec::belcour()
-    };
-    serve(head, &spec, false, 0);
+    // Belcour's grid, all of its 3 441 points.
+    let spec = ScanSpec::belcour();
+    serve(head, &spec, false, 0, "scan_points");
 
     let resumed = ScanSpec {
         first_order: spec.len() - 2 * PLAN_CHUNK as u32,
@@ -452,7 +446,7 @@ fn scan_and_resume() {
     if started.is_err() {
         mark("resume_refused", BEGIN);
     }
-    serve(head, &resumed, true, resumed.first_order + PLAN_CHUNK as u32);
+    serve(head, &resumed, true, resumed.first_order + PLAN_CHUNK as u32, "resume_points");
 }
 
 // Every probe is out of line (`#[inline(never)]`): inlined here, their
