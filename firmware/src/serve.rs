@@ -166,9 +166,10 @@ impl<B: Board> Head<B> {
             }
             // One turn of this loop is at most one stretch of the executor:
             // a turn whose awaits all completed at once (requests already
-            // received, replies that found room in the USB channel) would
-            // otherwise run into the next, and a burst of queued requests
-            // (plan chunks, say) into one long stretch.
+            // received, replies that found room in the USB channel, a scan
+            // point skipped for its kinematics) would otherwise run into the
+            // next, and a burst of queued plan chunks or a run of
+            // unreachable points into one long stretch.
             embassy_futures::yield_now().await;
         }
     }
@@ -451,16 +452,7 @@ impl<B: Board> Head<B> {
                 }
             }
         };
-        let skipped = matches!(ev, ScanEvent::Skipped { .. });
-        self.publish::<ScanEventTopic, L>(&ev, link).await?;
-        if skipped {
-            // A skipped point awaits nothing the hardware does (its
-            // kinematics failed, 45 000 instructions on the chip), and a
-            // send that finds room completes at once: without this, a run
-            // of unreachable points would be one stretch of the executor.
-            embassy_futures::yield_now().await;
-        }
-        Ok(())
+        self.publish::<ScanEventTopic, L>(&ev, link).await
     }
 
     /// A running scan whose plan has run dry: waits for the host's next

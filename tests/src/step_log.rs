@@ -101,7 +101,7 @@ pub fn run(exec: &mut Executor<LogPin>, scope: &Scope, origin: u64, tick_scale: 
     while let Some(t) = next {
         let now = (t as u64).max(busy_until);
         scope.clock.set(origin + now * tick_scale);
-        next = exec.fire(now as u32);
+        next = exec.fire(now.min(u32::MAX as u64) as u32);
         busy_until = now + isr_ticks;
         fires += 1;
     }

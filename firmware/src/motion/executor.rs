@@ -193,7 +193,7 @@ impl Track {
 
     /// After a step: the next one of the block, or of the next block.
     /// Every interval is at least one (Q32): [`Executor::push`] and
-    /// [`Braking::step`] see to it, so time always moves on.
+    /// [`Braking::step`] see to it, so a step's time never goes back.
     fn advance(&mut self) {
         self.left -= 1;
         if self.left > 0 {
@@ -242,10 +242,11 @@ impl<P: OutputPin> Executor<P> {
     }
 
     /// Queues a block; an empty one is dropped (it has nothing to emit).
-    /// A block whose intervals would fall below one (Q32) is held at one: no
-    /// planner of ours makes such a block (`TrapezoidBlocks` is tested for
-    /// it), and checking here, once per block, spares the interrupt a clamp
-    /// on every step.
+    /// A block whose intervals would fall below one (Q32) gets the least
+    /// `add` that keeps its last one at one or more: no planner of ours makes
+    /// such a block (`TrapezoidBlocks` cuts a block to one step where its
+    /// rounding could), and checking here, once per block, spares the
+    /// interrupt a clamp on every step.
     pub fn push(&mut self, axis: Axis, b: StepBlock) -> Result<(), QueueFull> {
         if b.count == 0 {
             return Ok(());

@@ -30,9 +30,9 @@
 //! - `resume_instructions_max` (≤ 1 000 000): a scan continued near its end.
 //! - `await_free_instructions_max` (≤ 100 000): the longest poll of the serve
 //!   loop while it serves the full Belcour grid (all 3 441 points, with a
-//!   sanity model, its plan fed as the host feeds it) and a resume near its
-//!   end (`await_free_scan_points`, `await_free_resume_points`: the points
-//!   served; fewer than the grid's fails the run).
+//!   sanity model, its plan fed as the host feeds it) and a resume two plan
+//!   chunks before its end (`await_free_scan_points`,
+//!   `await_free_resume_points`: the points served; fewer fails the run).
 //! - `boot_instructions`, `boot_safe_pins`: the unmodified `gonio-head` image
 //!   run from reset to the executor's first idle wait, the registers it polls
 //!   answering as the reference manual says (`emulate.py boot`); the laser
@@ -47,6 +47,7 @@
 use anyhow::{bail, Context, Result};
 use gonio_firmware::board::CPU_HZ;
 use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
+use gonio_shared::scan::PLAN_CHUNK;
 use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -116,6 +117,7 @@ fn main() -> Result<()> {
     let step_rate = 0.5 * CPU_HZ / (3.0 * cycles_per_step);
     let await_free = max("await_free")?;
     let scan_points = run["values"]["scan_points"].as_u64().context("points of the served scan")?;
+    let resume_points = run["values"]["resume_points"].as_u64().context("points of the resumed scan")?;
     let resume = max("resume")?;
     let figures = json!({
         "emulator": run["emulator"],
@@ -145,7 +147,7 @@ fn main() -> Result<()> {
         "await_free_instructions_max": await_free,
         "await_free_polls": p["await_free"]["count"],
         "await_free_scan_points": scan_points,
-        "await_free_resume_points": run["values"]["resume_points"],
+        "await_free_resume_points": resume_points,
         "await_free_stack_bytes_max": p["await_free"]["stack_max"],
         "probe_stack_bytes_max": run["stack_bytes_max"],
         "step_rate_hz_3axes_at_50pct_cpu": step_rate.round(),
@@ -166,9 +168,16 @@ fn main() -> Result<()> {
         },
     });
     println!("{figures}");
+    // motion-bench takes its interrupt cost from here.
+    std::fs::write(chip_costs::report_path(), figures.to_string()).context("writing target/chip-bench.json")?;
     let grid = gonio_shared::ScanSpec::belcour().len() as u64;
     if scan_points != grid {
         bail!("the served scan ended after {scan_points} of the Belcour grid's {grid} points");
+    }
+    // The resume starts two chunks before the grid's end (probes.rs).
+    let resumed = 2 * PLAN_CHUNK as u64;
+    if resume_points != resumed {
+        bail!("the resumed scan ended after {resume_points} of its {resumed} points");
     }
     // The simulated head and the duration estimate charge this per block.
     let block = max("move_block")?;
@@ -178,8 +187,6 @@ fn main() -> Result<()> {
     if boot["boot_safe_pins"] != Value::Bool(true) {
         bail!("the image does not reach its idle wait in the safe state: {boot}");
     }
-    // motion-bench takes its interrupt cost from here.
-    std::fs::write(chip_costs::report_path(), figures.to_string()).context("writing target/chip-bench.json")?;
     // The counts are exact and the same on every machine: a bar missed is
     // a regression of the code, and fails the run (and `.ci/run`).
     let missed: Vec<&String> = figures["bars_met"]
