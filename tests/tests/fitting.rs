@@ -206,3 +206,22 @@ fn shared_inputs_enter_the_covariance_as_the_refit_moves_the_parameters() {
         assert!((predicted - want).abs() <= 1e-3 * p, "{name}: {predicted:.3e} vs {want:.3e}");
     }
 }
+
+/// The samples and the search's candidates are shared among threads, but
+/// the sums stay in sample order and the candidates in theirs: one thread
+/// and three give the very same fit, bit for bit (the sample count is past
+/// the size the evaluation is split at).
+#[test]
+fn a_fit_does_not_depend_on_the_number_of_threads() {
+    for model in [ModelId::AbcRetro, ModelId::Lafortune] {
+        let data = synthetic::samples(&synthetic::reference(model), 3000, 0.02, 9);
+        let spec = FitSpec::new(model);
+        let on = |threads: usize| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| fit::fit(&data, &spec).unwrap())
+        };
+        let (one, three) = (on(1), on(3));
+        assert_eq!(one.material.params, three.material.params, "{}", model.name());
+        assert_eq!(one.cost.to_bits(), three.cost.to_bits(), "{}", model.name());
+    }
+}

@@ -20,6 +20,7 @@ use super::local;
 use super::problem::Problem;
 use super::transform::from_unit;
 use cmaes::restart::{RestartOptions, RestartStrategy, IPOP};
+use rayon::prelude::*;
 
 /// Samples the global search looks at: a twentieth of the data, at least
 /// 600 (narrow lobes need their peaks) and at most 4 000.
@@ -77,28 +78,37 @@ pub fn search(problem: &Problem, seed: u64) -> Vec<f64> {
         .seed(seed)
         .build()
         .expect("dimension ≥ 1 and a non-empty range")
-        .run_with_reuse(objective);
+        // Each generation's candidates on all the threads, one each.
+        .run_parallel_with_reuse(objective);
     let best_z: Vec<f64> = match results.best {
         Some(best) => best.point.iter().map(|v| v.clamp(1e-9, 1.0 - 1e-9)).collect(),
         None => vec![0.5; n],
     };
-    // Local fits on the thinned data, judged on all of it.
-    let mut candidates: Vec<(f64, Vec<f64>)> = std::iter::once(best_z)
+    // Local fits on the thinned data, judged on all of it; the fits are
+    // independent, so they run on all the threads (collected in order: the
+    // result does not depend on the number of threads).
+    let starts: Vec<Vec<f64>> = std::iter::once(best_z)
         .chain((0..STARTS).map(|k| halton(k + seed as usize * STARTS, n).into_iter().map(|z| 0.02 + 0.96 * z).collect()))
-        .map(|z: Vec<f64>| {
+        .collect();
+    let mut candidates: Vec<(f64, Vec<f64>)> = starts
+        .into_par_iter()
+        .map(|z| {
             let x = local::minimize_within(&thin, &to_x(&z), PROBE_ITERATIONS);
             let c = problem.cost(&x);
             (if c.is_finite() { c } else { f64::INFINITY }, x)
         })
         .collect();
     candidates.sort_by(|a, b| a.0.total_cmp(&b.0));
-    candidates
-        .into_iter()
-        .take(POLISHED)
+    candidates.truncate(POLISHED);
+    let polished: Vec<(f64, Vec<f64>)> = candidates
+        .into_par_iter()
         .map(|(_, x)| {
             let x = local::minimize(problem, &x);
             (problem.cost(&x), x)
         })
+        .collect();
+    polished
+        .into_iter()
         .min_by(|a, b| a.0.total_cmp(&b.0))
         .map(|(_, x)| x)
         .unwrap_or_else(|| to_x(&vec![0.5; n]))

@@ -236,6 +236,12 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
     })
 }
 
+/// Threads a fit runs on: rayon's pool, one per core unless
+/// `RAYON_NUM_THREADS` says otherwise. The results do not depend on it.
+pub fn threads() -> usize {
+    rayon::current_num_threads()
+}
+
 /// The free parameters at the optimum: a local fit from `start` (every
 /// parameter, clamped into the bounds), or the seeded global search.
 pub fn solve(problem: &Problem, start: Option<&[f64]>, seed: u64) -> Vec<f64> {

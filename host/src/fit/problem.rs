@@ -8,6 +8,28 @@ use crate::brdf::{Bound, Geometry, HandGradient, ModelId, Param};
 use crate::uncertainty::SHARED;
 use nalgebra::{Const, DMatrix, U1};
 use num_dual::DualSVec64;
+use rayon::prelude::*;
+
+/// Samples per task of the parallel evaluation: a task of 256 samples is
+/// some 5–300 µs of model, above rayon's few microseconds to hand it to a
+/// thread. Sums stay sequential over the samples, so a fit gives the same
+/// numbers on any number of threads.
+const CHUNK: usize = 256;
+/// Fewer samples than this are evaluated on the calling thread: the global
+/// search's subsets (600 samples and up) are evaluated many at a time
+/// instead, one candidate per thread, where the hand-over costs nothing.
+const PARALLEL_MIN: usize = 2048;
+
+/// Fills `out`, `width` values per sample, with `f(first sample, its part)`:
+/// in tasks of [`CHUNK`] samples on all threads when there are enough
+/// samples to pay for them, else at once here.
+fn fill(out: &mut [f64], width: usize, f: impl Fn(usize, &mut [f64]) + Sync) {
+    if out.len() < PARALLEL_MIN * width {
+        f(0, out);
+    } else {
+        out.par_chunks_mut(CHUNK * width).enumerate().for_each(|(c, part)| f(c * CHUNK, part));
+    }
+}
 
 #[derive(Debug, Clone)]
 pub struct Problem {
@@ -55,12 +77,16 @@ impl Problem {
             .collect()
     }
 
-    /// Weighted residuals.
+    /// Weighted residuals, the samples shared among the threads.
     pub fn residuals(&self, x: &[f64]) -> Vec<f64> {
         let p = self.full(x);
-        (0..self.geos.len())
-            .map(|k| self.weight[k] * (self.scale[k] * self.model.eval(&self.geos[k], &p, self.param) - self.y[k]))
-            .collect()
+        let mut r = vec![0.0; self.geos.len()];
+        fill(&mut r, 1, |first, out| {
+            for (k, r) in (first..).zip(out) {
+                *r = self.weight[k] * (self.scale[k] * self.model.eval(&self.geos[k], &p, self.param) - self.y[k]);
+            }
+        });
+        r
     }
 
     /// `Σ r²`; infinite where the model overflows.
@@ -94,10 +120,9 @@ impl Problem {
 
     fn hand_jacobian(&self, x: &[f64], gradient: HandGradient) -> (Vec<f64>, DMatrix<f64>) {
         let full = self.full(x);
-        let mut grad = vec![0.0; full.len()];
-        self.weighted_rows(self.free.len(), |g, row| {
-            let f = gradient(g, &full, &mut grad);
-            row.extend(self.free.iter().map(|&i| grad[i]));
+        self.weighted_rows(self.free.len(), full.len(), |g, row, grad| {
+            let f = gradient(g, &full, grad);
+            row.iter_mut().zip(&self.free).for_each(|(d, &i)| *d = grad[i]);
             f
         })
     }
@@ -108,27 +133,38 @@ impl Problem {
         for (j, &i) in self.free.iter().enumerate() {
             p[i] = DualSVec64::from_re(full[i]).derivative(j);
         }
-        self.weighted_rows(N, |g, row| {
+        self.weighted_rows(N, 0, |g, row, _| {
             let f = self.model.eval(g, &p, self.param);
-            row.extend(f.eps.unwrap_generic(Const::<N>, U1).iter());
+            row.copy_from_slice(f.eps.unwrap_generic(Const::<N>, U1).as_slice());
             f.re
         })
     }
 
     /// Residuals and Jacobian from `sample`, which returns `f_r` at a
-    /// geometry and appends its `n` derivatives to the row.
-    fn weighted_rows(&self, n: usize, mut sample: impl FnMut(&Geometry, &mut Vec<f64>) -> f64) -> (Vec<f64>, DMatrix<f64>) {
+    /// geometry and writes its `n` derivatives into the row, with a scratch
+    /// of `scratch` values of its own; the samples shared among the threads.
+    fn weighted_rows(
+        &self,
+        n: usize,
+        scratch: usize,
+        sample: impl Fn(&Geometry, &mut [f64], &mut [f64]) -> f64 + Sync,
+    ) -> (Vec<f64>, DMatrix<f64>) {
         let m = self.geos.len();
-        let mut r = Vec::with_capacity(m);
-        let mut rows = Vec::with_capacity(m * n);
-        for k in 0..m {
-            let start = rows.len();
-            let f = sample(&self.geos[k], &mut rows);
-            let ws = self.weight[k] * self.scale[k];
-            rows[start..].iter_mut().for_each(|d| *d *= ws);
-            r.push(self.weight[k] * (self.scale[k] * f - self.y[k]));
-        }
-        (r, DMatrix::from_row_slice(m, n, &rows))
+        // Per sample: its residual, then its row of the Jacobian.
+        let width = n + 1;
+        let mut out = vec![0.0; m * width];
+        fill(&mut out, width, |first, part| {
+            let mut buf = vec![0.0; scratch];
+            for (k, sample_out) in (first..).zip(part.chunks_exact_mut(width)) {
+                let (r, row) = sample_out.split_at_mut(1);
+                let f = sample(&self.geos[k], row, &mut buf);
+                let ws = self.weight[k] * self.scale[k];
+                row.iter_mut().for_each(|d| *d *= ws);
+                r[0] = self.weight[k] * (self.scale[k] * f - self.y[k]);
+            }
+        });
+        let r = out.iter().step_by(width).copied().collect();
+        (r, DMatrix::from_fn(m, n, |k, j| out[k * width + 1 + j]))
     }
 
     /// A problem on about `n` of the samples: the global search's cheap

@@ -31,6 +31,9 @@
 //!   (ours / the peer's best; bar ≤ 1 + 1e-9), `time_ratio` (our whole
 //!   global fit / the peer's 24 fits; bar ≤ 1/3) and our `at_bound`.
 //!
+//! Ours evaluates the samples and the global search's candidates on every
+//! core (`threads`), as the peer's BLAS does.
+//!
 //! Installs scipy (pinned) with pip if it is missing or another version;
 //! prints one JSON object, with the peer's versions and BLAS.
 
@@ -111,9 +114,11 @@ fn rmse(p: &Problem, x: &[f64]) -> f64 {
 fn main() {
     ensure_scipy();
     let mut report = Map::new();
-    // `fit-bench misfit [N]`: the misfit table alone (its first N cases).
+    // `fit-bench misfit [N [FILTER]]`: the misfit table alone (its first N
+    // cases, those whose `SAMPLES/MATERIAL/MODEL` holds FILTER).
     let misfit_only = std::env::args().nth(1).as_deref() == Some("misfit");
     let cases: usize = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(usize::MAX);
+    let filter = std::env::args().nth(3).unwrap_or_default();
     let mut worst = (f64::INFINITY, 0.0f64, SEEDS);
     for model in ModelId::ALL.into_iter().filter(|_| !misfit_only) {
         let truth = synthetic::reference(model);
@@ -196,11 +201,12 @@ fn main() {
             }),
         );
     }
-    let (misfit, worst_rmse, worst_time) = misfit(cases);
+    let (misfit, worst_rmse, worst_time) = misfit(cases, &filter);
     report.insert("misfit".into(), misfit);
     report.insert("misfit_max_rmse_ratio".into(), worst_rmse.into());
     report.insert("misfit_max_time_ratio".into(), worst_time.into());
     report.insert("peer".into(), scipy(&json!({"versions": true})));
+    report.insert("threads".into(), fit::threads().into());
     report.insert("samples".into(), SAMPLES.into());
     report.insert("noise".into(), NOISE.into());
     report.insert("min_speedup_vs_scipy".into(), worst.0.into());
@@ -254,7 +260,7 @@ const RETRO_MODELS: [ModelId; 5] = [
 
 /// Ours against the peer's multi-start on data no model is exactly; returns
 /// the table and the worst RMSE and time ratios.
-fn misfit(limit: usize) -> (Value, f64, f64) {
+fn misfit(limit: usize, filter: &str) -> (Value, f64, f64) {
     let mut rng = rand::rngs::StdRng::seed_from_u64(24);
     let mut cases = Vec::new();
     let (mut worst_rmse, mut worst_time) = (0.0f64, 0.0f64);
@@ -275,12 +281,16 @@ fn misfit(limit: usize) -> (Value, f64, f64) {
                     continue;
                 }
                 let spec = FitSpec::new(model);
-                let ours = fit::fit(&data, &spec).expect("misfit fit");
                 let problem = fit::problem(&data, &spec).expect("misfit problem");
                 let bounds = problem.bounds_all.clone();
+                // Drawn for every case, so a case's starts do not depend on the filter.
                 let starts: Vec<Vec<f64>> = (0..PEER_STARTS)
                     .map(|_| bounds.iter().map(|b| transform::from_unit(b, rng.random_range(0.0..1.0))).collect())
                     .collect();
+                if !format!("{samples}/{}/{}", g.name, model.name()).contains(filter) {
+                    continue;
+                }
+                let ours = fit::fit(&data, &spec).expect("misfit fit");
                 let peer = scipy(&json!({
                     "model": model.name(), "geometry": geometry_json(&problem), "y": problem.y, "weight": problem.weight,
                     "scale": problem.scale, "starts": starts, "lo": bounds.iter().map(|b| b.lo).collect::<Vec<_>>(),
