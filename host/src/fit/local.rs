@@ -11,6 +11,7 @@
 //! the damping update is Nielsen's (Madsen, Nielsen & Tingleff 2004, §3.2).
 
 use super::problem::Problem;
+use crate::brdf::Bound;
 use super::transform::{slope, to_external, to_internal};
 use nalgebra::{DMatrix, DVector};
 
@@ -21,7 +22,7 @@ const XTOL: f64 = 1e-12;
 /// …or the residuals are this close to orthogonal to every Jacobian column
 /// (MINPACK's gtol: `|gᵢ|/sqrt(Aᵢᵢ·cost)`).
 const GTOL: f64 = 1e-10;
-const MAX_ITERATIONS: usize = 500;
+pub const MAX_ITERATIONS: usize = 500;
 /// Largest change of one transformed parameter in one step (rad).
 const MAX_STEP: f64 = 1.0;
 /// A parameter whose transformed value is this close to a bound's (rad;
@@ -57,133 +58,206 @@ pub fn minimize(problem: &Problem, start: &[f64]) -> Vec<f64> {
 /// [`minimize`] with at most `iterations` rounds: the global search's
 /// probes of a basin, which need its floor only roughly.
 pub fn minimize_within(problem: &Problem, start: &[f64], iterations: usize) -> Vec<f64> {
-    let bounds = problem.bounds();
-    let external = |u: &DVector<f64>| -> Vec<f64> { bounds.iter().zip(u.iter()).map(|(b, &u)| to_external(b, u)).collect() };
-    let evaluate = |u: DVector<f64>, with_jacobian: bool| {
-        let x = external(&u);
-        let (r, j) = if with_jacobian {
-            let (r, mut j) = problem.residuals_and_jacobian(&x);
-            for (c, (b, &uc)) in bounds.iter().zip(u.iter()).enumerate() {
-                let k = slope(b, uc);
-                j.column_mut(c).iter_mut().for_each(|v| *v *= k);
-            }
-            (r, Some(j))
-        } else {
-            (problem.residuals(&x), None)
-        };
-        let r = DVector::from_vec(r);
-        let cost = r.norm_squared();
-        State {
-            u,
-            r,
-            j,
-            cost: if cost.is_finite() { cost } else { f64::INFINITY },
+    let mut d = Descent::new(problem, start);
+    d.run(iterations);
+    d.x()
+}
+
+/// A Levenberg–Marquardt descent that can run a few rounds at a time and go
+/// on where it stopped, with its damping and scaling (the global search's
+/// race of candidates; a restart would forget both and crawl).
+pub struct Descent<'a> {
+    problem: &'a Problem,
+    bounds: Vec<Bound>,
+    start: Vec<f64>,
+    s: State,
+    lambda: f64,
+    nu: f64,
+    scale: DVector<f64>,
+    finished: bool,
+}
+
+impl<'a> Descent<'a> {
+    pub fn new(problem: &'a Problem, start: &[f64]) -> Self {
+        let bounds = problem.bounds();
+        let u = DVector::from_iterator(start.len(), bounds.iter().zip(start).map(|(b, &x)| to_internal(b, x)));
+        let s = evaluate(problem, &bounds, u, true);
+        Descent {
+            finished: !s.cost.is_finite(),
+            problem,
+            bounds,
+            start: start.to_vec(),
+            s,
+            lambda: 1e-3,
+            nu: 10.0,
+            scale: DVector::zeros(start.len()),
         }
-    };
-    let mut s = evaluate(
-        DVector::from_iterator(start.len(), bounds.iter().zip(start).map(|(b, &x)| to_internal(b, x))),
-        true,
-    );
-    if !s.cost.is_finite() {
-        return start.to_vec();
     }
-    let (mut lambda, mut nu) = (1e-3, 10.0);
-    let mut scale = DVector::zeros(start.len());
-    'outer: for _ in 0..iterations {
-        let j = match s.j.take() {
-            Some(j) => j,
-            None => evaluate(s.u.clone(), true)
-                .j
-                .unwrap_or_else(|| DMatrix::zeros(s.r.len(), start.len())),
-        };
-        let a: DMatrix<f64> = j.tr_mul(&j);
-        let g: DVector<f64> = j.tr_mul(&s.r);
-        // A Jacobian that overflowed (a lobe's power of a base at 0) gives no
-        // direction to follow: stop where the cost was last finite.
-        if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
-            break;
+
+    /// The cost where the descent stands (infinite where the start was).
+    pub fn cost(&self) -> f64 {
+        self.s.cost
+    }
+
+    /// Whether it has ended on its own: converged, or can go no further.
+    pub fn finished(&self) -> bool {
+        self.finished
+    }
+
+    /// The free parameters where it stands (the start, if the model could
+    /// not be evaluated there).
+    pub fn x(&self) -> Vec<f64> {
+        if !self.s.cost.is_finite() {
+            return self.start.clone();
         }
-        // MINPACK's scaling: the largest diagonal seen so far, so a direction
-        // that went flat (a parameter at its bound) stays damped.
-        scale = scale.zip_map(&a.diagonal(), f64::max);
-        let diag = scale.map(|d| d.max(1e-300));
-        let orthogonality = g
-            .iter()
-            .zip(diag.iter())
-            .map(|(g, d)| g.abs() / (d * s.cost).sqrt())
-            .fold(0.0, f64::max);
-        if orthogonality <= GTOL || s.cost == 0.0 {
-            break;
+        self.bounds.iter().zip(self.s.u.iter()).map(|(b, &u)| to_external(b, u)).collect()
+    }
+
+    /// Whether `other` is heading for the same optimum: every parameter
+    /// within `rel` of each other (relative, or of its box's width).
+    pub fn near(&self, other: &Descent, rel: f64) -> bool {
+        let (x, y) = (self.x(), other.x());
+        x.iter()
+            .zip(&y)
+            .zip(&self.bounds)
+            .all(|((a, b), bound)| (a - b).abs() <= rel * (0.5 * (a.abs() + b.abs())).max(1e-6 * (bound.hi - bound.lo)))
+    }
+
+    /// Runs at most `iterations` more rounds.
+    pub fn run(&mut self, iterations: usize) {
+        if !self.finished && !self.step(iterations) {
+            self.finished = true;
         }
-        let mut expect_accept = true;
-        // Raise the damping until a step lowers the cost.
-        loop {
-            let mut damped = a.clone();
-            for i in 0..diag.len() {
-                damped[(i, i)] += lambda * diag[i];
-            }
-            let Some(ch) = damped.cholesky() else {
-                lambda *= nu;
-                nu *= 2.0;
-                if lambda > 1e16 {
-                    break 'outer;
-                }
-                continue;
+    }
+
+    /// The rounds; false once the descent has ended on its own.
+    fn step(&mut self, iterations: usize) -> bool {
+        let (problem, bounds) = (self.problem, &self.bounds);
+        let evaluate = |u: DVector<f64>, with_jacobian: bool| evaluate(problem, bounds, u, with_jacobian);
+        let n = self.start.len();
+        let Descent {
+            s, lambda, nu, scale, ..
+        } = self;
+        for _ in 0..iterations {
+            let j = match s.j.take() {
+                Some(j) => j,
+                None => evaluate(s.u.clone(), true)
+                    .j
+                    .unwrap_or_else(|| DMatrix::zeros(s.r.len(), n)),
             };
-            let mut step = ch.solve(&(-&g));
-            // The transform is periodic: a step of more than a radian in `u`
-            // jumps across the bounds into an arbitrary basin. Trust region of 1 rad.
-            let longest = step.amax();
-            if longest > MAX_STEP {
-                step *= MAX_STEP / longest;
+            let a: DMatrix<f64> = j.tr_mul(&j);
+            let g: DVector<f64> = j.tr_mul(&s.r);
+            // A Jacobian that overflowed (a lobe's power of a base at 0) gives no
+            // direction to follow: stop where the cost was last finite.
+            if !(a.iter().all(|v| v.is_finite()) && g.iter().all(|v| v.is_finite())) {
+                return false;
             }
-            let small_x = step.norm() <= XTOL * (s.u.norm() + XTOL);
-            let trial = evaluate(&s.u + &step, expect_accept);
-            // Reduction the linear model predicts: −(2gᵀδ + δᵀAδ).
-            let predicted = -(2.0 * g.dot(&step) + step.dot(&(&a * &step)));
-            if trial.cost < s.cost {
-                // A small decrease means convergence only for a step close to
-                // Gauss–Newton's; a heavily damped one is small by construction.
-                let small_f = s.cost - trial.cost <= FTOL * s.cost && lambda <= 1.0;
-                let rho = (s.cost - trial.cost) / predicted.max(f64::MIN_POSITIVE);
-                lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-                nu = 10.0;
-                let crawling = s.cost - trial.cost <= CRAWL * s.cost;
-                s = trial;
-                // The transform is flat at a bound: an optimum on it is
-                // approached ever more slowly (the cost is quartic in `u`
-                // there). Once progress has slowed to a crawl, try the
-                // parameters that are nearly on a bound on it; keep that if
-                // it is no worse.
-                let near: Vec<usize> = (0..s.u.len())
-                    .filter(|_| crawling)
-                    .filter(|&i| {
-                        let d = (s.u[i].sin().abs().min(1.0)).acos();
-                        d > 1.5 * ON_BOUND && d < SNAP
-                    })
-                    .collect();
-                if !near.is_empty() {
-                    let mut u = s.u.clone();
-                    for &i in &near {
-                        u[i] = (std::f64::consts::FRAC_PI_2 - ON_BOUND).copysign(s.u[i].sin());
-                    }
-                    let snapped = evaluate(u, true);
-                    if snapped.cost <= s.cost {
-                        s = snapped;
-                    }
-                }
-                if small_f || small_x {
-                    break 'outer;
-                }
-                break;
+            // MINPACK's scaling: the largest diagonal seen so far, so a direction
+            // that went flat (a parameter at its bound) stays damped.
+            *scale = scale.zip_map(&a.diagonal(), f64::max);
+            let diag = scale.map(|d| d.max(1e-300));
+            let orthogonality = g
+                .iter()
+                .zip(diag.iter())
+                .map(|(g, d)| g.abs() / (d * s.cost).sqrt())
+                .fold(0.0, f64::max);
+            if orthogonality <= GTOL || s.cost == 0.0 {
+                return false;
             }
-            expect_accept = false;
-            lambda *= nu;
-            nu *= 2.0;
-            if lambda > 1e16 {
-                break 'outer;
+            let mut expect_accept = true;
+            // Raise the damping until a step lowers the cost.
+            loop {
+                let mut damped = a.clone();
+                for i in 0..diag.len() {
+                    damped[(i, i)] += *lambda * diag[i];
+                }
+                let Some(ch) = damped.cholesky() else {
+                    *lambda *= *nu;
+                    *nu *= 2.0;
+                    if *lambda > 1e16 {
+                        return false;
+                    }
+                    continue;
+                };
+                let mut step = ch.solve(&(-&g));
+                // The transform is periodic: a step of more than a radian in `u`
+                // jumps across the bounds into an arbitrary basin. Trust region of 1 rad.
+                let longest = step.amax();
+                if longest > MAX_STEP {
+                    step *= MAX_STEP / longest;
+                }
+                let small_x = step.norm() <= XTOL * (s.u.norm() + XTOL);
+                let trial = evaluate(&s.u + &step, expect_accept);
+                // Reduction the linear model predicts: −(2gᵀδ + δᵀAδ).
+                let predicted = -(2.0 * g.dot(&step) + step.dot(&(&a * &step)));
+                if trial.cost < s.cost {
+                    // A small decrease means convergence only for a step close to
+                    // Gauss–Newton's; a heavily damped one is small by construction.
+                    let small_f = s.cost - trial.cost <= FTOL * s.cost && *lambda <= 1.0;
+                    let rho = (s.cost - trial.cost) / predicted.max(f64::MIN_POSITIVE);
+                    *lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+                    *nu = 10.0;
+                    let crawling = s.cost - trial.cost <= CRAWL * s.cost;
+                    *s = trial;
+                    // The transform is flat at a bound: an optimum on it is
+                    // approached ever more slowly (the cost is quartic in `u`
+                    // there). Once progress has slowed to a crawl, try the
+                    // parameters that are nearly on a bound on it; keep that if
+                    // it is no worse.
+                    let near: Vec<usize> = (0..s.u.len())
+                        .filter(|_| crawling)
+                        .filter(|&i| {
+                            let d = (s.u[i].sin().abs().min(1.0)).acos();
+                            d > 1.5 * ON_BOUND && d < SNAP
+                        })
+                        .collect();
+                    if !near.is_empty() {
+                        let mut u = s.u.clone();
+                        for &i in &near {
+                            u[i] = (std::f64::consts::FRAC_PI_2 - ON_BOUND).copysign(s.u[i].sin());
+                        }
+                        let snapped = evaluate(u, true);
+                        if snapped.cost <= s.cost {
+                            *s = snapped;
+                        }
+                    }
+                    if small_f || small_x {
+                        return false;
+                    }
+                    break;
+                }
+                expect_accept = false;
+                *lambda *= *nu;
+                *nu *= 2.0;
+                if *lambda > 1e16 {
+                    return false;
+                }
             }
         }
+        true
     }
-    external(&s.u)
+}
+
+/// The residuals (and, if asked, the Jacobian in the transformed
+/// parameters) at `u`.
+fn evaluate(problem: &Problem, bounds: &[Bound], u: DVector<f64>, with_jacobian: bool) -> State {
+    let x: Vec<f64> = bounds.iter().zip(u.iter()).map(|(b, &u)| to_external(b, u)).collect();
+    let (r, j) = if with_jacobian {
+        let (r, mut j) = problem.residuals_and_jacobian(&x);
+        for (c, (b, &uc)) in bounds.iter().zip(u.iter()).enumerate() {
+            let k = slope(b, uc);
+            j.column_mut(c).iter_mut().for_each(|v| *v *= k);
+        }
+        (r, Some(j))
+    } else {
+        (problem.residuals(&x), None)
+    };
+    let r = DVector::from_vec(r);
+    let cost = r.norm_squared();
+    State {
+        u,
+        r,
+        j,
+        cost: if cost.is_finite() { cost } else { f64::INFINITY },
+    }
 }
