@@ -11,8 +11,8 @@
 //! the damping update is Nielsen's (Madsen, Nielsen & Tingleff 2004, §3.2).
 
 use super::problem::Problem;
-use crate::brdf::Bound;
 use super::transform::{slope, to_external, to_internal};
+use crate::brdf::Bound;
 use nalgebra::{DMatrix, DVector};
 
 /// Stop when a step lowers the cost by less than this fraction.
@@ -135,15 +135,11 @@ impl<'a> Descent<'a> {
         let (problem, bounds) = (self.problem, &self.bounds);
         let evaluate = |u: DVector<f64>, with_jacobian: bool| evaluate(problem, bounds, u, with_jacobian);
         let n = self.start.len();
-        let Descent {
-            s, lambda, nu, scale, ..
-        } = self;
+        let Descent { s, lambda, nu, scale, .. } = self;
         for _ in 0..iterations {
             let j = match s.j.take() {
                 Some(j) => j,
-                None => evaluate(s.u.clone(), true)
-                    .j
-                    .unwrap_or_else(|| DMatrix::zeros(s.r.len(), n)),
+                None => evaluate(s.u.clone(), true).j.unwrap_or_else(|| DMatrix::zeros(s.r.len(), n)),
             };
             let a: DMatrix<f64> = j.tr_mul(&j);
             let g: DVector<f64> = j.tr_mul(&s.r);

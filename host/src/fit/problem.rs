@@ -27,7 +27,9 @@ fn fill(out: &mut [f64], width: usize, f: impl Fn(usize, &mut [f64]) + Sync) {
     if out.len() < PARALLEL_MIN * width {
         f(0, out);
     } else {
-        out.par_chunks_mut(CHUNK * width).enumerate().for_each(|(c, part)| f(c * CHUNK, part));
+        out.par_chunks_mut(CHUNK * width)
+            .enumerate()
+            .for_each(|(c, part)| f(c * CHUNK, part));
     }
 }
 
