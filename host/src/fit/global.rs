@@ -42,15 +42,18 @@ const PROBE_ITERATIONS: usize = 40;
 /// two looks at the field (5 dropped the two-lobe winner early; 25 spent
 /// twice the time on losers).
 const ROUND: usize = 10;
-/// Two candidates this close in cost (relative) are on the same optimum: the
-/// slower one is out.
+/// Two running candidates this close in cost (relative) are on the same
+/// optimum: the higher one is out.
 const SAME_OPTIMUM: f64 = 1e-8;
 /// Rounds ahead over which a candidate's pace must be able to take it to
-/// the best cost to stay in the race.
+/// the best cost to stay in the race. It assumes descents slow down; one
+/// that would speed up later (leaving a plateau as its damping falls) can be
+/// dropped: a trade of certainty for time, set on `fit-bench`'s misfit cases.
 const HORIZON: usize = 3;
-/// A candidate this close (relative) above one that has converged is
-/// crawling to the same floor along a flat valley (retro-phong's towards a
-/// bound): it is out.
+/// A candidate this close (relative) above one that has ended (converged,
+/// or could go no further) is crawling to the same floor along a flat
+/// valley (retro-phong's towards a bound): it is out. Judged by cost alone:
+/// a different basin within 1e-5 of an ended one is given up too.
 const SAME_FLOOR: f64 = 1e-5;
 /// …and so are two this close in cost and in every parameter (relative):
 /// two descents into one basin, one of them behind.

@@ -114,7 +114,8 @@ impl<'a> Descent<'a> {
     }
 
     /// Whether `other` is heading for the same optimum: every parameter
-    /// within `rel` of each other (relative, or of its box's width).
+    /// within `rel` of the two values' mean magnitude (for a parameter near
+    /// zero, within `rel` of a millionth of its box's width).
     pub fn near(&self, other: &Descent, rel: f64) -> bool {
         let (x, y) = (self.x(), other.x());
         x.iter()
@@ -255,5 +256,68 @@ fn evaluate(problem: &Problem, bounds: &[Bound], u: DVector<f64>, with_jacobian:
         r,
         j,
         cost: if cost.is_finite() { cost } else { f64::INFINITY },
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::brdf::{Directions, Geometry, ModelId, Param};
+    use crate::uncertainty::SHARED;
+
+    /// Retro-phong data over a spread of geometries, with a deterministic
+    /// ±3 % ripple standing in for noise.
+    fn problem() -> Problem {
+        let model = ModelId::RetroPhong;
+        let truth = [0.3, 30.0, 0.2, 0.05, 0.01, 4.0];
+        let geos: Vec<Geometry> = (0..600)
+            .map(|k| {
+                Geometry::new(&Directions::from_degrees(
+                    10.0 + (k % 6) as f64 * 12.0,
+                    (k * 7 % 80) as f64,
+                    -180.0 + (k * 37 % 360) as f64,
+                ))
+            })
+            .collect();
+        let y = geos
+            .iter()
+            .enumerate()
+            .map(|(k, g)| model.eval(g, &truth, Param::View) * (1.0 + 0.03 * (k as f64 * 0.7).sin()))
+            .collect();
+        let m = geos.len();
+        Problem {
+            model,
+            param: Param::View,
+            geos,
+            y,
+            scale: vec![1.0; m],
+            weight: vec![1.0; m],
+            shared: vec![[0.0; SHARED.len()]; m],
+            bounds_all: model.bounds().to_vec(),
+            template: truth.to_vec(),
+            free: (0..truth.len()).collect(),
+        }
+    }
+
+    /// The global search's race runs a descent a few rounds at a time: it
+    /// keeps its damping, scaling and Jacobian between runs, so the pieces
+    /// end exactly where one run of the same length does.
+    #[test]
+    fn a_descent_run_in_pieces_is_the_same_descent() {
+        let p = problem();
+        let start: Vec<f64> = p.bounds().iter().map(|b| crate::fit::transform::from_unit(b, 0.5)).collect();
+        let mut whole = Descent::new(&p, &start);
+        whole.run(12);
+        let mut pieces = Descent::new(&p, &start);
+        pieces.run(2);
+        // Still going after the first piece: the pieces do continue it.
+        assert!(!pieces.finished());
+        for _ in 0..5 {
+            pieces.run(2);
+        }
+        assert_eq!(whole.x(), pieces.x());
+        assert_eq!(whole.cost().to_bits(), pieces.cost().to_bits());
+        assert_eq!(whole.finished(), pieces.finished());
+        assert!(whole.cost() < Descent::new(&p, &start).cost());
     }
 }

@@ -16,8 +16,10 @@ use rayon::prelude::*;
 /// numbers on any number of threads.
 const CHUNK: usize = 256;
 /// Fewer samples than this are evaluated on the calling thread: the global
-/// search's subsets (600 samples and up) are evaluated many at a time
-/// instead, one candidate per thread, where the hand-over costs nothing.
+/// search's subsets (600 samples and up) are evaluated many candidates at a
+/// time instead, one per thread, where the hand-over costs nothing. A subset
+/// of data past 40 960 samples is larger, and nests its tasks inside the
+/// candidates' (rayon's work stealing runs both).
 const PARALLEL_MIN: usize = 2048;
 
 /// Fills `out`, `width` values per sample, with `f(first sample, its part)`:
