@@ -87,16 +87,6 @@ class Elf:
                     self.functions.append((value & ~1, size, name))
 
 
-def thumb_instructions(code):
-    """Number of Thumb-2 instructions in `code` (whole instructions)."""
-    n = i = 0
-    while i + 1 < len(code):
-        hw = code[i] | code[i + 1] << 8
-        i += 4 if (hw >> 11) in (0b11101, 0b11110, 0b11111) else 2
-        n += 1
-    return n
-
-
 class Counter(ctypes.Structure):
     """`struct counter` of count.c."""
 

@@ -110,7 +110,7 @@ impl<'a> Descent<'a> {
         if !self.s.cost.is_finite() {
             return self.start.clone();
         }
-        self.bounds.iter().zip(self.s.u.iter()).map(|(b, &u)| to_external(b, u)).collect()
+        external(&self.bounds, &self.s.u)
     }
 
     /// Whether `other` is heading for the same optimum: every parameter
@@ -235,10 +235,15 @@ impl<'a> Descent<'a> {
     }
 }
 
+/// The parameters at the transformed `u`.
+fn external(bounds: &[Bound], u: &DVector<f64>) -> Vec<f64> {
+    bounds.iter().zip(u.iter()).map(|(b, &u)| to_external(b, u)).collect()
+}
+
 /// The residuals (and, if asked, the Jacobian in the transformed
 /// parameters) at `u`.
 fn evaluate(problem: &Problem, bounds: &[Bound], u: DVector<f64>, with_jacobian: bool) -> State {
-    let x: Vec<f64> = bounds.iter().zip(u.iter()).map(|(b, &u)| to_external(b, u)).collect();
+    let x = external(bounds, &u);
     let (r, j) = if with_jacobian {
         let (r, mut j) = problem.residuals_and_jacobian(&x);
         for (c, (b, &uc)) in bounds.iter().zip(u.iter()).enumerate() {

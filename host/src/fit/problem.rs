@@ -87,10 +87,15 @@ impl Problem {
         let mut r = vec![0.0; self.geos.len()];
         fill(&mut r, 1, |first, out| {
             for (k, r) in (first..).zip(out) {
-                *r = self.weight[k] * (self.scale[k] * self.model.eval(&self.geos[k], &p, self.param) - self.y[k]);
+                *r = self.residual(k, self.model.eval(&self.geos[k], &p, self.param));
             }
         });
         r
+    }
+
+    /// Sample `k`'s weighted residual where the model gives `f_r = f`.
+    fn residual(&self, k: usize, f: f64) -> f64 {
+        self.weight[k] * (self.scale[k] * f - self.y[k])
     }
 
     /// `Σ r²`; infinite where the model overflows.
@@ -164,7 +169,7 @@ impl Problem {
                 let f = sample(&self.geos[k], row, &mut buf);
                 let ws = self.weight[k] * self.scale[k];
                 row.iter_mut().for_each(|d| *d *= ws);
-                r[0] = self.weight[k] * (self.scale[k] * f - self.y[k]);
+                r[0] = self.residual(k, f);
             }
         });
         let r = out.iter().step_by(width).copied().collect();
