@@ -1,11 +1,13 @@
 //! Shared pieces of the test suites and benchmarks: proptest strategies for
 //! every message type, hardware doubles for driving the firmware core without
 //! the simulator, one scan read back, the host model of the step-timer
-//! interrupt, and the chopped signal of the lock-in benchmark.
+//! interrupt, the chopped signal of the lock-in benchmark, and the
+//! fixed-point models' cases.
 
 pub mod chip_costs;
 pub mod chop_signal;
 pub mod doubles;
+pub mod fixed_agreement;
 pub mod frames;
 pub mod fuzz;
 pub mod safety_bench;

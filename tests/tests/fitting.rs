@@ -208,7 +208,7 @@ fn shared_inputs_enter_the_covariance_as_the_refit_moves_the_parameters() {
 }
 
 /// The samples and the search's candidates are shared among threads, but
-/// the sums stay in sample order and the candidates in theirs: one thread
+/// the sums stay in task order and the candidates in theirs: one thread
 /// and three give the very same fit, bit for bit (the sample count is past
 /// the size the evaluation is split at).
 #[test]

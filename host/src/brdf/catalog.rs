@@ -10,7 +10,7 @@ use anyhow::{Context, Result};
 use serde::{Deserialize, Serialize};
 
 /// `f_r` at a geometry, writing its gradient in every parameter into the slice.
-pub type HandGradient = fn(&Geometry, &[f64], &mut [f64]) -> f64;
+pub type HandGradient = fn(&Geometry, &[f64], Param, &mut [f64]) -> f64;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -218,6 +218,7 @@ impl ModelId {
     pub fn hand_gradient(self) -> Option<HandGradient> {
         match self {
             ModelId::Lafortune => Some(lafortune::value_and_gradient),
+            ModelId::RetroPhong => Some(retro_phong::value_and_gradient),
             _ => None,
         }
     }
@@ -233,6 +234,38 @@ impl ModelId {
             ModelId::Lafortune => lafortune::eval(g, p),
             ModelId::OrenNayar => oren_nayar::eval(g, p),
             ModelId::FiveParam => five_param::eval(g, p),
+        }
+    }
+}
+
+/// Asserts that `model`'s hand-written gradient gives the value and the
+/// derivatives that dual numbers give through its `eval`, at `p`, every one
+/// of `geometries` (θi, θo, Δφ in degrees) and both retro cosines.
+#[cfg(test)]
+pub(crate) fn assert_hand_gradient<const N: usize>(model: ModelId, p: [f64; N], geometries: &[(f64, f64, f64)]) {
+    use num_dual::DualSVec64;
+    let hand = model.hand_gradient().expect("a hand-written gradient");
+    for &(ti, to, dp) in geometries {
+        let g = Geometry::new(&super::Directions::from_degrees(ti, to, dp));
+        for param in [Param::View, Param::Back] {
+            let duals: Vec<DualSVec64<N>> = p.iter().enumerate().map(|(i, &v)| DualSVec64::from_re(v).derivative(i)).collect();
+            let want = model.eval(&g, &duals, param);
+            let mut grad = [0.0; N];
+            let f = hand(&g, &p, param, &mut grad);
+            assert!(
+                (f - want.re).abs() <= 1e-12 * want.re.abs(),
+                "{ti} {to} {dp} {param:?}: {f} vs {}",
+                want.re
+            );
+            let d = want.eps.unwrap_generic(nalgebra::Const::<N>, nalgebra::U1);
+            for i in 0..N {
+                assert!(
+                    (grad[i] - d[i]).abs() <= 1e-10 * d[i].abs().max(1e-10),
+                    "{ti} {to} {dp} {param:?} ∂/∂p{i}: {} vs {}",
+                    grad[i],
+                    d[i]
+                );
+            }
         }
     }
 }

@@ -115,12 +115,18 @@ fn main() {
     ensure_scipy();
     let mut report = Map::new();
     // `fit-bench misfit [N [FILTER]]`: the misfit table alone (its first N
-    // cases, those whose `SAMPLES/MATERIAL/MODEL` holds FILTER).
-    let misfit_only = std::env::args().nth(1).as_deref() == Some("misfit");
+    // cases, those whose `SAMPLES/MATERIAL/MODEL` holds FILTER);
+    // `fit-bench models [MODEL]`: the per-model figures alone.
+    let mode = std::env::args().nth(1).unwrap_or_default();
+    let (misfit_only, models_only) = (mode == "misfit", mode == "models");
     let cases: usize = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(usize::MAX);
     let filter = std::env::args().nth(3).unwrap_or_default();
+    let only_model = std::env::args().nth(2).filter(|_| models_only);
     let mut worst = (f64::INFINITY, 0.0f64, SEEDS);
-    for model in ModelId::ALL.into_iter().filter(|_| !misfit_only) {
+    for model in ModelId::ALL
+        .into_iter()
+        .filter(|m| !misfit_only && only_model.as_deref().is_none_or(|name| name == m.name()))
+    {
         let truth = synthetic::reference(model);
         let data = synthetic::samples(&truth, SAMPLES, NOISE, 7);
         let spec = FitSpec::new(model);
@@ -200,6 +206,10 @@ fn main() {
                 "global_hits": hits, "global_seeds": SEEDS, "model_agreement": agreement,
             }),
         );
+    }
+    if models_only {
+        println!("{}", Value::Object(report));
+        return;
     }
     let (misfit, worst_rmse, worst_time) = misfit(cases, &filter);
     report.insert("misfit".into(), misfit);
