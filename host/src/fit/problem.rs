@@ -144,23 +144,13 @@ impl Problem {
             .collect()
     }
 
-    /// Weighted residuals, the samples shared among the threads.
-    pub fn residuals(&self, x: &[f64]) -> Vec<f64> {
-        let p = self.full(x);
-        tasks(self.geos.len(), |range| {
-            range
-                .map(|k| self.residual(k, self.model.eval(&self.geos[k], &p, self.param)))
-                .collect::<Vec<_>>()
-        })
-        .concat()
-    }
-
     /// Sample `k`'s weighted residual where the model gives `f_r = f`.
     fn residual(&self, k: usize, f: f64) -> f64 {
         self.weight[k] * (self.scale[k] * f - self.y[k])
     }
 
-    /// `Σ r²`; infinite where the model overflows. Summed as
+    /// `Σ r²`, the samples shared among the threads; infinite where the
+    /// model overflows. Summed as
     /// [`Problem::normal_equations`] sums it, so a descent compares like
     /// with like whichever of the two gave a point's cost.
     pub fn cost(&self, x: &[f64]) -> f64 {
