@@ -33,6 +33,10 @@ pub struct ScanOutcome {
     pub recoveries: BTreeMap<String, u32>,
     /// Time the head spent (its clock, s): real time on a real head, simulated time on the simulator.
     pub head_time_s: f64,
+    /// No stop-and-go order of the scan's points takes less head time than
+    /// this (s; [`crate::scan_order::lower_bound`]); absent for a resumed scan,
+    /// whose head time covers only its last part.
+    pub lower_bound_s: Option<f64>,
     pub wall_time_s: f64,
 }
 
@@ -128,6 +132,7 @@ pub async fn run(
             duplicates_dropped: 0,
             recoveries: BTreeMap::new(),
             head_time_s: 0.0,
+            lower_bound_s: None,
             wall_time_s: 0.0,
         },
         clock: HeadClock::default(),

@@ -1,6 +1,9 @@
-//! The scan grid shared by head and host: canonical indexing and the
-//! serpentine visit order.
+//! The scan grid shared by head and host: canonical indexing, the
+//! serpentine visit order, and the host's plan against its lower bound.
 
+use gonio_firmware::board::REFERENCE;
+use gonio_firmware::motion::PARK;
+use gonio_host::scan_order::{lower_bound, scan_time, visit_order, ScanTime};
 use gonio_shared::{AngleRange, ScanSpec};
 use proptest::prelude::*;
 use std::collections::BTreeSet;
@@ -51,4 +54,73 @@ fn ranges_include_their_stop_and_refuse_nonsense() {
     assert_eq!(s.validate(), Ok(3441));
     s.first_order = 3442;
     assert!(s.validate().is_err());
+}
+
+/// Small grids on the reference head, some with unreachable points.
+fn small_grid() -> impl Strategy<Value = ScanSpec> {
+    (1usize..=2, 1u32..4, 1u32..4, 0.0f32..80.0, 1.0f32..12.0, 1.0f32..40.0).prop_map(|(n_ti, n_to, n_dp, to0, to_step, dp_step)| {
+        ScanSpec {
+            theta_i_deg: heapless::Vec::from_slice(&[20.0, 55.0][..n_ti]).unwrap(),
+            theta_o: AngleRange::new(to0, to0 + to_step * (n_to - 1) as f32, to_step),
+            dphi: AngleRange::new(-170.0, -170.0 + dp_step * (n_dp - 1) as f32, dp_step),
+            first_order: 0,
+        }
+    })
+}
+
+/// Every order of `points` (Heap's algorithm), each handed to `visit`.
+fn each_order(points: &mut [u32], k: usize, visit: &mut impl FnMut(&[u32])) {
+    if k <= 1 {
+        visit(points);
+        return;
+    }
+    for i in 0..k {
+        each_order(points, k - 1, visit);
+        let j = if k % 2 == 0 { i } else { 0 };
+        points.swap(j, k - 1);
+    }
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(64))]
+
+    /// The lower bound is one: no order of the points, the plan's or any
+    /// other, takes less (every order is tried on grids of up to 6 points),
+    /// and the plan visits every point once.
+    #[test]
+    fn no_order_beats_the_lower_bound(spec in small_grid()) {
+        let cfg = &REFERENCE;
+        let (settle, integration) = (0.05, 0.1);
+        let (bound, moves) = lower_bound(cfg, &spec, PARK, settle, integration);
+        prop_assert!(bound.moves_s >= moves.shortest_entry_s.max(moves.two_neighbours_s) - 1e-12);
+        let plan: Vec<u32> = visit_order(cfg, &spec, PARK).collect();
+        prop_assert_eq!(plan.iter().collect::<BTreeSet<_>>().len() as u32, spec.len());
+        prop_assert_eq!(plan.len() as u32, spec.len());
+        // The chip's planning is not in the bound: compare what the stages and the detector take.
+        let physical = |t: ScanTime| t.total_s() - t.planning_s;
+        let planned = scan_time(cfg, &spec, plan.iter().copied(), PARK, settle, integration);
+        prop_assert_eq!(planned.measured, bound.measured);
+        prop_assert!(physical(planned) >= bound.total_s() - 1e-9, "plan {} < bound {}", physical(planned), bound.total_s());
+        let mut points: Vec<u32> = (0..spec.len()).collect();
+        let mut best = f64::INFINITY;
+        if points.len() <= 6 {
+            let n = points.len();
+            each_order(&mut points, n, &mut |order| {
+                best = best.min(physical(scan_time(cfg, &spec, order.iter().copied(), PARK, settle, integration)));
+            });
+            prop_assert!(best >= bound.total_s() - 1e-9, "an order takes {} < bound {}", best, bound.total_s());
+        }
+    }
+}
+
+/// The Belcour grid's plan against its bound (`scan-bench` quotes the
+/// figure; this keeps the planner from sliding back to the greedy path,
+/// about 1.05 times the bound by this measure).
+#[test]
+fn the_belcour_plan_is_within_four_percent_of_the_bound() {
+    let (cfg, spec) = (&REFERENCE, ScanSpec::belcour());
+    let (bound, _) = lower_bound(cfg, &spec, PARK, 0.05, 0.1);
+    let plan = scan_time(cfg, &spec, visit_order(cfg, &spec, PARK), PARK, 0.05, 0.1);
+    let ratio = (plan.total_s() - plan.planning_s) / bound.total_s();
+    assert!(ratio < 1.04, "plan / bound = {ratio}");
 }

@@ -11,7 +11,7 @@ use crate::client::Target;
 use crate::run_record::RunRecord;
 use crate::samples_csv::{stored_rows, SampleWriter};
 use crate::scan::{self, Monitor, ScanOutcome};
-use crate::scan_order::{scan_time, visit_order};
+use crate::scan_order::{lower_bound, scan_time, visit_order};
 use crate::session::{Session, Setup};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
@@ -107,7 +107,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
     };
     let domain = fit::domain(&calibrated.csv, &options)?;
     let rows = fit::compare(&domain, &options)?;
-    let facts = vec![
+    let mut facts = vec![
         ("head".to_string(), "simulated (gonio demo)".to_string()),
         ("virtual material".to_string(), truth.describe()),
         (
@@ -129,6 +129,9 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ),
         ("data".to_string(), calibrated.csv.display().to_string()),
     ];
+    if let Some(bound) = outcome.lower_bound_s {
+        facts.push(("scan time".to_string(), against_bound(outcome.head_time_s, bound)));
+    }
     let budget = crate::calibration::budget_by_incidence(&calibrated.rows);
     let report = fit::report(&a.out, format!("gonio demo: {}", truth.describe()), facts, &domain, &rows, &budget)?;
     let best = rows
@@ -293,6 +296,9 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
             .insert("link lost while preparing the head".into(), reconnected_before_scan);
     }
     let samples = writer.finish()?;
+    if resume.is_none() {
+        outcome.lower_bound_s = Some(lower_bound_s(spec, &detection));
+    }
     if resume.is_some() {
         // Counts of the whole scan, not only of this session.
         outcome.measured = crate::samples_csv::read(&samples)?.iter().filter(|r| r.index.is_some()).count() as u32;
@@ -309,17 +315,38 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     Ok((outcome, samples))
 }
 
-/// The head's plan replayed from the park position under the reference axis
-/// limits, from the scan's first position on: moves, settle and integration
-/// (s), the latter with the chop periods the detector spends ranging the gain
-/// and letting the amplifier settle.
-fn estimate_s(spec: &ScanSpec, det: &DetectionReport) -> f64 {
-    let cfg = &REFERENCE;
-    let settle = cfg.detector.settle_periods as f64;
+/// Settle and acquisition time per point (s): the acquisition counts the
+/// chop periods the detector spends ranging the gain and letting the
+/// amplifier settle.
+fn dwell_s(det: &DetectionReport) -> (f64, f64) {
+    let settle = REFERENCE.detector.settle_periods as f64;
     let extra_periods = if det.settings.auto_range { 2.0 * settle + 1.0 } else { settle };
     let acquire = det.integration_s as f64 + extra_periods / det.chop_hz_actual as f64;
-    let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
-    scan_time(cfg, spec, rest, PARK, det.settings.settle_s as f64, acquire).total_s()
+    (det.settings.settle_s as f64, acquire)
+}
+
+/// The head's plan replayed from the park position under the reference axis
+/// limits, from the scan's first position on: moves, settle and acquisition (s).
+fn estimate_s(spec: &ScanSpec, det: &DetectionReport) -> f64 {
+    let (settle, acquire) = dwell_s(det);
+    let rest = visit_order(&REFERENCE, spec, PARK).skip(spec.first_order as usize);
+    scan_time(&REFERENCE, spec, rest, PARK, settle, acquire).total_s()
+}
+
+/// The least head time any stop-and-go order of the whole scan could take (s).
+fn lower_bound_s(spec: &ScanSpec, det: &DetectionReport) -> f64 {
+    let (settle, acquire) = dwell_s(det);
+    lower_bound(&REFERENCE, spec, PARK, settle, acquire).0.total_s()
+}
+
+/// Head time against the lower bound, in words.
+fn against_bound(head_time_s: f64, bound_s: f64) -> String {
+    format!(
+        "{} of head time; no stop-and-go order of these points takes less than {} (× {:.3})",
+        hms(head_time_s),
+        hms(bound_s),
+        head_time_s / bound_s
+    )
 }
 
 fn hms(s: f64) -> String {
@@ -336,6 +363,9 @@ fn summarise(o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
         "{} points: {} measured, {} unreachable, {} flagged; {:.0} s of head time in {:.1} s",
         o.points, o.measured, o.skipped, o.flagged, o.head_time_s, o.wall_time_s
     );
+    if let Some(bound) = o.lower_bound_s {
+        println!("  {}", against_bound(o.head_time_s, bound));
+    }
     for (reason, n) in &o.skipped_by_reason {
         println!("  {n:5} × {reason}");
     }

@@ -15,8 +15,8 @@
 //!   first), plus 24 cycles of exception entry and exit, one cycle per
 //!   instruction at 168 MHz: every edge within one tick of its schedule, no
 //!   step lost. Null when chip-bench has not run.
-//! - `plan_time_s`, `raster_time_s`: the Belcour grid in the head's serpentine
-//!   order and in raster order (θi, θo, Δφ loops, Δφ innermost), moves under
+//! - `plan_time_s`, `raster_time_s`: the Belcour grid in the host's planned
+//!   order (`scan-bench` compares it with its lower bound) and in raster order (θi, θo, Δφ loops, Δφ innermost), moves under
 //!   the reference axis limits plus 50 ms settle and 100 ms integration per point.
 
 use gonio_firmware::board::{HeadConfig, REFERENCE};

@@ -1,0 +1,60 @@
+//! What a visit order costs in head time: the moves under the axis limits,
+//! the chip's planning of them, and the dwell at every measured point.
+
+use gonio_firmware::board::HeadConfig;
+use gonio_firmware::kinematics;
+use gonio_firmware::motion::blocks::plan_s;
+use gonio_firmware::motion::{move_blocks, move_time, target_steps};
+use gonio_shared::ScanSpec;
+
+/// The step timer's tick rate on the reference board (chip/step_timer.rs).
+const STEP_TICK_HZ: u32 = 1_000_000;
+
+/// Time budget of a scan (s).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct ScanTime {
+    pub moves_s: f64,
+    /// The chip's planning of the moves ([`gonio_firmware::motion::blocks::plan_s`]).
+    pub planning_s: f64,
+    pub settle_s: f64,
+    pub integration_s: f64,
+    pub measured: u32,
+    pub skipped: u32,
+}
+
+impl ScanTime {
+    pub fn total_s(&self) -> f64 {
+        self.moves_s + self.planning_s + self.settle_s + self.integration_s
+    }
+}
+
+/// Duration of the points of `spec` in the order `visit` yields them (canonical
+/// indices), starting from stage position `from` (microsteps); unreachable
+/// points are skipped without moving, as the head does.
+pub fn scan_time(
+    cfg: &HeadConfig,
+    spec: &ScanSpec,
+    visit: impl Iterator<Item = u32>,
+    from: [i32; 3],
+    settle_s: f64,
+    integration_s: f64,
+) -> ScanTime {
+    let mut t = ScanTime::default();
+    let mut at = from;
+    for g in visit.filter_map(|i| spec.point(i)) {
+        match kinematics::inverse(cfg, &g) {
+            Ok(axes) => {
+                let target = target_steps(cfg, &axes);
+                let delta = [0, 1, 2].map(|i| target[i] - at[i]);
+                t.moves_s += move_time(cfg, delta);
+                t.planning_s += plan_s(move_blocks(cfg, delta, STEP_TICK_HZ));
+                at = target;
+                t.settle_s += settle_s;
+                t.integration_s += integration_s;
+                t.measured += 1;
+            }
+            Err(_) => t.skipped += 1,
+        }
+    }
+    t
+}
