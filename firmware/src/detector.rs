@@ -51,15 +51,6 @@ pub struct Detector {
     running: bool,
 }
 
-fn wrap_deg(d: f64) -> f64 {
-    let x = libm::fmod(d + 180.0, 360.0);
-    if x < 0.0 {
-        x + 180.0
-    } else {
-        x - 180.0
-    }
-}
-
 impl Detector {
     /// Starts with `settings`; a matched reference there falls back to the
     /// square until a calibration has learned the waveform.
@@ -134,7 +125,7 @@ impl Detector {
     /// Reads one period into `buf`, noting an overrun in `flags`.
     async fn period<B: Board>(hw: &mut Hardware<B>, buf: &mut [u16], flags: &mut SampleFlags) {
         if hw.adc.next_period(buf).await.is_err() {
-            flags.set(SampleFlags::OVERRUN);
+            flags.insert(SampleFlags::OVERRUN);
         }
     }
 
@@ -227,20 +218,20 @@ impl Detector {
 
     fn flag(&self, e: &Estimate, full: u16, flags: &mut SampleFlags) {
         if e.max >= full || e.min == 0 {
-            flags.set(SampleFlags::SATURATED);
+            flags.insert(SampleFlags::SATURATED);
         }
         if e.amplitude.abs() < NOISE_FLOOR_K * e.std_err {
-            flags.set(SampleFlags::BELOW_NOISE);
+            flags.insert(SampleFlags::BELOW_NOISE);
         }
         if let Some(l) = self.learned() {
             let snr = e.magnitude / e.std_err.max(1e-12);
-            let off = wrap_deg(e.phase_deg - l.phase_square.to_degrees());
+            let off = units::wrap_deg(e.phase_deg - l.phase_square.to_degrees());
             let reference_off = match self.reference.kind() {
-                Kind::Sine => wrap_deg(e.phase_deg - l.phase_sine.to_degrees()),
+                Kind::Sine => units::wrap_deg(e.phase_deg - l.phase_sine.to_degrees()),
                 Kind::Square | Kind::Matched => off,
             };
             if snr > PHASE_CHECK_SNR && libm::fabs(reference_off) > PHASE_TOLERANCE_DEG {
-                flags.set(SampleFlags::PHASE_OFF);
+                flags.insert(SampleFlags::PHASE_OFF);
             }
         }
     }

@@ -350,14 +350,14 @@ impl<B: Board> Head<B> {
         if m.flags.contains(SampleFlags::MODEL_MISMATCH) && self.sanity.as_ref().is_some_and(|s| s.config().remeasure) {
             // Measured once more; the second reading stands, marked as such.
             m = self.measure_checked(&reached, splitter).await?;
-            m.flags.set(SampleFlags::REMEASURED);
+            m.flags.insert(SampleFlags::REMEASURED);
             self.samples_remeasured = self.samples_remeasured.wrapping_add(1);
         }
         let mut flags = m.flags;
         if splitter {
-            flags.set(SampleFlags::THROUGH_SPLITTER);
+            flags.insert(SampleFlags::THROUGH_SPLITTER);
         }
-        if flags.0 & !SampleFlags::THROUGH_SPLITTER != 0 {
+        if flags.doubtful() {
             self.samples_flagged = self.samples_flagged.wrapping_add(1);
         }
         let s = Sample {
@@ -404,7 +404,7 @@ impl<B: Board> Head<B> {
                 .zip(fg)
                 .map(|(s, fg)| (s, s.expected_at(&fg, m.gain_v_per_a, through_splitter)));
             if expected.is_none_or(|(s, e)| s.mismatch(e, m.amplitude_v, m.noise_v)) {
-                m.flags.set(SampleFlags::MODEL_MISMATCH);
+                m.flags.insert(SampleFlags::MODEL_MISMATCH);
             }
             embassy_futures::yield_now().await;
         }

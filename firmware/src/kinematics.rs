@@ -10,6 +10,7 @@
 //! soft-float f64 on the Cortex-M4 irrelevant.
 
 use crate::board::HeadConfig;
+use crate::units;
 use gonio_shared::{Axis, AxisAngles, Fault, Field, Geometry, Unreachable};
 use libm::{atan2, cos, sin, sqrt};
 
@@ -30,17 +31,6 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// Angle between two unit vectors, accurate at 0 and π.
 fn angle(a: [f64; 3], b: [f64; 3]) -> f64 {
     atan2(norm3(cross(a, b)), dot(a, b))
-}
-
-/// Wraps degrees into (−180, 180].
-fn wrap_deg(d: f64) -> f64 {
-    let mut x = d % 360.0;
-    if x <= -180.0 {
-        x += 360.0;
-    } else if x > 180.0 {
-        x -= 360.0;
-    }
-    x
 }
 
 /// Checks a requested geometry's fields (finite, θ in [0°, 90°), |Δφ| ≤ 360°).
@@ -105,7 +95,7 @@ pub fn forward(a: &AxisAngles) -> Geometry {
     let y = dot(n, cross(l, d));
     let x = dot(l, d) - dot(n, l) * dot(n, d);
     let dphi = if sin(ti) * sin(to) < 1e-12 { 0.0 } else { atan2(y, x) };
-    Geometry::new((ti / DEG) as f32, (to / DEG) as f32, wrap_deg(dphi / DEG) as f32)
+    Geometry::new((ti / DEG) as f32, (to / DEG) as f32, units::wrap_deg(dphi / DEG) as f32)
 }
 
 /// Stage angles for a geometry the head can reach, or why it cannot.

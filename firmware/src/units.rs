@@ -11,6 +11,19 @@ pub fn deg_to_steps(axis: &AxisConfig, deg: f32) -> i32 {
     libm::round(deg as f64 * axis.microsteps_per_rev as f64 / 360.0) as i32
 }
 
+/// An angle in degrees wrapped into (−180°, 180°]: Δφ from the kinematics,
+/// phase offsets in the detector.
+pub fn wrap_deg(d: f64) -> f64 {
+    let x = libm::fmod(d, 360.0);
+    if x <= -180.0 {
+        x + 360.0
+    } else if x > 180.0 {
+        x - 360.0
+    } else {
+        x
+    }
+}
+
 /// Microsteps → degrees.
 pub fn steps_to_deg(axis: &AxisConfig, steps: i32) -> f32 {
     (steps as f64 * 360.0 / axis.microsteps_per_rev as f64) as f32
@@ -62,4 +75,26 @@ pub fn chop_hz_actual(t: ChopTiming, timer_hz: u32) -> f32 {
 /// ADC codes → volts at the ADC input.
 pub fn codes_to_volts(codes: f32, bits: u8, vref: f32) -> f32 {
     codes * vref / (1u32 << bits) as f32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::wrap_deg;
+
+    #[test]
+    fn angles_wrap_into_the_half_open_turn() {
+        for (d, want) in [
+            (0.0, 0.0),
+            (180.0, 180.0),
+            (-180.0, 180.0),
+            (540.0, 180.0),
+            (-540.0, 180.0),
+            (190.0, -170.0),
+            (-190.0, 170.0),
+            (719.5, -0.5),
+            (-359.0, 1.0),
+        ] {
+            assert_eq!(wrap_deg(d), want, "wrap_deg({d})");
+        }
+    }
 }

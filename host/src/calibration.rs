@@ -29,10 +29,13 @@ use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 
 /// Samples whose value is not a measurement of the BRDF.
-const UNUSABLE: u16 = SampleFlags::SATURATED | SampleFlags::OVERRUN | SampleFlags::PHASE_OFF | SampleFlags::BELOW_NOISE;
+const UNUSABLE: SampleFlags = SampleFlags::SATURATED
+    .union(SampleFlags::OVERRUN)
+    .union(SampleFlags::PHASE_OFF)
+    .union(SampleFlags::BELOW_NOISE);
 
 pub fn usable(r: &Row) -> bool {
-    r.flags & UNUSABLE == 0
+    !r.sample_flags().intersects(UNUSABLE)
 }
 
 fn current_a(r: &Row) -> f64 {
@@ -40,7 +43,7 @@ fn current_a(r: &Row) -> f64 {
 }
 
 fn through_splitter(r: &Row) -> bool {
-    r.flags & SampleFlags::THROUGH_SPLITTER != 0
+    r.sample_flags().contains(SampleFlags::THROUGH_SPLITTER)
 }
 
 fn cos_o(r: &Row) -> f64 {

@@ -38,13 +38,16 @@ pub struct Row {
     pub flag_names: String,
 }
 
+impl Row {
+    /// The `flags` column as the bit set it stores.
+    pub fn sample_flags(&self) -> SampleFlags {
+        SampleFlags::from_bits_retain(self.flags)
+    }
+}
+
 impl From<&Sample> for Row {
     fn from(s: &Sample) -> Self {
-        let names: Vec<&str> = SampleFlags::NAMES
-            .iter()
-            .filter(|(b, _)| s.flags.contains(*b))
-            .map(|(_, n)| *n)
-            .collect();
+        let names: Vec<String> = s.flags.iter_names().map(|(n, _)| n.to_ascii_lowercase()).collect();
         Row {
             seq: s.seq,
             index: s.scan.map(|p| p.index),
@@ -68,7 +71,7 @@ impl From<&Sample> for Row {
             gain_v_per_a: s.gain_v_per_a,
             gain_index: s.gain_index,
             periods: s.periods,
-            flags: s.flags.0,
+            flags: s.flags.bits(),
             flag_names: names.join("|"),
         }
     }

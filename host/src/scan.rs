@@ -365,7 +365,7 @@ impl ScanRun<'_> {
                 ScanEvent::Sample(s) => {
                     out.push(&s)?;
                     outcome.measured += 1;
-                    if s.flags.0 & !gonio_shared::SampleFlags::THROUGH_SPLITTER != 0 {
+                    if s.flags.doubtful() {
                         outcome.flagged += 1;
                     }
                     clock.saw(s.timestamp_us);

@@ -1,47 +1,56 @@
 //! One demodulated measurement, as the head reports it.
 
 use crate::geometry::{AxisAngles, Geometry};
+use postcard_schema::schema::{DataModelType, NamedType};
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
 
-/// Quality flags of a sample, one bit each.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, Schema)]
-#[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct SampleFlags(pub u16);
+bitflags::bitflags! {
+    /// Quality flags of a sample, one bit each. On the wire (postcard) the
+    /// bits as a `u16`; in human-readable formats (JSON) the names, e.g.
+    /// `"SATURATED | THROUGH_SPLITTER"`. Unknown bits are kept.
+    #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Hash, Serialize, Deserialize)]
+    #[serde(transparent)]
+    pub struct SampleFlags: u16 {
+        /// ADC codes reached a rail during integration at the reported gain.
+        const SATURATED = 1 << 0;
+        /// Amplitude below three times its noise estimate.
+        const BELOW_NOISE = 1 << 1;
+        /// Phase off the calibrated reference phase.
+        const PHASE_OFF = 1 << 2;
+        /// An ADC block was lost or late during integration.
+        const OVERRUN = 1 << 3;
+        /// Measured value outside the loaded sanity model's band.
+        const MODEL_MISMATCH = 1 << 4;
+        /// Measured through the beam splitter (retro zone): the host rescales it
+        /// by the splitter's transmission factor.
+        const THROUGH_SPLITTER = 1 << 5;
+        /// This is the second measurement of a point that failed its first.
+        const REMEASURED = 1 << 6;
+    }
+}
+
+/// The schema of the `u16` newtype the flags were before they were a bit
+/// set: the wire bytes are the same, and so are the endpoint keys.
+impl Schema for SampleFlags {
+    const SCHEMA: &'static NamedType = &NamedType {
+        name: "SampleFlags",
+        ty: &DataModelType::NewtypeStruct(u16::SCHEMA),
+    };
+}
+
+#[cfg(feature = "defmt")]
+impl defmt::Format for SampleFlags {
+    fn format(&self, f: defmt::Formatter) {
+        defmt::write!(f, "SampleFlags({=u16:#x})", self.bits())
+    }
+}
 
 impl SampleFlags {
-    /// ADC codes reached a rail during integration at the reported gain.
-    pub const SATURATED: u16 = 1 << 0;
-    /// Amplitude below three times its noise estimate.
-    pub const BELOW_NOISE: u16 = 1 << 1;
-    /// Phase off the calibrated reference phase.
-    pub const PHASE_OFF: u16 = 1 << 2;
-    /// An ADC block was lost or late during integration.
-    pub const OVERRUN: u16 = 1 << 3;
-    /// Measured value outside the loaded sanity model's band.
-    pub const MODEL_MISMATCH: u16 = 1 << 4;
-    /// Measured through the beam splitter (retro zone): the host rescales it
-    /// by the splitter's transmission factor.
-    pub const THROUGH_SPLITTER: u16 = 1 << 5;
-    /// This is the second measurement of a point that failed its first.
-    pub const REMEASURED: u16 = 1 << 6;
-
-    pub const NAMES: [(u16, &'static str); 7] = [
-        (Self::SATURATED, "saturated"),
-        (Self::BELOW_NOISE, "below_noise"),
-        (Self::PHASE_OFF, "phase_off"),
-        (Self::OVERRUN, "overrun"),
-        (Self::MODEL_MISMATCH, "model_mismatch"),
-        (Self::THROUGH_SPLITTER, "through_splitter"),
-        (Self::REMEASURED, "remeasured"),
-    ];
-
-    pub const fn contains(self, bit: u16) -> bool {
-        self.0 & bit != 0
-    }
-
-    pub fn set(&mut self, bit: u16) {
-        self.0 |= bit;
+    /// Any flag that says the value itself is in doubt (everything but
+    /// `THROUGH_SPLITTER`, which only says how to scale it).
+    pub fn doubtful(self) -> bool {
+        !self.difference(Self::THROUGH_SPLITTER).is_empty()
     }
 }
 
@@ -87,4 +96,25 @@ pub struct Sample {
     /// Chop periods integrated.
     pub periods: u16,
     pub flags: SampleFlags,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The bit set keeps the schema (and so the endpoint keys) and the wire
+    /// bytes of the plain `u16` newtype it replaced.
+    #[test]
+    fn the_flags_keep_the_wire_format_of_a_u16_newtype() {
+        #[derive(Serialize, Schema)]
+        struct SampleFlags(u16);
+        assert_eq!(<super::SampleFlags as Schema>::SCHEMA, SampleFlags::SCHEMA);
+        let flags = super::SampleFlags::SATURATED | super::SampleFlags::THROUGH_SPLITTER;
+        let bytes = postcard::to_allocvec(&flags).unwrap();
+        assert_eq!(bytes, postcard::to_allocvec(&SampleFlags(0b10_0001)).unwrap());
+        assert_eq!(postcard::from_bytes::<super::SampleFlags>(&bytes).unwrap(), flags);
+        let unknown = postcard::to_allocvec(&SampleFlags(0x8001)).unwrap();
+        assert_eq!(postcard::from_bytes::<super::SampleFlags>(&unknown).unwrap().bits(), 0x8001);
+        assert!(flags.doubtful() && !super::SampleFlags::THROUGH_SPLITTER.doubtful());
+    }
 }

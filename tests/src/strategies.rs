@@ -120,7 +120,7 @@ pub fn sample() -> BoxedStrategy<Sample> {
                 gain_v_per_a: g,
                 gain_index: gi,
                 periods,
-                flags: SampleFlags(flags),
+                flags: SampleFlags::from_bits_retain(flags),
             },
         )
         .boxed()

@@ -1,13 +1,15 @@
 //! Issue #7: the Disney BRDF Explorer export. Every model's `.brdf` file is
-//! checked twice: glslangValidator compiles its GLSL as the tool would (the
-//! parameters as uniforms), and g++ compiles the same text as C++ against a
-//! small GLSL shim (tests/glsl/shim.hpp) so that it can be evaluated and
-//! compared with the host's Rust model at the Belcour grid and random
-//! geometries, seen from a random surface frame. CI installs both tools and
-//! sets `GONIO_REQUIRE_GLSL_TOOLS`, so there a missing tool fails the test;
-//! on a machine with only a Rust toolchain (the README's `cargo test`) the
-//! steps whose tool is missing are skipped, said so on stderr, and the
-//! parameter blocks are still checked.
+//! checked three ways: naga (pure Rust, so everywhere `cargo test` runs)
+//! parses its GLSL as a fragment shader with the parameters as uniforms and
+//! validates the module (types, names, calls, control flow); glslangValidator
+//! compiles it as the tool would; and g++ compiles the same text as C++
+//! against a small GLSL shim (tests/glsl/shim.hpp) so that it can be
+//! evaluated and compared with the host's Rust model at the Belcour grid and
+//! random geometries, seen from a random surface frame. CI installs the two
+//! external tools and sets `GONIO_REQUIRE_GLSL_TOOLS`, so there a missing tool
+//! fails the test; on a machine with only a Rust toolchain (the README's
+//! `cargo test`) the steps whose tool is missing are skipped and said so on
+//! stderr, while the parameter blocks and naga's check still run.
 
 use gonio_host::brdf::{Directions, Material, ModelId, Param};
 use gonio_host::formats::brdf_explorer;
@@ -80,6 +82,33 @@ fn check_glsl(dir: &Path, name: &str, text: &str) {
     let path = dir.join(format!("{name}.frag"));
     std::fs::write(&path, src).unwrap();
     run(Command::new("glslangValidator").arg(&path), &format!("glslangValidator {name}"));
+}
+
+/// Parses the shader with naga's GLSL front end as a Vulkan-style GLSL 4.50
+/// fragment shader (naga's dialect: the parameters in a uniform block, the
+/// output at a location) and validates the module.
+fn check_naga(name: &str, text: &str) {
+    let mut src = String::from("#version 450 core\nlayout(set = 0, binding = 0) uniform Parameters {\n");
+    for (p, ..) in parameters(text) {
+        let _ = writeln!(src, "    float {p};");
+    }
+    src.push_str("};\n");
+    src.push_str(shader(text));
+    src.push_str(
+        "layout(location = 0) out vec4 color;\nvoid main()\n{\n    color = vec4(BRDF(vec3(0.0, 0.6, 0.8), vec3(0.0, 0.0, 1.0), \
+         vec3(0.0, 0.0, 1.0), vec3(1.0, 0.0, 0.0), vec3(0.0, 1.0, 0.0)), 1.0);\n}\n",
+    );
+    let options = naga::front::glsl::Options::from(naga::ShaderStage::Fragment);
+    let module = naga::front::glsl::Frontend::default()
+        .parse(&options, &src)
+        .unwrap_or_else(|e| panic!("naga cannot parse {name}:\n{}\n{src}", e.emit_to_string(&src)));
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::empty())
+        .validate(&module)
+        .unwrap_or_else(|e| panic!("naga rejects {name}:\n{}", e.emit_to_string(&src)));
+    assert!(
+        module.functions.iter().any(|(_, f)| f.name.as_deref() == Some("BRDF")),
+        "{name}: no BRDF function"
+    );
 }
 
 /// A random right-handed orthonormal frame `(N, X, Y)`.
@@ -208,6 +237,7 @@ fn brdf_explorer_shaders_compile_and_equal_the_models() {
                 assert_eq!(v, want, "{name}: default of {p}");
                 assert!(lo <= v && v <= hi && lo < hi, "{name}: {p} range [{lo}, {hi}] ∌ {v}");
             }
+            check_naga(&name, &text);
             if glslang {
                 check_glsl(dir.path(), &name, &text);
             }
@@ -240,4 +270,19 @@ fn brdf_explorer_shaders_compile_and_equal_the_models() {
             }
         }
     }
+}
+
+/// naga's check is a check: a shader calling a function nobody defined is refused.
+#[test]
+fn naga_refuses_a_shader_with_an_undefined_name() {
+    let text = brdf_explorer::write(&synthetic::reference(ModelId::ALL[0]), &["test".into()]);
+    let broken = text.replacen(
+        "::begin shader\n",
+        "::begin shader\nfloat broken(float x) { return undefined_function(x); }\n",
+        1,
+    );
+    assert_ne!(broken, text);
+    check_naga("lambert", &text);
+    let refused = std::panic::catch_unwind(|| check_naga("broken", &broken));
+    assert!(refused.is_err(), "naga accepted a call of an undefined function");
 }

@@ -75,12 +75,12 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
         .map(|r| {
             assert!((r.theta_o_deg - r.target_theta_o_deg).abs() < 0.01 && (r.theta_i_deg - r.target_theta_i_deg).abs() < 0.01);
             let d = Directions::from_degrees(r.target_theta_i_deg as f64, r.target_theta_o_deg as f64, r.target_dphi_deg as f64);
-            let splitter = if r.flags & SampleFlags::THROUGH_SPLITTER != 0 {
+            let splitter = if r.sample_flags().contains(SampleFlags::THROUGH_SPLITTER) {
                 sim.photodiode.splitter_factor
             } else {
                 1.0
             };
-            assert_eq!(r.flags & !SampleFlags::THROUGH_SPLITTER, 0, "unexpected flags on {r:?}");
+            assert!(!r.sample_flags().doubtful(), "unexpected flags on {r:?}");
             r.amplitude_v as f64 / r.gain_v_per_a as f64 / (m.eval(&d) * d.cos_o() * splitter)
         })
         .collect();

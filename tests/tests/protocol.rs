@@ -161,7 +161,7 @@ fn largest_messages_fit_the_frame_buffer() {
         gain_v_per_a: 1.0,
         gain_index: u8::MAX,
         periods: u16::MAX,
-        flags: SampleFlags(u16::MAX),
+        flags: SampleFlags::from_bits_retain(u16::MAX),
     };
     // The frame check takes the last bytes of the buffer.
     let mut buf = [0u8; MAX_FRAME - gonio_firmware::check::LEN];

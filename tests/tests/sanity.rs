@@ -71,7 +71,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
     assert_eq!(dusty.len(), dust.len());
     let flagged: BTreeSet<u32> = rows
         .iter()
-        .filter(|r| r.flags & SampleFlags::MODEL_MISMATCH != 0)
+        .filter(|r| r.sample_flags().contains(SampleFlags::MODEL_MISMATCH))
         .map(|r| r.index.unwrap())
         .collect();
     assert!(dusty.is_subset(&flagged), "dust {dusty:?}, flagged {flagged:?}");
@@ -89,7 +89,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
     );
     // Every mismatch was measured once more, and the head counted it.
     for r in rows.iter().filter(|r| dusty.contains(&r.index.unwrap())) {
-        assert!(r.flags & SampleFlags::REMEASURED != 0, "{r:?}");
+        assert!(r.sample_flags().contains(SampleFlags::REMEASURED), "{r:?}");
     }
     assert_eq!(status.samples_remeasured as usize, flagged.len());
     assert!(status.sanity_loaded);

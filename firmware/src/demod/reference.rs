@@ -4,8 +4,9 @@
 use super::learn::Learned;
 use gonio_shared::Reference as Kind;
 
-/// Largest supported samples per period (`DetectionSettings::SAMPLES_PER_PERIOD_MAX`).
-pub const MAX_M: usize = 512;
+/// Largest supported samples per period: the settings' own limit, so a
+/// validated setting always fits the tables.
+pub const MAX_M: usize = gonio_shared::DetectionSettings::SAMPLES_PER_PERIOD_MAX as usize;
 /// Scale of sine and matched tables (Q14).
 const FULL: f64 = 16383.0;
 
