@@ -14,6 +14,7 @@ pub mod fault;
 pub mod geometry;
 pub mod icd;
 pub mod identity;
+pub mod models;
 pub mod safety;
 pub mod sample;
 pub mod sanity;
@@ -24,6 +25,7 @@ pub use detection::{CalibrateRequest, CalibrationReport, DetectionReport, Detect
 pub use fault::{Axis, Fault, Field, Unreachable};
 pub use geometry::{AxisAngles, Geometry};
 pub use identity::{Capabilities, Identity, PROTOCOL_VERSION};
+pub use models::{ModelSpec, MODELS};
 pub use safety::SafetySettings;
 pub use sample::{Sample, SampleFlags};
 pub use sanity::{SanityConfig, SanityKind, SanityModel};

@@ -1,7 +1,8 @@
 //! The model the head checks samples against (RetroPhong / ABC-Retro /
-//! Lambert, `../shared/spec/models.md` §2), uploaded by the host.
+//! Lambert, `docs/models.md` §2), uploaded by the host.
 
 use crate::fault::{Fault, Field};
+use crate::models::{self, ModelSpec};
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
 
@@ -43,20 +44,25 @@ pub enum SanityKind {
 }
 
 impl SanityKind {
-    /// Number of parameters (`models.md` §2).
-    pub const fn arity(self) -> usize {
+    /// Its row of the model table.
+    pub const fn spec(self) -> &'static ModelSpec {
         match self {
-            SanityKind::Lambert => 1,
-            SanityKind::RetroPhong => 6,
-            SanityKind::AbcRetro { .. } => 8,
+            SanityKind::Lambert => &models::LAMBERT,
+            SanityKind::RetroPhong => &models::RETRO_PHONG,
+            SanityKind::AbcRetro { .. } => &models::ABC_RETRO,
         }
+    }
+
+    /// Number of parameters.
+    pub const fn arity(self) -> usize {
+        self.spec().arity()
     }
 }
 
 impl SanityModel {
-    /// Builds a model from its parameters in the order of `models.md`
-    /// (`kd, n, k1, k2, k3, k4` / `kd, r0, ab, bb, cb, ar, br, cr`); `None`
-    /// when the count is wrong.
+    /// Builds a model from its parameters in the order of the model table
+    /// ([`SanityKind::spec`]); `None` when the count is wrong. The fields are
+    /// named as the table's parameters (`model_contract.rs` checks the order).
     pub fn from_params(kind: SanityKind, p: &[f32]) -> Option<Self> {
         Some(match (kind, p) {
             (SanityKind::Lambert, &[kd]) => SanityModel::Lambert { kd },
@@ -84,7 +90,7 @@ impl SanityModel {
         }
     }
 
-    /// The parameters in the order of `models.md`.
+    /// The parameters in the order of the model table.
     pub fn params(&self) -> heapless::Vec<f32, 8> {
         let s: &[f32] = match self {
             SanityModel::Lambert { kd } => &[*kd],

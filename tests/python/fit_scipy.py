@@ -57,7 +57,8 @@ def smith_g1(tan, alpha):
 
 def model(name, g, p):
     if name == "lambert":
-        return np.full_like(g["cos_i"], p[0] / PI)
+        (kd,) = p
+        return np.full_like(g["cos_i"], kd / PI)
     if name == "retro-phong":
         kd, n, k1, k2, k3, k4 = p
         omc = 1.0 - g["cos_i"]
@@ -86,9 +87,9 @@ def model(name, g, p):
         kd, alpha_r, alpha_b = p
         return kd / PI + pow_geo(g["ln_nh"], alpha_r) + pow_geo(g["ln_c"], alpha_b)
     if name == "lafortune":
-        kd, cxs, czs, ns, cxr, czr, nr = p
+        kd, cxy_s, cz_s, n_s, cxy_r, cz_r, n_r = p
         lobe = lambda cxy, cz, n: pow_pos(cxy * g["lv_xy"] + cz * g["lv_z"], n)
-        return kd / PI + lobe(cxs, czs, ns) + lobe(cxr, czr, nr)
+        return kd / PI + lobe(cxy_s, cz_s, n_s) + lobe(cxy_r, cz_r, n_r)
     if name == "oren-nayar":
         rho, sigma = p
         s2 = sigma * sigma

@@ -1,12 +1,13 @@
-//! The model ids of `models.md` §2, their parameter names (CLI and JSON
-//! contract), the bounds a fit searches within, and the dispatch to each
-//! model's evaluation.
+//! The models of `docs/models.md` §2 as the host knows them: ids and
+//! parameter names from the shared model table (CLI and JSON contract), the
+//! bounds a fit searches within, and the dispatch to each model's evaluation.
 
 use super::frame::Param;
 use super::geometry::Geometry;
 use super::scalar::Scalar;
 use super::{abc_retro, beckmann_retro, blinn_retro, five_param, lafortune, lambert, oren_nayar, retro_phong};
 use anyhow::{Context, Result};
+use gonio_shared::{ModelSpec, MODELS};
 use serde::{Deserialize, Serialize};
 
 /// `f_r` at a geometry, writing its gradient in every parameter into the slice.
@@ -134,30 +135,18 @@ impl ModelId {
         ModelId::FiveParam,
     ];
 
+    /// Its row of the model table (`gonio_shared::models`), which `ALL`
+    /// follows in order.
+    pub fn spec(self) -> &'static ModelSpec {
+        MODELS[self as usize]
+    }
+
     pub fn name(self) -> &'static str {
-        match self {
-            ModelId::Lambert => "lambert",
-            ModelId::RetroPhong => "retro-phong",
-            ModelId::AbcRetro => "abc-retro",
-            ModelId::BeckmannRetro => "beckmann-retro",
-            ModelId::BlinnRetro => "blinn-retro",
-            ModelId::Lafortune => "lafortune",
-            ModelId::OrenNayar => "oren-nayar",
-            ModelId::FiveParam => "five-param",
-        }
+        self.spec().id
     }
 
     pub fn param_names(self) -> &'static [&'static str] {
-        match self {
-            ModelId::Lambert => &["kd"],
-            ModelId::RetroPhong => &["kd", "n", "k1", "k2", "k3", "k4"],
-            ModelId::AbcRetro => &["kd", "r0", "ab", "bb", "cb", "ar", "br", "cr"],
-            ModelId::BeckmannRetro => &["kd", "alpha", "r0"],
-            ModelId::BlinnRetro => &["kd", "alpha_r", "alpha_b"],
-            ModelId::Lafortune => &["kd", "cxy_s", "cz_s", "n_s", "cxy_r", "cz_r", "n_r"],
-            ModelId::OrenNayar => &["rho", "sigma"],
-            ModelId::FiveParam => &["kb", "kr", "a", "b", "kd"],
-        }
+        self.spec().params
     }
 
     /// The search box for data whose median `f_r` is `median` (sr⁻¹): the

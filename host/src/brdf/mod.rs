@@ -1,4 +1,4 @@
-//! BRDF models of `../shared/spec/models.md` §2, in f64, with the parameter
+//! BRDF models of `docs/models.md` §2, in f64, with the parameter
 //! names of the contract. The simulated head's virtual material is one of
 //! these; the fitting engine builds on the same evaluations.
 
