@@ -2,7 +2,7 @@
 //! arm's blind zone, detector gains and the ADC. The chip binary's board
 //! module maps these onto pins; the simulated head builds the same machine.
 
-use gonio_shared::Axis;
+use gonio_shared::{Axis, AxisMechanics, Mechanics};
 
 /// One stage axis.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -75,6 +75,40 @@ impl HeadConfig {
     pub fn axis(&self, axis: Axis) -> &AxisConfig {
         &self.axes[axis.index()]
     }
+
+    /// What the head reports of its stages (`gonio/mechanics`).
+    pub fn mechanics(&self) -> Mechanics {
+        Mechanics {
+            axes: self.axes.map(|a| AxisMechanics {
+                microsteps_per_rev: a.microsteps_per_rev,
+                min_deg: a.min_deg,
+                max_deg: a.max_deg,
+                max_speed_dps: a.max_speed_dps,
+                max_accel_dps2: a.max_accel_dps2,
+            }),
+            retro_max_deg: self.optics.retro_max_deg,
+            blind_max_deg: self.optics.blind_max_deg,
+        }
+    }
+
+    /// This configuration with a head's reported mechanics in place of its
+    /// own: what the host plans and estimates a scan with. Homing, driver
+    /// timing and the detector stay as they are (a plan does not use them).
+    pub fn with_mechanics(&self, m: &Mechanics) -> HeadConfig {
+        let mut cfg = *self;
+        for (a, r) in cfg.axes.iter_mut().zip(&m.axes) {
+            a.microsteps_per_rev = r.microsteps_per_rev;
+            a.min_deg = r.min_deg;
+            a.max_deg = r.max_deg;
+            a.max_speed_dps = r.max_speed_dps;
+            a.max_accel_dps2 = r.max_accel_dps2;
+        }
+        cfg.optics = ArmOptics {
+            retro_max_deg: m.retro_max_deg,
+            blind_max_deg: m.blind_max_deg,
+        };
+        cfg
+    }
 }
 
 /// Core clock of the reference board (Hz): the PLL's 168 MHz.
@@ -130,3 +164,21 @@ pub const REFERENCE: HeadConfig = HeadConfig {
         settle_periods: 1,
     },
 };
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn reported_mechanics_rebuild_the_planning_config() {
+        let mut other = REFERENCE;
+        other.axes[0].microsteps_per_rev *= 2;
+        other.axes[1].max_speed_dps = 4.0;
+        other.axes[2].max_accel_dps2 = 15.0;
+        other.axes[2].min_deg = -120.0;
+        other.optics.blind_max_deg = 7.0;
+        let rebuilt = REFERENCE.with_mechanics(&other.mechanics());
+        assert_eq!(rebuilt, other);
+        assert_eq!(REFERENCE.with_mechanics(&REFERENCE.mechanics()), REFERENCE);
+    }
+}

@@ -5,7 +5,8 @@
 
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
+    StatusEndpoint,
 };
 use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, PlanChunk, SafetySettings, SanityConfig, ScanSpec};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
@@ -18,6 +19,7 @@ use serde::{Deserialize, Serialize};
 pub enum Command {
     Identify,
     Status,
+    Mechanics,
     Home(HomeRequest),
     Move(Geometry),
     Measure(MeasureRequest),
@@ -90,6 +92,8 @@ pub fn decode(frame: &[u8]) -> Result<(VarHeader, Command), DecodeError> {
         body::<()>(hdr, rest).map(|_| Command::Identify)
     } else if is::<StatusEndpoint>(k) {
         body::<()>(hdr, rest).map(|_| Command::Status)
+    } else if is::<MechanicsEndpoint>(k) {
+        body::<()>(hdr, rest).map(|_| Command::Mechanics)
     } else if is::<HomeEndpoint>(k) {
         body(hdr, rest).map(Command::Home)
     } else if is::<MoveEndpoint>(k) {

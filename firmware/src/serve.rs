@@ -20,8 +20,9 @@ use crate::state::{Event, Mode};
 use embassy_futures::select::{select, Either};
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint, MoveEndpoint,
-    PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint,
+    MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic,
+    StatusEndpoint,
 };
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{Fault, Reply, ScanEvent, Status};
@@ -341,6 +342,7 @@ impl<B: Board> Head<B> {
         match cmd {
             Command::Identify => self.reply::<IdentifyEndpoint, L>(seq, &self.identity(), link).await,
             Command::Status => self.reply::<StatusEndpoint, L>(seq, &self.status(), link).await,
+            Command::Mechanics => self.reply::<MechanicsEndpoint, L>(seq, &self.cfg.mechanics(), link).await,
             Command::Home(r) => {
                 let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.home(r).await).await?;
                 self.reply::<HomeEndpoint, L>(seq, &resp, link).await

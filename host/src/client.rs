@@ -4,10 +4,11 @@
 use crate::link::{self, Workers};
 use crate::sim::SimConfig;
 use anyhow::{anyhow, bail, Context, Result};
+use gonio_firmware::board::{HeadConfig, REFERENCE};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MoveEndpoint, MoveReport, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic,
-    StatusEndpoint,
+    MeasureRequest, MechanicsEndpoint, MoveEndpoint, MoveReport, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
+    ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::{
     AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, PlanChunk, PlanQueued,
@@ -25,8 +26,8 @@ use std::time::Duration;
 /// Where the head is.
 #[derive(Debug, Clone)]
 pub enum Target {
-    /// A simulated head in this process.
-    Sim(SimConfig),
+    /// A simulated head in this process (boxed: its configuration is large).
+    Sim(Box<SimConfig>),
     /// A serial port: the head's USB port or a simulated head's pseudo-terminal.
     Port(String),
 }
@@ -47,6 +48,9 @@ pub struct Head {
     client: HostClient<WireError>,
     workers: Workers,
     identity: Identity,
+    /// The reference configuration with the head's reported mechanics: what
+    /// scans are planned and estimated with.
+    config: HeadConfig,
     sim_thread: Option<JoinHandle<()>>,
 }
 
@@ -55,7 +59,7 @@ impl Head {
     pub async fn connect(target: &Target) -> Result<Head> {
         let (client, workers, sim_thread) = match target {
             Target::Sim(cfg) => {
-                let (c, w, t) = link::in_process_client(cfg.clone());
+                let (c, w, t) = link::in_process_client((**cfg).clone());
                 (c, w, Some(t))
             }
             Target::Port(p) => {
@@ -78,16 +82,26 @@ impl Head {
                 PROTOCOL_VERSION
             );
         }
+        let mechanics = call::<MechanicsEndpoint>(&client, &(), QUICK)
+            .await
+            .context("the head did not report its mechanics")?;
         Ok(Head {
             client,
             workers,
             identity,
+            config: REFERENCE.with_mechanics(&mechanics),
             sim_thread,
         })
     }
 
     pub fn identity(&self) -> &Identity {
         &self.identity
+    }
+
+    /// The head's configuration as far as planning goes: its reported
+    /// gearing, travel, speeds and blind zone.
+    pub fn config(&self) -> &HeadConfig {
+        &self.config
     }
 
     pub async fn status(&self) -> Result<Status> {

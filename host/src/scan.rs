@@ -6,7 +6,6 @@ use crate::samples_csv::SampleWriter;
 use crate::scan_order::visit_order;
 use crate::session::Session;
 use anyhow::{bail, Context, Result};
-use gonio_firmware::board::REFERENCE;
 use gonio_firmware::motion::PARK;
 use gonio_shared::{Fault, Geometry, HeadState, PlanChunk, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
 use indicatif::{ProgressBar, ProgressStyle};
@@ -119,6 +118,10 @@ pub async fn run(
 ) -> Result<ScanOutcome> {
     let t0 = Instant::now();
     let mut first = spec.first_order;
+    // The whole visit order, planned here once (the head keeps only the next
+    // `PLAN_QUEUE` points) for the mechanics the head reported, as the
+    // duration estimate.
+    let order = visit_order(session.head().config(), spec, PARK).collect();
     let mut run = ScanRun {
         session,
         out,
@@ -138,10 +141,7 @@ pub async fn run(
         clock: HeadClock::default(),
         recoveries_in_a_row: 0,
         progress: first,
-        // The whole visit order, planned here once (the head keeps only the
-        // next `PLAN_QUEUE` points); the reference board's limits, as the
-        // duration estimate.
-        order: visit_order(&REFERENCE, spec, PARK).collect(),
+        order,
     };
     pb.set_length((run.outcome.points - first) as u64);
     let mut read_monitor_now = true;

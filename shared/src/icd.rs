@@ -11,6 +11,7 @@ use crate::detection::{CalibrateRequest, CalibrationReport, DetectionReport, Det
 use crate::fault::Fault;
 use crate::geometry::{AxisAngles, Geometry};
 use crate::identity::Identity;
+use crate::mechanics::Mechanics;
 use crate::safety::SafetySettings;
 use crate::sample::Sample;
 use crate::sanity::SanityConfig;
@@ -74,6 +75,7 @@ endpoints! {
     | ----------            | ---------         | ----------              | ----                 |
     | IdentifyEndpoint      | ()                | Identity                | "gonio/identify"     |
     | StatusEndpoint        | ()                | Status                  | "gonio/status"       |
+    | MechanicsEndpoint     | ()                | Mechanics               | "gonio/mechanics"    |
     | HomeEndpoint          | HomeRequest       | HomeReply               | "gonio/home"         |
     | MoveEndpoint          | Geometry          | MoveReply               | "gonio/move"         |
     | MeasureEndpoint       | MeasureRequest    | MeasureReply            | "gonio/measure"      |

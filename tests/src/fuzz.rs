@@ -10,7 +10,8 @@ use gonio_host::formats::{alta, brdf_csv};
 use gonio_host::sim::{FrameHead, SimConfig};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
+    StatusEndpoint,
 };
 use gonio_shared::{
     AngleRange, CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, SanityKind, SanityModel, ScanSpec,
@@ -98,6 +99,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     let requests: Vec<(&str, Vec<u8>)> = vec![
         ("identify", request::<IdentifyEndpoint>(&())),
         ("status", request::<StatusEndpoint>(&())),
+        ("mechanics", request::<MechanicsEndpoint>(&())),
         ("home", request::<HomeEndpoint>(&HomeRequest::ALL)),
         ("move", request::<MoveEndpoint>(&Geometry::new(30.0, 20.0, 90.0))),
         ("move-nan", request::<MoveEndpoint>(&Geometry::new(f32::NAN, 20.0, 90.0))),

@@ -35,7 +35,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
         calibrate_at: None,
         calibration_periods: 0,
     };
-    let mut session = Session::connect(Target::Sim(sim.clone()), setup, true).await.unwrap();
+    let mut session = Session::connect(Target::Sim(Box::new(sim.clone())), setup, true).await.unwrap();
     session.start().await.unwrap();
     let head = session.head();
 

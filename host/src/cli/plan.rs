@@ -95,7 +95,7 @@ impl ScanPlan {
                     ..SimConfig::default()
                 };
                 c.photodiode.laser_drift = *laser_drift;
-                Target::Sim(c)
+                Target::Sim(Box::new(c))
             }
             PlanTarget::Port { path } => Target::Port(path.clone()),
         }

@@ -11,11 +11,11 @@ use crate::client::Target;
 use crate::run_record::RunRecord;
 use crate::samples_csv::{stored_rows, SampleWriter};
 use crate::scan::{self, Monitor, ScanOutcome};
-use crate::scan_order::{lower_bound, scan_time, visit_order};
+use crate::scan_order::{dwell_s, lower_bound, scan_time, visit_order};
 use crate::session::{Session, Setup};
 use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::board::HeadConfig;
 use gonio_firmware::motion::PARK;
 use gonio_shared::{DetectionReport, ScanSpec};
 
@@ -165,7 +165,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
 /// then the Belcour grid (quiet with `output.json`). Returns the outcome and
 /// the samples file.
 pub async fn demo_scan(sim: SimConfig, dir: &Path, output: &OutputArgs) -> Result<(ScanOutcome, PathBuf)> {
-    let mut plan = ScanPlan::new(&Target::Sim(sim), &ScanSpec::belcour(), &DetectorArgs::demo());
+    let mut plan = ScanPlan::new(&Target::Sim(Box::new(sim)), &ScanSpec::belcour(), &DetectorArgs::demo());
     plan.reference_plate = true;
     scan_to_dir(&plan, dir, output, None).await
 }
@@ -182,7 +182,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
     }
     let target = match (&a.port, a.sim) {
         (Some(p), _) => Target::Port(p.clone()),
-        (None, true) => Target::Sim(a.sim_head.config()?),
+        (None, true) => Target::Sim(Box::new(a.sim_head.config()?)),
         (None, false) => bail!("one of --sim or --port is required"),
     };
     let mut plan = ScanPlan::new(&target, &a.grid.spec()?, &a.detector);
@@ -262,7 +262,8 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     if plan.reference_plate && resume.is_none() {
         reference::measure_plate(session.head(), &target, dir, json).await?;
     }
-    let estimate = estimate_s(spec, &detection);
+    let config = *session.head().config();
+    let estimate = estimate_s(&config, spec, &detection);
     if !json {
         eprintln!(
             "{} points; estimated duration {} (moves, {:.0} ms settle and {:.0} ms integration per point)",
@@ -297,7 +298,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     }
     let samples = writer.finish()?;
     if resume.is_none() {
-        outcome.lower_bound_s = Some(lower_bound_s(spec, &detection));
+        outcome.lower_bound_s = Some(lower_bound_s(&config, spec, &detection));
     }
     if resume.is_some() {
         // Counts of the whole scan, not only of this session.
@@ -315,28 +316,18 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     Ok((outcome, samples))
 }
 
-/// Settle and acquisition time per point (s): the acquisition counts the
-/// chop periods the detector spends ranging the gain and letting the
-/// amplifier settle.
-fn dwell_s(det: &DetectionReport) -> (f64, f64) {
-    let settle = REFERENCE.detector.settle_periods as f64;
-    let extra_periods = if det.settings.auto_range { 2.0 * settle + 1.0 } else { settle };
-    let acquire = det.integration_s as f64 + extra_periods / det.chop_hz_actual as f64;
-    (det.settings.settle_s as f64, acquire)
-}
-
-/// The head's plan replayed from the park position under the reference axis
+/// The plan replayed from the park position under the head's reported axis
 /// limits, from the scan's first position on: moves, settle and acquisition (s).
-fn estimate_s(spec: &ScanSpec, det: &DetectionReport) -> f64 {
-    let (settle, acquire) = dwell_s(det);
-    let rest = visit_order(&REFERENCE, spec, PARK).skip(spec.first_order as usize);
-    scan_time(&REFERENCE, spec, rest, PARK, settle, acquire).total_s()
+fn estimate_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
+    let (settle, acquire) = dwell_s(cfg, det);
+    let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
+    scan_time(cfg, spec, rest, PARK, settle, acquire).total_s()
 }
 
 /// The least head time any stop-and-go order of the whole scan could take (s).
-fn lower_bound_s(spec: &ScanSpec, det: &DetectionReport) -> f64 {
-    let (settle, acquire) = dwell_s(det);
-    lower_bound(&REFERENCE, spec, PARK, settle, acquire).0.total_s()
+fn lower_bound_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
+    let (settle, acquire) = dwell_s(cfg, det);
+    lower_bound(cfg, spec, PARK, settle, acquire).0.total_s()
 }
 
 /// Head time against the lower bound, in words.

@@ -5,7 +5,7 @@ use gonio_firmware::board::HeadConfig;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::plan_s;
 use gonio_firmware::motion::{move_blocks, move_time, target_steps};
-use gonio_shared::ScanSpec;
+use gonio_shared::{DetectionReport, ScanSpec};
 
 /// The step timer's tick rate on the reference board (chip/step_timer.rs).
 const STEP_TICK_HZ: u32 = 1_000_000;
@@ -26,6 +26,16 @@ impl ScanTime {
     pub fn total_s(&self) -> f64 {
         self.moves_s + self.planning_s + self.settle_s + self.integration_s
     }
+}
+
+/// Settle and acquisition time per point (s) under detection settings
+/// `det`: the acquisition counts the chop periods the detector spends ranging
+/// the gain and letting the amplifier settle.
+pub fn dwell_s(cfg: &HeadConfig, det: &DetectionReport) -> (f64, f64) {
+    let settle = cfg.detector.settle_periods as f64;
+    let extra_periods = if det.settings.auto_range { 2.0 * settle + 1.0 } else { settle };
+    let acquire = det.integration_s as f64 + extra_periods / det.chop_hz_actual as f64;
+    (det.settings.settle_s as f64, acquire)
 }
 
 /// Duration of the points of `spec` in the order `visit` yields them (canonical

@@ -23,7 +23,7 @@ mod duration;
 mod tour;
 
 pub use bound::lower_bound;
-pub use duration::{scan_time, ScanTime};
+pub use duration::{dwell_s, scan_time, ScanTime};
 
 use gonio_firmware::board::HeadConfig;
 use gonio_firmware::kinematics;

@@ -22,7 +22,7 @@ pub use pty::serve_pty;
 pub use world::World;
 
 use crate::brdf::Specimen;
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::board::{HeadConfig, REFERENCE};
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::Head;
 use gonio_shared::PROTOCOL_VERSION;
@@ -56,6 +56,9 @@ pub struct SimConfig {
     /// the head from outside in the middle of a move; 0 (the default) runs
     /// as fast as it can.
     pub pace: f32,
+    /// The head's machine: gearing, travel, speeds, optics (the reference
+    /// board unless a test builds another).
+    pub board: HeadConfig,
 }
 
 /// Which target sits on the sample holder. Shared between the host (the
@@ -93,6 +96,7 @@ impl Default for SimConfig {
             faults: faults::Faults::default(),
             imperfections: Box::default(),
             pace: 0.0,
+            board: REFERENCE,
         }
     }
 }
@@ -104,7 +108,7 @@ pub(crate) fn sentry(world: &Rc<RefCell<World>>) -> clock::SimSentry {
 
 /// Builds a firmware head on a fresh virtual world.
 pub(crate) fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World>>) {
-    let world = Rc::new(RefCell::new(World::new(REFERENCE, cfg)));
+    let world = Rc::new(RefCell::new(World::new(cfg.board, cfg)));
     let hw = board::hardware(&world);
     let info = HeadInfo {
         board: "simulated STM32F405 head",
@@ -112,5 +116,5 @@ pub(crate) fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World
         simulated: true,
         protocol_version: cfg.protocol_version,
     };
-    (Head::new(REFERENCE, hw, info), world)
+    (Head::new(cfg.board, hw, info), world)
 }
