@@ -8,6 +8,7 @@ use gonio_shared::icd::{
     MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
     StatusEndpoint,
 };
+use gonio_shared::wire::{check, key_is};
 use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, PlanChunk, SafetySettings, SanityConfig, ScanSpec};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::standard_icd::WireError;
@@ -44,13 +45,6 @@ pub enum DecodeError {
     Wire(VarHeader, WireError),
 }
 
-/// Whether the frame key `got` is `key` at the width the host chose.
-pub fn key_is(key: Key, got: &VarKey) -> bool {
-    let mut k = VarKey::Key8(key);
-    k.shrink_to(got.kind());
-    k == *got
-}
-
 /// What a request that arrives in the middle of an operation asks for,
 /// read from its key alone (a frame that fails its check or its header is
 /// [`Midway::Other`] and meets the full decoder later).
@@ -64,7 +58,7 @@ pub enum Midway {
 }
 
 pub fn midway(sealed: &[u8]) -> Midway {
-    let Some((hdr, _)) = crate::check::open(sealed).and_then(VarHeader::take_from_slice) else {
+    let Some((hdr, _)) = check::open(sealed).and_then(VarHeader::take_from_slice) else {
         return Midway::Other;
     };
     if is::<AbortEndpoint>(&hdr.key) {

@@ -16,11 +16,9 @@
 pub mod log;
 
 pub mod board;
-pub mod check;
 pub mod demod;
 pub mod detector;
 pub mod dispatch;
-pub mod framing;
 pub mod head;
 pub mod homing;
 pub mod hw;

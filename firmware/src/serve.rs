@@ -10,9 +10,7 @@
 //! ([`Head::stop`]). Other requests that arrive meanwhile are kept and
 //! answered when the operation ends.
 
-use crate::check;
 use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
-use crate::framing::MAX_FRAME;
 use crate::head::Head;
 use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
@@ -25,6 +23,8 @@ use gonio_shared::icd::{
     StatusEndpoint,
 };
 use gonio_shared::sample::ScanPosition;
+use gonio_shared::wire::check;
+use gonio_shared::wire::framing::MAX_FRAME;
 use gonio_shared::{Fault, Reply, ScanEvent, Status};
 use heapless::{Deque, Vec};
 use postcard_rpc::header::VarSeq;

@@ -7,7 +7,7 @@
 //! different message definitions cannot silently misread each other: the head
 //! answers an unknown key with a wire error, and [`Identity::protocol_version`]
 //! names the mismatch.
-#![no_std]
+#![cfg_attr(not(test), no_std)]
 
 pub mod detection;
 pub mod fault;
@@ -21,6 +21,7 @@ pub mod sample;
 pub mod sanity;
 pub mod scan;
 pub mod status;
+pub mod wire;
 
 pub use detection::{CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Reference};
 pub use fault::{Axis, Fault, Field, Unreachable};

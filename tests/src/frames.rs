@@ -3,11 +3,12 @@
 //! requests encoded and sealed, the head's scan events and replies decoded.
 
 use gonio_firmware::board::REFERENCE;
+use gonio_firmware::dispatch;
 use gonio_firmware::motion::PARK;
-use gonio_firmware::{check, dispatch, framing};
 use gonio_host::scan_order::visit_order;
 use gonio_host::sim::Sent;
 use gonio_shared::icd::{PlanEndpoint, ScanEndpoint, ScanEventTopic};
+use gonio_shared::wire::{check, framing};
 use gonio_shared::{PlanChunk, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Key, Topic};

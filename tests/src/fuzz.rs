@@ -4,8 +4,7 @@
 //! (tests/tests/fuzz_seeds.rs), and `fuzz-seeds` writes those seeds.
 
 use crate::frames::{request, sealed};
-use gonio_firmware::framing::{self, Decoder};
-use gonio_firmware::{check, dispatch};
+use gonio_firmware::dispatch;
 use gonio_host::formats::{alta, brdf_csv};
 use gonio_host::sim::{FrameHead, SimConfig};
 use gonio_shared::icd::{
@@ -13,6 +12,8 @@ use gonio_shared::icd::{
     MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
     StatusEndpoint,
 };
+use gonio_shared::wire::check;
+use gonio_shared::wire::framing::{self, Decoder};
 use gonio_shared::{
     AngleRange, CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, SanityKind, SanityModel, ScanSpec,
 };

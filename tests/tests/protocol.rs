@@ -3,8 +3,8 @@
 //! largest messages fit the head's frame buffer.
 
 use gonio_firmware::dispatch::{decode, encode, Command, DecodeError};
-use gonio_firmware::framing::MAX_FRAME;
 use gonio_shared::icd::*;
+use gonio_shared::wire::framing::MAX_FRAME;
 use gonio_shared::*;
 use gonio_tests::strategies::*;
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
@@ -81,7 +81,7 @@ proptest! {
         let _ = postcard::from_bytes::<ScanEvent>(&bytes);
         let _ = postcard::from_bytes::<Status>(&bytes);
         let _ = postcard::from_bytes::<Identity>(&bytes);
-        let mut d = gonio_firmware::framing::Decoder::new();
+        let mut d = gonio_shared::wire::framing::Decoder::new();
         d.feed(&bytes, |_| {});
     }
 
@@ -164,7 +164,7 @@ fn largest_messages_fit_the_frame_buffer() {
         flags: SampleFlags::from_bits_retain(u16::MAX),
     };
     // The frame check takes the last bytes of the buffer.
-    let mut buf = [0u8; MAX_FRAME - gonio_firmware::check::LEN];
+    let mut buf = [0u8; MAX_FRAME - gonio_shared::wire::check::LEN];
     let seq = VarSeq::Seq4(u32::MAX);
     assert!(encode(ScanEventTopic::TOPIC_KEY, VarKeyKind::Key8, seq, &ScanEvent::Sample(s), &mut buf).is_some());
     assert!(encode(MeasureEndpoint::RESP_KEY, VarKeyKind::Key8, seq, &Ok::<_, Fault>(s), &mut buf).is_some());

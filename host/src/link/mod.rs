@@ -1,7 +1,7 @@
 //! Transports from the host to a head, as postcard-rpc `HostClient` wires:
 //! a byte stream carrying COBS frames (the head's USB CDC-ACM port, or the
 //! simulated head's pseudo-terminal) and in-process channels (the simulated
-//! head in a thread). Both use the firmware's own framing code.
+//! head in a thread). Both use the wire format of the message crate (`gonio_shared::wire`).
 
 mod inproc;
 mod stream;
@@ -51,19 +51,19 @@ impl WireSpawn for Workers {
     }
 }
 
-/// A frame with its check appended (`gonio_firmware::check`), as every wire sends it.
+/// A frame with its check appended (`gonio_shared::wire::check`), as every wire sends it.
 fn seal(mut frame: Vec<u8>) -> Vec<u8> {
     let n = frame.len();
-    frame.resize(n + gonio_firmware::check::LEN, 0);
+    frame.resize(n + gonio_shared::wire::check::LEN, 0);
     // The buffer has room for the check by construction.
-    let _ = gonio_firmware::check::seal(&mut frame, n);
+    let _ = gonio_shared::wire::check::seal(&mut frame, n);
     frame
 }
 
 /// The frame inside a received one, or `None` when its check fails: the
 /// frame is dropped as if lost (requests time out, scan gaps are re-requested).
 fn open(mut sealed: Vec<u8>) -> Option<Vec<u8>> {
-    let n = gonio_firmware::check::open(&sealed)?.len();
+    let n = gonio_shared::wire::check::open(&sealed)?.len();
     sealed.truncate(n);
     Some(sealed)
 }

@@ -3,7 +3,7 @@
 
 use super::{config, WireClosed, Workers};
 use anyhow::{Context, Result};
-use gonio_firmware::framing::{self, Decoder};
+use gonio_shared::wire::framing::{self, Decoder};
 use postcard_rpc::host_client::{HostClient, WireRx, WireTx};
 use postcard_rpc::standard_icd::WireError;
 use std::collections::VecDeque;

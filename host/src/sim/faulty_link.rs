@@ -9,10 +9,10 @@
 //! out, a plan hits the same request or event on every run.
 
 use super::faults::{Direction, Faults, LinkFault};
-use gonio_firmware::check;
-use gonio_firmware::dispatch::key_is;
 use gonio_firmware::link::{Link, LinkError};
 use gonio_shared::icd::StatusEndpoint;
+use gonio_shared::wire::check;
+use gonio_shared::wire::key_is;
 use postcard_rpc::header::VarHeader;
 use postcard_rpc::Endpoint;
 use std::collections::VecDeque;

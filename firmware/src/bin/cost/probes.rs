@@ -12,7 +12,6 @@ use static_cell::StaticCell;
 use embassy_stm32 as _;
 use embedded_hal::digital::{ErrorType, OutputPin};
 use gonio_firmware::board::REFERENCE;
-use gonio_firmware::check;
 use gonio_firmware::demod::{Design, Integrator, Reference};
 use gonio_firmware::dispatch;
 use gonio_firmware::head::HeadInfo;
@@ -26,6 +25,7 @@ use gonio_firmware::sanity::model::FixedModel;
 use gonio_firmware::units;
 use gonio_firmware::Head;
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, PlanEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint};
+use gonio_shared::wire::check;
 use gonio_shared::{
     AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE,
 };

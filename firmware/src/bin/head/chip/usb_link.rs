@@ -18,9 +18,9 @@ use embassy_sync::signal::Signal;
 use embassy_time::Timer;
 use embassy_usb::class::cdc_acm::{CdcAcmClass, ControlChanged, Receiver, Sender, State};
 use embassy_usb::{Builder, UsbDevice};
-use gonio_firmware::framing::{self, Decoder, MAX_ENCODED, MAX_FRAME};
 use gonio_firmware::link::{Link, LinkError};
 use gonio_shared::identity::{USB_PID, USB_VID};
+use gonio_shared::wire::framing::{self, Decoder, MAX_ENCODED, MAX_FRAME};
 use static_cell::StaticCell;
 
 type UsbDriver = Driver<'static, USB_OTG_FS>;
