@@ -15,8 +15,9 @@ pub struct Versions {
     pub firmware: String,
 }
 
+/// Which head the run was taken on.
 #[derive(Debug, Serialize)]
-pub struct Head {
+pub struct HeadRecord {
     pub board: String,
     pub serial: String,
     pub simulated: bool,
@@ -69,7 +70,7 @@ impl From<&DetectionReport> for Detection {
 #[derive(Debug, Serialize)]
 pub struct RunRecord {
     pub versions: Versions,
-    pub head: Head,
+    pub head: HeadRecord,
     /// The simulated head's material; absent for a real head.
     pub material: Option<Specimen>,
     pub grid: Grid,
@@ -97,7 +98,7 @@ impl RunRecord {
                 protocol: id.protocol_version,
                 firmware: id.firmware_version.to_string(),
             },
-            head: Head {
+            head: HeadRecord {
                 board: id.board.to_string(),
                 serial: id.serial.to_string(),
                 simulated: id.simulated,

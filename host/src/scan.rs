@@ -122,7 +122,7 @@ pub async fn run(
     // `PLAN_QUEUE` points) for the mechanics the head reported, as the
     // duration estimate.
     let order = visit_order(session.head().config(), spec, PARK).collect();
-    let mut run = ScanRun {
+    let mut run = ScanDriver {
         session,
         out,
         pb,
@@ -179,8 +179,9 @@ pub async fn run(
     Ok(outcome)
 }
 
-/// What every stretch, monitor visit and recovery of one scan shares.
-struct ScanRun<'a> {
+/// The host's side of one scan: what every stretch, monitor visit and
+/// recovery shares (the head keeps its own `ScanRun`).
+struct ScanDriver<'a> {
     session: &'a mut Session,
     out: &'a mut SampleWriter,
     pb: &'a ProgressBar,
@@ -194,7 +195,7 @@ struct ScanRun<'a> {
     order: Vec<u32>,
 }
 
-impl ScanRun<'_> {
+impl ScanDriver<'_> {
     /// Recovers from an interruption before position `next`: reconnects, or
     /// homes, or (events lost, a transient fault) nothing but continuing.
     async fn recover(&mut self, why: Interruption, next: u32) -> Result<()> {

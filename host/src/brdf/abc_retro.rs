@@ -4,12 +4,12 @@
 //! not Spieringhs eq. 10's misprint `(1 − o·h)`.
 
 use super::frame::Param;
-use super::geometry::Geometry;
+use super::geometry::GeometryTerms;
 use super::scalar::{pow, schlick, Scalar};
 use std::f64::consts::PI;
 
 /// Parameters `kd, r0, ab, bb, cb, ar, br, cr`.
-pub fn eval<T: Scalar>(g: &Geometry, p: &[T], param: Param) -> T {
+pub fn eval<T: Scalar>(g: &GeometryTerms, p: &[T], param: Param) -> T {
     let [kd, r0, ab, bb, cb, ar, br, cr] = [p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]];
     let one = T::one();
     let specular = ar / pow(one + br * (1.0 - g.nh), cr) * schlick(g.vh, r0);

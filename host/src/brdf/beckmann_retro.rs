@@ -4,7 +4,7 @@
 //! and Smith–Beckmann shadowing in Walter et al.'s rational approximation.
 
 use super::frame::Param;
-use super::geometry::Geometry;
+use super::geometry::GeometryTerms;
 use super::scalar::{schlick, Scalar};
 use std::f64::consts::PI;
 
@@ -12,7 +12,7 @@ use std::f64::consts::PI;
 const MIN_C: f64 = 1e-4;
 
 /// Parameters `kd, alpha, r0`.
-pub fn eval<T: Scalar>(g: &Geometry, p: &[T], param: Param) -> T {
+pub fn eval<T: Scalar>(g: &GeometryTerms, p: &[T], param: Param) -> T {
     let [kd, alpha, r0] = [p[0], p[1], p[2]];
     let c = g.retro_cos(param);
     let diffuse = kd / PI;

@@ -3,12 +3,12 @@
 //! have no amplitude of their own: their width is the only free parameter.
 
 use super::frame::Param;
-use super::geometry::Geometry;
+use super::geometry::GeometryTerms;
 use super::scalar::{pow_geo, Scalar};
 use std::f64::consts::PI;
 
 /// Parameters `kd, alpha_r, alpha_b`.
-pub fn eval<T: Scalar>(g: &Geometry, p: &[T], param: Param) -> T {
+pub fn eval<T: Scalar>(g: &GeometryTerms, p: &[T], param: Param) -> T {
     let [kd, alpha_r, alpha_b] = [p[0], p[1], p[2]];
     kd / PI + pow_geo(g.ln_nh, alpha_r) + pow_geo(g.retro_ln(param), alpha_b)
 }

@@ -3,7 +3,7 @@
 //! bounds a fit searches within, and the dispatch to each model's evaluation.
 
 use super::frame::Param;
-use super::geometry::Geometry;
+use super::geometry::GeometryTerms;
 use super::scalar::Scalar;
 use super::{abc_retro, beckmann_retro, blinn_retro, five_param, lafortune, lambert, oren_nayar, retro_phong};
 use anyhow::{Context, Result};
@@ -11,7 +11,7 @@ use gonio_shared::{ModelSpec, MODELS};
 use serde::{Deserialize, Serialize};
 
 /// `f_r` at a geometry, writing its gradient in every parameter into the slice.
-pub type HandGradient = fn(&Geometry, &[f64], Param, &mut [f64]) -> f64;
+pub type HandGradient = fn(&GeometryTerms, &[f64], Param, &mut [f64]) -> f64;
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -213,7 +213,7 @@ impl ModelId {
     }
 
     /// `f_r` (sr⁻¹) at one geometry; `p` holds every parameter in order.
-    pub fn eval<T: Scalar>(self, g: &Geometry, p: &[T], param: Param) -> T {
+    pub fn eval<T: Scalar>(self, g: &GeometryTerms, p: &[T], param: Param) -> T {
         match self {
             ModelId::Lambert => lambert::eval(p),
             ModelId::RetroPhong => retro_phong::eval(g, p, param),
@@ -235,7 +235,7 @@ pub(crate) fn assert_hand_gradient<const N: usize>(model: ModelId, p: [f64; N], 
     use num_dual::DualSVec64;
     let hand = model.hand_gradient().expect("a hand-written gradient");
     for &(ti, to, dp) in geometries {
-        let g = Geometry::new(&super::Directions::from_degrees(ti, to, dp));
+        let g = GeometryTerms::new(&super::Directions::from_degrees(ti, to, dp));
         for param in [Param::View, Param::Back] {
             let duals: Vec<DualSVec64<N>> = p.iter().enumerate().map(|(i, &v)| DualSVec64::from_re(v).derivative(i)).collect();
             let want = model.eval(&g, &duals, param);

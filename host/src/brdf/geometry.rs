@@ -7,7 +7,7 @@ use super::frame::{dot, Directions, Param};
 
 /// Parameter-independent terms of one geometry (`models.md` §1).
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Geometry {
+pub struct GeometryTerms {
     pub cos_i: f64,
     pub cos_o: f64,
     /// `l·v`, signed.
@@ -56,7 +56,7 @@ fn ln_pos(x: f64) -> f64 {
 /// contract, this only keeps a grazing sample finite.
 const MIN_COS: f64 = 1e-9;
 
-impl Geometry {
+impl GeometryTerms {
     pub fn new(d: &Directions) -> Self {
         let (cos_i, cos_o) = (d.cos_i().clamp(0.0, 1.0), d.cos_o().clamp(0.0, 1.0));
         let (sin_i, sin_o) = ((1.0 - cos_i * cos_i).sqrt(), (1.0 - cos_o * cos_o).sqrt());
@@ -73,7 +73,7 @@ impl Geometry {
         };
         let cos_gamma = ((1.0 + lv) / 2.0).sqrt();
         let mirror = dot(d.mirror_l(), d.v);
-        Geometry {
+        GeometryTerms {
             ln_mirror: ln_pos(mirror),
             ln_nh: ln_pos(h[2]),
             ln_cos_b: ln_pos(b[2]),

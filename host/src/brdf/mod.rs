@@ -19,7 +19,7 @@ pub mod scalar;
 
 pub use catalog::{Bound, HandGradient, ModelId, Spread};
 pub use frame::{Directions, Param};
-pub use geometry::Geometry;
+pub use geometry::GeometryTerms;
 pub use glass_beads::GlassBeads;
 pub use retro_phong::energy_sum as retro_phong_energy_sum;
 
@@ -120,7 +120,7 @@ impl Material {
 
     /// `f_r` (sr⁻¹) for a pair of directions.
     pub fn eval(&self, d: &Directions) -> f64 {
-        self.model.eval(&Geometry::new(d), &self.params, self.param)
+        self.model.eval(&GeometryTerms::new(d), &self.params, self.param)
     }
 
     /// The model as the head's sanity check evaluates it, if the head has it

@@ -4,13 +4,13 @@
 //! `kr(θi) = k1(1 − cosθi) + k2`, `ks(θi) = k3·exp(k4(1 − cosθi))`.
 
 use super::frame::Param;
-use super::geometry::Geometry;
+use super::geometry::GeometryTerms;
 use super::scalar::{pow_geo, Scalar};
 use std::f64::consts::PI;
 
 /// Parameters `kd, n, k1, k2, k3, k4`; `c = l·v` in the view parametrization
 /// (the published model) or `cos_B`.
-pub fn eval<T: Scalar>(g: &Geometry, p: &[T], param: Param) -> T {
+pub fn eval<T: Scalar>(g: &GeometryTerms, p: &[T], param: Param) -> T {
     let [kd, n, k1, k2, k3, k4] = [p[0], p[1], p[2], p[3], p[4], p[5]];
     let one_minus_cos = 1.0 - g.cos_i;
     let kr = k1 * one_minus_cos + k2;
@@ -25,7 +25,7 @@ pub fn eval<T: Scalar>(g: &Geometry, p: &[T], param: Param) -> T {
 /// factors. As for lafortune: the three `exp` are computed once, where dual
 /// numbers carry six derivatives through each (measured in the global
 /// search's race, where retro-phong fits spend their time).
-pub fn value_and_gradient(g: &Geometry, p: &[f64], param: Param, grad: &mut [f64]) -> f64 {
+pub fn value_and_gradient(g: &GeometryTerms, p: &[f64], param: Param, grad: &mut [f64]) -> f64 {
     let [kd, n, k1, k2, k3, k4] = [p[0], p[1], p[2], p[3], p[4], p[5]];
     let one_minus_cos = 1.0 - g.cos_i;
     let kr = k1 * one_minus_cos + k2;
@@ -72,7 +72,7 @@ mod tests {
         let (kd, n, k1, k2, k3, k4) = (0.62, 24.0, 0.158, 0.0415, 0.00133, 5.47);
         let norm = (n + 2.0) / (2.0 * PI);
         let p = [kd, n, k1, k2, k3, k4];
-        let at = |ti, to, dp| Geometry::new(&Directions::from_degrees(ti, to, dp));
+        let at = |ti, to, dp| GeometryTerms::new(&Directions::from_degrees(ti, to, dp));
         // Pure retroreflection at 60°: l·v = 1, mirror lobe r(l)·v = cos 120° < 0.
         let want = kd / PI + (k1 * 0.5 + k2) * norm;
         assert!((eval(&at(60.0, 60.0, 0.0), &p, Param::View) - want).abs() < 1e-12);

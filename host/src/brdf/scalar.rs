@@ -10,7 +10,7 @@ pub trait Scalar: DualNum<f64> + Copy {}
 impl<T: DualNum<f64> + Copy> Scalar for T {}
 
 /// `base^e` for a geometric base given as `ln base` (precomputed in
-/// `Geometry`) and a parameter exponent; 0 where `base ≤ 0` (`ln_base = −∞`,
+/// `GeometryTerms`) and a parameter exponent; 0 where `base ≤ 0` (`ln_base = −∞`,
 /// the lobes' `max(0, ·)^n`), with a zero derivative there.
 pub fn pow_geo<T: Scalar>(ln_base: f64, e: T) -> T {
     if ln_base == f64::NEG_INFINITY {

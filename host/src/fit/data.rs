@@ -2,7 +2,7 @@
 //! came from: geometry in radians, a value in the file's units, and an
 //! optional standard uncertainty.
 
-use crate::brdf::{Directions, Geometry};
+use crate::brdf::{Directions, GeometryTerms};
 use crate::uncertainty::SHARED;
 use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
@@ -36,8 +36,8 @@ impl Observation {
         Directions::from_angles(self.theta_i, self.theta_o, self.dphi)
     }
 
-    pub fn geometry(&self) -> Geometry {
-        Geometry::new(&self.directions())
+    pub fn geometry(&self) -> GeometryTerms {
+        GeometryTerms::new(&self.directions())
     }
 
     /// The factor from `f_r` to `units`.

@@ -4,7 +4,7 @@
 //! fitting units (1 or `cosθo`), and exact Jacobians by forward-mode
 //! differentiation (`num-dual`).
 
-use crate::brdf::{Bound, Geometry, ModelId, Param};
+use crate::brdf::{Bound, GeometryTerms, ModelId, Param};
 use crate::uncertainty::SHARED;
 use nalgebra::{Const, DMatrix, DVector, U1};
 use num_dual::DualSVec64;
@@ -102,7 +102,7 @@ impl Gather for Sums {
 pub struct Problem {
     pub model: ModelId,
     pub param: Param,
-    pub geos: Vec<Geometry>,
+    pub geos: Vec<GeometryTerms>,
     /// Targets in the fitting units.
     pub y: Vec<f64>,
     /// `f_r` → fitting units, per sample.
@@ -245,7 +245,7 @@ impl Problem {
         &self,
         scratch: usize,
         gather: &G,
-        sample: impl Fn(&Geometry, &mut [f64], &mut [f64]) -> f64 + Sync,
+        sample: impl Fn(&GeometryTerms, &mut [f64], &mut [f64]) -> f64 + Sync,
     ) -> Vec<G::Part> {
         let n = self.free.len();
         tasks(self.geos.len(), |range| {
@@ -297,9 +297,9 @@ pub(super) fn retro_phong_fixture(m: usize) -> Problem {
     use crate::brdf::Directions;
     let model = ModelId::RetroPhong;
     let truth = [0.3, 30.0, 0.2, 0.05, 0.01, 4.0];
-    let geos: Vec<Geometry> = (0..m)
+    let geos: Vec<GeometryTerms> = (0..m)
         .map(|k| {
-            Geometry::new(&Directions::from_degrees(
+            GeometryTerms::new(&Directions::from_degrees(
                 10.0 + (k % 6) as f64 * 12.0,
                 (k * 7 % 80) as f64,
                 -180.0 + (k * 37 % 360) as f64,

@@ -5,7 +5,7 @@
 //!
 //! The GLSL is the host's f64 model (`crate::brdf`) written once more, in the
 //! tool's language: it first takes `L` and `V` into the local frame `(X, Y, N)`
-//! and then follows [`crate::brdf::Geometry`] and the model's `eval` line by
+//! and then follows [`crate::brdf::GeometryTerms`] and the model's `eval` line by
 //! line, so that the tests can compile it as C++ (host/tests/brdf_export.rs)
 //! and compare it with the Rust model at many geometries. BRDF Explorer
 //! multiplies by `n·l` itself: the function returns `f_r` (sr⁻¹), grey.

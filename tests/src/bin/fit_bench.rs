@@ -37,7 +37,7 @@
 //! Installs scipy (pinned) with pip if it is missing or another version;
 //! prints one JSON object, with the peer's versions and BLAS.
 
-use gonio_host::brdf::{Directions, Geometry, GlassBeads, ModelId};
+use gonio_host::brdf::{Directions, GeometryTerms, GlassBeads, ModelId};
 use gonio_host::fit::{self, transform, FitSpec, Problem};
 use gonio_tests::synthetic;
 use rand::{Rng, SeedableRng};
@@ -78,7 +78,7 @@ fn ensure_scipy() {
 }
 
 fn geometry_json(p: &Problem) -> Value {
-    let col = |f: &dyn Fn(&Geometry) -> f64| Value::from(p.geos.iter().map(f).collect::<Vec<f64>>());
+    let col = |f: &dyn Fn(&GeometryTerms) -> f64| Value::from(p.geos.iter().map(f).collect::<Vec<f64>>());
     json!({
         "cos_i": col(&|g| g.cos_i), "cos_o": col(&|g| g.cos_o), "mirror": col(&|g| g.mirror),
         "c": col(&|g| g.retro_cos(p.param)), "nh": col(&|g| g.nh), "vh": col(&|g| g.vh), "vpb": col(&|g| g.vpb),

@@ -4,7 +4,7 @@
 //! with its code, and when it is reported the laser is off and every motor
 //! driver disabled (checked on the virtual pins at the moment the report
 //! leaves). The host's half (recovery, no sample lost or duplicated,
-//! resumption) is host/tests/fault_matrix.rs.
+//! resumption) is host/tests/fault_recovery.rs.
 
 use gonio_host::sim::faults::Faults;
 use gonio_host::sim::{FrameHead, Sent, SimConfig};

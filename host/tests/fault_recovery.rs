@@ -5,7 +5,7 @@
 //! named and the way to resume, and the resumed scan (on the repaired head)
 //! completes. Either way the stored samples are exactly the grid: no
 //! position twice, none missing. The head's half (safe state when each
-//! fault is reported) is tests/tests/fault_matrix.rs.
+//! fault is reported) is tests/tests/fault_safe_state.rs.
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -58,33 +58,33 @@ fn link_and_transient_faults_are_recovered_without_losing_or_repeating_a_sample(
         ("reorder@60", Named("events lost or out of order")),
         ("duplicate@60", Recovery::None),
         ("delay@60:300", Recovery::None),
-        // Frames 1–6 answer the setup, 7 the scan request; then the five
+        // Frames 1–7 answer the setup, 8 the scan request; then the five
         // chunks of the plan are answered among the first points' events,
-        // so 8–155 are the 143 points' events and 5 plan replies (155 the
-        // last sample), 156 the end of the scan, whose loss the host
+        // so 9–156 are the 143 points' events and 5 plan replies (156 the
+        // last sample), 157 the end of the scan, whose loss the host
         // notices by asking the head (no recovery needed).
-        ("drop@155", Named("events lost or out of order")),
-        ("drop@156", Recovery::None),
+        ("drop@156", Named("events lost or out of order")),
+        ("drop@157", Recovery::None),
         ("disconnect@60", Named("link lost")),
         ("stall@30", Named("E402")),
         ("overrun@30:1", Recovery::None),
         ("overrun@30:40", Named("E500")),
         ("drop@40,duplicate@50,reorder@70,corrupt@90,disconnect@120", Named("link lost")),
-        // The host's requests: 1 identify, 2 abort (whatever the head was
-        // doing), 3 detection settings, 4 homing, 5 detection settings,
-        // 6 safety settings, 7 the scan. A lost request (or answer) is found
-        // by the probe that follows an unanswered request, at once instead
-        // of after the request's timeout.
-        ("drop@7", Named("was lost")),
-        ("req-drop@7", Named("was lost")),
-        ("req-corrupt@7", Named("was lost")),
-        ("req-reorder@7", NoneOr("was lost")),
-        ("req-duplicate@7", Recovery::None),
-        ("req-delay@7:300", Recovery::None),
-        ("req-disconnect@7", Named("link lost")),
+        // The host's requests: 1 identify, 2 mechanics, 3 abort (whatever
+        // the head was doing), 4 detection settings, 5 homing, 6 detection
+        // settings, 7 safety settings, 8 the scan. A lost request (or
+        // answer) is found by the probe that follows an unanswered request,
+        // at once instead of after the request's timeout.
+        ("drop@8", Named("was lost")),
+        ("req-drop@8", Named("was lost")),
+        ("req-corrupt@8", Named("was lost")),
+        ("req-reorder@8", NoneOr("was lost")),
+        ("req-duplicate@8", Recovery::None),
+        ("req-delay@8:300", Recovery::None),
+        ("req-disconnect@8", Named("link lost")),
         // Lost while preparing the head (homing): found again before the scan starts.
-        ("req-drop@4", Named("while preparing the head")),
-        ("req-duplicate@4", Recovery::None),
+        ("req-drop@5", Named("while preparing the head")),
+        ("req-duplicate@5", Recovery::None),
     ] {
         let dir = tempfile::tempdir().unwrap();
         let o = scan(dir.path(), inject);
