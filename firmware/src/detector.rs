@@ -79,7 +79,7 @@ impl Detector {
 
     /// Applies validated settings; the ADC restarts on the next measurement.
     /// A matched reference needs a calibration at the same chop timing.
-    pub fn configure<B: Board>(&mut self, hw: &mut Hardware<B>, s: DetectionSettings) -> Result<DetectionReport, Fault> {
+    pub fn configure<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, s: DetectionSettings) -> Result<DetectionReport, Fault> {
         s.validate()?;
         let timing = units::chop_timing(&s, <B::Adc as AdcStream>::TIMER_HZ);
         let calibrated = self.learned.as_ref().is_some_and(|(_, t)| *t == timing);
@@ -92,10 +92,10 @@ impl Detector {
         self.reference = Reference::new(s.reference, s.samples_per_period as usize, self.learned());
         self.design = Design::new(s.periods as u32, self.chop_hz);
         self.stop(hw);
-        Ok(self.report::<B::Adc>())
+        Ok(self.report(cfg))
     }
 
-    pub fn report<A: AdcStream>(&self) -> DetectionReport {
+    pub fn report(&self, cfg: &HeadConfig) -> DetectionReport {
         let chop = self.chop_hz as f32;
         let t = self.settings.periods as f32 / chop;
         DetectionReport {
@@ -103,6 +103,7 @@ impl Detector {
             chop_hz_actual: chop,
             integration_s: t,
             enbw_hz: 1.0 / (2.0 * t),
+            settle_periods: cfg.detector.settle_periods,
         }
     }
 

@@ -516,7 +516,7 @@ impl<B: Board> Head<B> {
         if !matches!(self.mode, Mode::Idle | Mode::Faulted) {
             return Err(Fault::Busy);
         }
-        self.detector.configure(&mut self.hw, s)
+        self.detector.configure(&mut self.hw, &self.cfg, s)
     }
 
     /// Learns the detection chain at the current position (laser on).

@@ -85,6 +85,12 @@ impl Head {
         let mechanics = call::<MechanicsEndpoint>(&client, &(), QUICK)
             .await
             .context("the head did not report its mechanics")?;
+        if !mechanics.is_plausible() {
+            bail!(
+                "head {} reports mechanics no scan can be planned with: {mechanics:?}",
+                identity.serial
+            );
+        }
         Ok(Head {
             client,
             workers,

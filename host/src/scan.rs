@@ -30,11 +30,15 @@ pub struct ScanOutcome {
     pub duplicates_dropped: u32,
     /// Interruptions recovered, by cause.
     pub recoveries: BTreeMap<String, u32>,
-    /// Time the head spent (its clock, s): real time on a real head, simulated time on the simulator.
+    /// Time the head spent (its clock, s), from its state just before the
+    /// scan started to the scan's last event: real time on a real head,
+    /// simulated time on the simulator.
     pub head_time_s: f64,
     /// No stop-and-go order of the scan's points takes less head time than
     /// this (s; [`crate::scan_order::lower_bound`]); absent for a resumed scan,
-    /// whose head time covers only its last part.
+    /// whose head time covers only its last part, for one with a drift
+    /// monitor, whose visits the bound knows nothing of, and for one too
+    /// large to bound.
     pub lower_bound_s: Option<f64>,
     pub wall_time_s: f64,
 }
@@ -260,10 +264,13 @@ impl ScanDriver<'_> {
         // monitor, or after host silence or a lost link) is continued
         // without replanning; otherwise it starts (or replaces the held one).
         let held = match head.status().await {
-            Ok(st) => match st.state {
-                HeadState::Paused { run, next_order, total } if next_order == expected && total == spec.len() => Some((run, total)),
-                _ => None,
-            },
+            Ok(st) => {
+                clock.start(st.uptime_us);
+                match st.state {
+                    HeadState::Paused { run, next_order, total } if next_order == expected && total == spec.len() => Some((run, total)),
+                    _ => None,
+                }
+            }
             Err(e) => return lost(e, expected),
         };
         let started = match held {
@@ -470,6 +477,12 @@ impl HeadClock {
     fn saw(&mut self, t_us: u64) {
         self.first.get_or_insert(t_us);
         self.last = t_us;
+    }
+
+    /// The head's clock when the scan starts: the first move counts too.
+    fn start(&mut self, t_us: u64) {
+        self.first.get_or_insert(t_us);
+        self.last = self.last.max(t_us);
     }
 
     fn span_s(&self) -> f64 {

@@ -123,6 +123,9 @@ pub struct DetectionReport {
     pub integration_s: f32,
     /// Equivalent noise bandwidth of the integration, `1/(2T)` (Hz).
     pub enbw_hz: f32,
+    /// Chop periods discarded after each gain change while the amplifier
+    /// settles (the head's front end): part of every point's dwell.
+    pub settle_periods: u16,
 }
 
 /// Ask the head to learn its detection chain at the current position, on a

@@ -28,3 +28,54 @@ pub struct Mechanics {
     /// From `retro_max_deg` up to this |ψ| the splitter plate cuts the beam.
     pub blind_max_deg: f32,
 }
+
+impl Mechanics {
+    /// Whether a scan can be planned with these: every gearing, speed and
+    /// acceleration positive and finite, every travel a finite range, the
+    /// arm's zones ordered. A head reporting otherwise is refused rather
+    /// than planned for with infinite or NaN move times.
+    pub fn is_plausible(&self) -> bool {
+        let positive = |x: f32| x.is_finite() && x > 0.0;
+        let axes_ok = self.axes.iter().all(|a| {
+            a.microsteps_per_rev > 0
+                && positive(a.max_speed_dps)
+                && positive(a.max_accel_dps2)
+                && a.min_deg.is_finite()
+                && a.max_deg.is_finite()
+                && a.min_deg < a.max_deg
+        });
+        axes_ok && self.retro_max_deg >= 0.0 && self.retro_max_deg <= self.blind_max_deg && self.blind_max_deg.is_finite()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn implausible_mechanics_are_told_apart() {
+        let axis = AxisMechanics {
+            microsteps_per_rev: 288_000,
+            min_deg: -100.0,
+            max_deg: 100.0,
+            max_speed_dps: 20.0,
+            max_accel_dps2: 40.0,
+        };
+        let good = Mechanics {
+            axes: [axis; 3],
+            retro_max_deg: 0.25,
+            blind_max_deg: 5.0,
+        };
+        assert!(good.is_plausible());
+        let mut bad = [good; 6];
+        bad[0].axes[1].max_speed_dps = 0.0;
+        bad[1].axes[2].max_accel_dps2 = f32::NAN;
+        bad[2].axes[0].microsteps_per_rev = 0;
+        bad[3].axes[0].min_deg = 100.0;
+        bad[4].retro_max_deg = 6.0;
+        bad[5].blind_max_deg = f32::INFINITY;
+        for (k, m) in bad.iter().enumerate() {
+            assert!(!m.is_plausible(), "case {k}");
+        }
+    }
+}

@@ -206,7 +206,7 @@ fn calibration_learns_the_phase_and_the_matched_reference_round_trips() {
         reference: Kind::Matched,
         ..s
     };
-    assert_eq!(det.configure(&mut hw, matched), Err(Fault::NotCalibrated));
+    assert_eq!(det.configure(&mut hw, &REFERENCE, matched), Err(Fault::NotCalibrated));
 
     // Calibrate on a strong chop delayed by d = 4 of 64 samples. Against the
     // square references that is I ∝ 32 − 2d and Q ∝ 2d.
@@ -215,7 +215,7 @@ fn calibration_learns_the_phase_and_the_matched_reference_round_trips() {
     let want = 8f32.atan2(24.0).to_degrees();
     assert!((report.phase_deg - want).abs() < 1e-3, "{report:?}");
     assert!(report.snr > 1e3);
-    det.configure(&mut hw, matched).unwrap();
+    det.configure(&mut hw, &REFERENCE, matched).unwrap();
 
     // A third of the amplitude, same delay: a third of the amplitude, in phase.
     hw.adc.periods.extend(delayed(m, 1000, 1500, 4, 1 + 23));

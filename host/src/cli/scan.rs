@@ -297,8 +297,8 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
             .insert("link lost while preparing the head".into(), reconnected_before_scan);
     }
     let samples = writer.finish()?;
-    if resume.is_none() {
-        outcome.lower_bound_s = Some(lower_bound_s(&config, spec, &detection));
+    if resume.is_none() && plan.monitor.is_none() {
+        outcome.lower_bound_s = lower_bound_s(&config, spec, &detection);
     }
     if resume.is_some() {
         // Counts of the whole scan, not only of this session.
@@ -319,15 +319,16 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
 /// The plan replayed from the park position under the head's reported axis
 /// limits, from the scan's first position on: moves, settle and acquisition (s).
 fn estimate_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
-    let (settle, acquire) = dwell_s(cfg, det);
+    let (settle, acquire) = dwell_s(det);
     let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
     scan_time(cfg, spec, rest, PARK, settle, acquire).total_s()
 }
 
-/// The least head time any stop-and-go order of the whole scan could take (s).
-fn lower_bound_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
-    let (settle, acquire) = dwell_s(cfg, det);
-    lower_bound(cfg, spec, PARK, settle, acquire).0.total_s()
+/// The least head time any stop-and-go order of the whole scan could take
+/// (s); `None` for a scan too large to bound.
+fn lower_bound_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> Option<f64> {
+    let (settle, acquire) = dwell_s(det);
+    lower_bound(cfg, spec, settle, acquire).map(|(t, _)| t.total_s())
 }
 
 /// Head time against the lower bound, in words.

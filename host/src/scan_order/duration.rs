@@ -31,8 +31,8 @@ impl ScanTime {
 /// Settle and acquisition time per point (s) under detection settings
 /// `det`: the acquisition counts the chop periods the detector spends ranging
 /// the gain and letting the amplifier settle.
-pub fn dwell_s(cfg: &HeadConfig, det: &DetectionReport) -> (f64, f64) {
-    let settle = cfg.detector.settle_periods as f64;
+pub fn dwell_s(det: &DetectionReport) -> (f64, f64) {
+    let settle = det.settle_periods as f64;
     let extra_periods = if det.settings.auto_range { 2.0 * settle + 1.0 } else { settle };
     let acquire = det.integration_s as f64 + extra_periods / det.chop_hz_actual as f64;
     (det.settings.settle_s as f64, acquire)

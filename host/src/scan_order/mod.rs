@@ -22,7 +22,7 @@ mod bound;
 mod duration;
 mod tour;
 
-pub use bound::lower_bound;
+pub use bound::{lower_bound, MoveBound, BOUND_CAPACITY};
 pub use duration::{dwell_s, scan_time, ScanTime};
 
 use gonio_firmware::board::HeadConfig;
@@ -35,7 +35,7 @@ pub const PLAN_CAPACITY: usize = 4096;
 
 /// Stage targets (microsteps) of the points of incidence `block` in canonical
 /// order, `None` where a point is unreachable.
-fn stage_targets(cfg: &HeadConfig, spec: &ScanSpec, block: u32) -> Vec<Option<[i32; 3]>> {
+pub fn stage_targets(cfg: &HeadConfig, spec: &ScanSpec, block: u32) -> Vec<Option<[i32; 3]>> {
     let per_block = spec.len() / spec.theta_i_deg.len().max(1) as u32;
     (block * per_block..(block + 1) * per_block)
         .map(|i| {
@@ -43,6 +43,11 @@ fn stage_targets(cfg: &HeadConfig, spec: &ScanSpec, block: u32) -> Vec<Option<[i
             kinematics::inverse(cfg, &g).ok().map(|axes| target_steps(cfg, &axes))
         })
         .collect()
+}
+
+/// Duration (s) of the move between two stage positions (microsteps).
+pub fn move_s(cfg: &HeadConfig, from: [i32; 3], to: [i32; 3]) -> f64 {
+    move_time(cfg, [0, 1, 2].map(|i| to[i] - from[i]))
 }
 
 /// The visit order of a whole scan (canonical indices), from stage position
@@ -69,10 +74,7 @@ pub fn visit_order(cfg: &HeadConfig, spec: &ScanSpec, from: [i32; 3]) -> impl It
                 targets[reachable[k - 1] as usize].unwrap_or(at)
             }
         };
-        let path = tour::shortest_path(reachable.len(), |a, b| {
-            let (p, q) = (node(a), node(b));
-            move_time(cfg, [0, 1, 2].map(|i| q[i] - p[i]))
-        });
+        let path = tour::shortest_path(reachable.len(), |a, b| move_s(cfg, node(a), node(b)));
         if let Some(&last) = path.last() {
             at = node(last);
         }

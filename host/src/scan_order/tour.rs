@@ -5,7 +5,7 @@
 //! Why hand-written: the crates for the travelling salesman problem solve
 //! closed tours over a stored distance matrix; ours is an open path (the
 //! scan ends wherever it ends) whose costs are move times computed on
-//! demand, and 4 096 points would need a 64 MiB matrix. Candidate moves are
+//! demand, and 4 096 points would need a 128 MiB matrix of f64. Candidate moves are
 //! restricted to each point's nearest neighbours by cost, the usual
 //! neighbour-list speed-up (Johnson & McGeoch, "The TSP: a case study in
 //! local optimization", 1997).
@@ -39,26 +39,21 @@ pub fn shortest_path(n: usize, cost: impl Fn(usize, usize) -> f64) -> Vec<usize>
     path.nodes.split_off(1)
 }
 
-/// The `NEIGHBOURS` cheapest other nodes of every node, cheapest first.
+/// The `NEIGHBOURS` cheapest other nodes of every node, cheapest first; one
+/// row of costs at a time, so memory stays linear in the nodes.
 fn neighbour_lists(n: usize, cost: &impl Fn(usize, usize) -> f64) -> Vec<Vec<usize>> {
-    let mut costs = vec![Vec::with_capacity(n); n + 1];
-    for a in 0..=n {
-        for b in a + 1..=n {
-            let c = cost(a, b);
-            costs[a].push((c, b));
-            costs[b].push((c, a));
-        }
-    }
-    costs
-        .into_iter()
-        .map(|mut c| {
-            let k = NEIGHBOURS.min(c.len());
-            if k < c.len() {
-                c.select_nth_unstable_by(k, |x, y| x.0.total_cmp(&y.0));
-                c.truncate(k);
+    let mut row: Vec<(f64, usize)> = Vec::with_capacity(n);
+    let order = |x: &(f64, usize), y: &(f64, usize)| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1));
+    (0..=n)
+        .map(|a| {
+            row.clear();
+            row.extend((0..=n).filter(|&b| b != a).map(|b| (cost(a, b), b)));
+            if NEIGHBOURS < row.len() {
+                row.select_nth_unstable_by(NEIGHBOURS, order);
+                row.truncate(NEIGHBOURS);
             }
-            c.sort_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
-            c.into_iter().map(|(_, b)| b).collect()
+            row.sort_by(order);
+            row.iter().map(|&(_, b)| b).collect()
         })
         .collect()
 }
@@ -75,10 +70,11 @@ impl Path {
         let mut nodes = vec![0];
         while !open.is_empty() {
             let last = nodes[nodes.len() - 1];
-            let mut best = 0;
-            for k in 1..open.len() {
-                if cost(last, open[k]) < cost(last, open[best]) {
-                    best = k;
+            let (mut best, mut best_cost) = (0, cost(last, open[0]));
+            for (k, &b) in open.iter().enumerate().skip(1) {
+                let c = cost(last, b);
+                if c < best_cost {
+                    (best, best_cost) = (k, c);
                 }
             }
             // Keeps the ties in index order, so the plan is deterministic.

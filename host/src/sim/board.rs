@@ -7,7 +7,6 @@
 use super::clock::{advance_to, elapse, owe, slice_end};
 use super::faults::HardwareFault;
 use super::world::World;
-use gonio_firmware::board::REFERENCE;
 use gonio_firmware::hw::{AdcStream, Board, ChopTiming, Clock, Hardware, Overrun, QueueFull, StepBlock, StepTimer};
 use gonio_firmware::motion::blocks;
 use gonio_firmware::motion::executor::Executor;
@@ -286,6 +285,7 @@ impl Clock for SimClock {
 
 /// Wires a firmware `Hardware` set to the virtual world.
 pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
+    let step_pulse_s = world.borrow().cfg.driver.step_pulse_s;
     let pin = |role| SimPin {
         world: world.clone(),
         role,
@@ -307,7 +307,7 @@ pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
             world: world.clone(),
             exec: Executor::new(
                 [0, 1, 2].map(|i| pin(Role::Step(i))),
-                units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, SimSteps::TICK_HZ) as u64,
+                units::seconds_to_ticks(step_pulse_s, SimSteps::TICK_HZ) as u64,
             ),
             origin_s: 0.0,
             next: None,

@@ -3,14 +3,14 @@
 //!
 //! - `plan_over_lower_bound`: head time of the planned Belcour grid (moves
 //!   under the reference axis limits, the chip's planning, 50 ms settle and
-//!   100 ms integration per point) over the lower bound of any stop-and-go
-//!   visit of its points (`scan_order::lower_bound`), beside the old
-//!   nearest-neighbour plan's figure (`old_plan_s`, replayed here).
+//!   100 ms integration per point, from the park position) over the lower
+//!   bound of any stop-and-go visit of its points from any start
+//!   (`scan_order::lower_bound`), beside the old nearest-neighbour plan's
+//!   figure (`old_plan_s`, replayed here).
 
 use gonio_firmware::board::{HeadConfig, REFERENCE};
-use gonio_firmware::kinematics;
-use gonio_firmware::motion::{move_time, target_steps, PARK};
-use gonio_host::scan_order::{lower_bound, scan_time, visit_order};
+use gonio_firmware::motion::PARK;
+use gonio_host::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
 use gonio_shared::ScanSpec;
 use std::time::Instant;
 
@@ -27,16 +27,11 @@ fn nearest_neighbour_order(cfg: &HeadConfig, spec: &ScanSpec, from: [i32; 3]) ->
     let mut order = Vec::new();
     for block in 0..blocks {
         let base = block * per_block;
-        let targets: Vec<Option<[i32; 3]>> = (base..base + per_block)
-            .map(|i| kinematics::inverse(cfg, &spec.point(i)?).ok().map(|a| target_steps(cfg, &a)))
-            .collect();
+        let targets = stage_targets(cfg, spec, block);
         order.extend((0..per_block).filter(|&k| targets[k as usize].is_none()).map(|k| base + k));
         let mut open: Vec<u32> = (0..per_block).filter(|&k| targets[k as usize].is_some()).collect();
         while !open.is_empty() {
-            let time = |k: u32| {
-                let t = targets[k as usize].unwrap_or(at);
-                move_time(cfg, [0, 1, 2].map(|i| t[i] - at[i]))
-            };
+            let time = |k: u32| move_s(cfg, at, targets[k as usize].unwrap_or(at));
             let best = (0..open.len()).fold(0, |b, j| if time(open[j]) < time(open[b]) { j } else { b });
             let k = open.remove(best);
             at = targets[k as usize].unwrap_or(at);
@@ -61,7 +56,7 @@ fn main() {
         SETTLE_S,
         INTEGRATION_S,
     );
-    let (bound, moves) = lower_bound(&cfg, &spec, PARK, SETTLE_S, INTEGRATION_S);
+    let (bound, moves) = lower_bound(&cfg, &spec, SETTLE_S, INTEGRATION_S).expect("3 316 points are bounded");
     let out = serde_json::json!({
         "points": spec.len(),
         "measured_points": plan.measured,
