@@ -2,7 +2,9 @@
 //!
 //! [`client`] talks to a head (real, or simulated in [`sim`]) over the
 //! transports in [`link`]; [`scan`] runs scans and [`samples_csv`] /
-//! [`run_record`] store them; [`brdf`] holds the models of `models.md`.
+//! [`run_record`] store them, planned by [`scan_order`]; [`brdf`] holds the
+//! models of `docs/models.md`; [`operator`] is where the library's notices
+//! and progress bars go (the library never prints itself).
 
 pub mod brdf;
 pub mod calibration;
@@ -12,6 +14,7 @@ pub mod coefficients;
 pub mod fit;
 pub mod formats;
 pub mod link;
+pub mod operator;
 pub mod plot;
 pub mod report;
 pub mod run_record;

@@ -8,7 +8,7 @@ use crate::session::Session;
 use anyhow::{bail, Context, Result};
 use gonio_firmware::motion::PARK;
 use gonio_shared::{Fault, Geometry, HeadState, PlanChunk, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
-use indicatif::{ProgressBar, ProgressStyle};
+use indicatif::ProgressBar;
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
@@ -41,22 +41,6 @@ pub struct ScanOutcome {
     /// large to bound.
     pub lower_bound_s: Option<f64>,
     pub wall_time_s: f64,
-}
-
-/// A bar on a terminal, nothing otherwise (or when `quiet`).
-pub fn progress_bar(len: u64, quiet: bool, task: &str, items: &str) -> ProgressBar {
-    if quiet {
-        return ProgressBar::hidden();
-    }
-    let pb = ProgressBar::new(len);
-    pb.set_style(
-        ProgressStyle::with_template(&format!(
-            "{{spinner}} {task} [{{bar:40}}] {{pos}}/{{len}} {items}, {{msg}} ({{eta}} left)"
-        ))
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> "),
-    );
-    pb
 }
 
 /// A laser-drift monitor: one geometry of the mounted target, measured
@@ -214,7 +198,9 @@ impl ScanDriver<'_> {
             );
         }
         *self.outcome.recoveries.entry(why.name()).or_default() += 1;
-        self.pb.suspend(|| note_recovery(&why, next));
+        let operator = self.session.operator;
+        self.pb
+            .suspend(|| operator.notice(format_args!("scan interrupted: {}; continuing from position {next}", why.name())));
         match why {
             Interruption::LinkLost(_) => self
                 .session
@@ -443,11 +429,6 @@ pub async fn feed(head: &Head, run: u32, order: &[u32], mut from: u32) -> Result
         }
     }
     Ok(from)
-}
-
-/// Tells the operator what is being recovered (stderr; quiet runs hide the bar, not this).
-fn note_recovery(why: &Interruption, next: u32) {
-    eprintln!("scan interrupted: {}; continuing from position {next}", why.name());
 }
 
 /// Readings per monitor visit: every sample of the scan is referred to them,

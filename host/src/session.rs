@@ -5,6 +5,7 @@
 //! back on; then prepare it again, since it may have been power-cycled.
 
 use crate::client::{is_link_loss, Head, Target};
+use crate::operator::Operator;
 use anyhow::{bail, Context, Result};
 use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Geometry, Reference, SafetySettings};
 use std::time::{Duration, Instant};
@@ -32,7 +33,8 @@ pub struct Session {
     setup: Setup,
     head: Option<Head>,
     serial: String,
-    quiet: bool,
+    /// Where notices of the preparation and of recoveries go.
+    pub operator: Operator,
     pub detection: Option<DetectionReport>,
     pub calibration: Option<CalibrationReport>,
     /// Times the link was found again.
@@ -41,14 +43,14 @@ pub struct Session {
 
 impl Session {
     /// Connects (nothing else: a head that cannot be reached leaves no trace).
-    pub async fn connect(target: Target, setup: Setup, quiet: bool) -> Result<Session> {
+    pub async fn connect(target: Target, setup: Setup, operator: Operator) -> Result<Session> {
         let head = Head::connect(&target).await?;
         Ok(Session {
             serial: head.identity().serial.to_string(),
             target,
             setup,
             head: Some(head),
-            quiet,
+            operator,
             detection: None,
             calibration: None,
             reconnections: 0,
@@ -79,12 +81,10 @@ impl Session {
             Some(g) => {
                 head.move_to(g).await.context("moving to the calibration geometry")?;
                 let c = head.calibrate(self.setup.calibration_periods).await?;
-                if !self.quiet {
-                    eprintln!(
-                        "detector calibrated: phase {:.1}°, {:.3} V at gain {}, SNR {:.0}",
-                        c.phase_deg, c.amplitude_v, c.gain_index, c.snr
-                    );
-                }
+                self.operator.notice(format_args!(
+                    "detector calibrated: phase {:.1}°, {:.3} V at gain {}, SNR {:.0}",
+                    c.phase_deg, c.amplitude_v, c.gain_index, c.snr
+                ));
                 Some(c)
             }
             None => None,
@@ -113,9 +113,7 @@ impl Session {
     pub async fn start(&mut self) -> Result<()> {
         match self.prepare().await {
             Err(e) if is_link_loss(&e) => {
-                if !self.quiet {
-                    eprintln!("preparing the head: {e:#}");
-                }
+                self.operator.notice(format_args!("preparing the head: {e:#}"));
                 self.reconnect().await
             }
             r => r,
@@ -126,9 +124,8 @@ impl Session {
     /// lost again while preparing is one more try within the window.
     pub async fn reconnect(&mut self) -> Result<()> {
         self.let_go().await;
-        if !self.quiet {
-            eprintln!("link to the head lost; looking for head {} again", self.serial);
-        }
+        self.operator
+            .notice(format_args!("link to the head lost; looking for head {} again", self.serial));
         let t0 = Instant::now();
         let mut last_err = None;
         while t0.elapsed() < RECONNECT_WINDOW {

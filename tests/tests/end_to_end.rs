@@ -7,6 +7,7 @@ use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
 use gonio_host::brdf::{Directions, Material, Specimen};
 use gonio_host::client::{Head, Target};
+use gonio_host::operator::Operator;
 use gonio_host::scan;
 use gonio_host::scan_order::{dwell_s, scan_time, visit_order};
 use gonio_host::session::{Session, Setup};
@@ -39,7 +40,7 @@ async fn session(target: Target) -> Session {
         calibrate_at: None,
         calibration_periods: 0,
     };
-    let mut s = Session::connect(target, setup, true).await.unwrap();
+    let mut s = Session::connect(target, setup, Operator::Silent).await.unwrap();
     s.start().await.unwrap();
     s
 }

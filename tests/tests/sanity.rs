@@ -4,6 +4,7 @@
 
 use gonio_host::brdf::{Directions, Material, Specimen};
 use gonio_host::client::Target;
+use gonio_host::operator::Operator;
 use gonio_host::session::{Session, Setup};
 use gonio_host::sim::SimConfig;
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, SampleFlags, SanityConfig, ScanSpec};
@@ -35,7 +36,9 @@ async fn dust_is_flagged_and_clean_data_is_not() {
         calibrate_at: None,
         calibration_periods: 0,
     };
-    let mut session = Session::connect(Target::Sim(Box::new(sim.clone())), setup, true).await.unwrap();
+    let mut session = Session::connect(Target::Sim(Box::new(sim.clone())), setup, Operator::Silent)
+        .await
+        .unwrap();
     session.start().await.unwrap();
     let head = session.head();
 

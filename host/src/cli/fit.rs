@@ -252,7 +252,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
 
 /// Every model fitted to the same data, in catalogue order.
 pub fn compare(d: &Domain, o: &FitOptions) -> Result<Vec<Outcome>> {
-    let bar = crate::scan::progress_bar(ModelId::ALL.len() as u64, o.json, "fitting", "models");
+    let bar = crate::operator::Operator::for_json(o.json).bar(ModelId::ALL.len() as u64, "fitting", "models");
     let mut rows = Vec::new();
     for model in ModelId::ALL {
         bar.set_message(model.name());

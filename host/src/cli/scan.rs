@@ -8,6 +8,7 @@ use super::material::SimHeadArgs;
 use super::plan::{PlanTarget, ScanPlan};
 use super::reference;
 use crate::client::Target;
+use crate::operator::Operator;
 use crate::run_record::RunRecord;
 use crate::samples_csv::{stored_rows, SampleWriter};
 use crate::scan::{self, Monitor, ScanOutcome};
@@ -240,7 +241,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         calibrate_at,
         calibration_periods: settings.periods_for(CALIBRATION_S),
     };
-    let mut session = Session::connect(target.clone(), setup, json).await?;
+    let mut session = Session::connect(target.clone(), setup, Operator::for_json(json)).await?;
     let id = session.head().identity().clone();
     if !json {
         eprintln!(
@@ -282,7 +283,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         }
         None => SampleWriter::create(dir)?,
     };
-    let pb = scan::progress_bar(spec.len() as u64, json, "scanning", "points");
+    let pb = Operator::for_json(json).bar(spec.len() as u64, "scanning", "points");
     let mut outcome = scan::run(&mut session, spec, &mut writer, &pb, plan.monitor.as_ref())
         .await
         .with_context(|| {

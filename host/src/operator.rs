@@ -1,0 +1,51 @@
+//! What the library tells the person at the instrument while it works:
+//! notices (a calibration's result, a recovery under way) and progress bars.
+//! The command line chooses where they go: stderr and a bar on a terminal
+//! run, nowhere under `--json` (whose output says it all) or in tests.
+//! Library code never prints itself.
+
+use indicatif::{ProgressBar, ProgressStyle};
+use std::fmt::Display;
+
+/// Where notices and progress go.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Operator {
+    /// Notices on stderr, progress bars on the terminal.
+    Terminal,
+    /// Nothing: a `--json` run or a test.
+    Silent,
+}
+
+impl Operator {
+    /// The operator of a command run with or without `--json`.
+    pub fn for_json(json: bool) -> Self {
+        if json {
+            Operator::Silent
+        } else {
+            Operator::Terminal
+        }
+    }
+
+    /// Tells the operator something, on a line of its own.
+    pub fn notice(self, msg: impl Display) {
+        if self == Operator::Terminal {
+            eprintln!("{msg}");
+        }
+    }
+
+    /// A bar over `len` `items` for `task`, hidden for a silent operator.
+    pub fn bar(self, len: u64, task: &str, items: &str) -> ProgressBar {
+        if self == Operator::Silent {
+            return ProgressBar::hidden();
+        }
+        let pb = ProgressBar::new(len);
+        pb.set_style(
+            ProgressStyle::with_template(&format!(
+                "{{spinner}} {task} [{{bar:40}}] {{pos}}/{{len}} {items}, {{msg}} ({{eta}} left)"
+            ))
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> "),
+        );
+        pb
+    }
+}
