@@ -20,6 +20,7 @@ pub mod report;
 pub mod run_record;
 pub mod samples_csv;
 pub mod scan;
+pub mod scan_dir;
 pub mod scan_order;
 pub mod session;
 pub mod sim;

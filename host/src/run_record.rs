@@ -3,6 +3,7 @@
 
 use crate::brdf::Specimen;
 use crate::scan::ScanOutcome;
+use crate::scan_dir::ScanDir;
 use anyhow::{Context, Result};
 use gonio_shared::{CalibrationReport, DetectionReport, Identity, ScanSpec};
 use serde::Serialize;
@@ -114,7 +115,7 @@ impl RunRecord {
     }
 
     pub fn write(&self, dir: &Path) -> Result<()> {
-        let path = dir.join("run.json");
+        let path = ScanDir::new(dir).run_record();
         let text = serde_json::to_string_pretty(self)?;
         std::fs::write(&path, text + "\n").with_context(|| format!("writing {}", path.display()))
     }

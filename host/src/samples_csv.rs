@@ -3,6 +3,7 @@
 //! named `samples.csv.part` until the scan completes, so a file called
 //! `samples.csv` is always a whole scan. Columns: `docs/samples-csv.md`.
 
+use crate::scan_dir::ScanDir;
 use anyhow::{Context, Result};
 use gonio_shared::{Sample, SampleFlags};
 use serde::{Deserialize, Serialize};
@@ -86,19 +87,19 @@ pub struct SampleWriter {
 
 impl SampleWriter {
     pub fn create(dir: &Path) -> Result<Self> {
-        let part = dir.join("samples.csv.part");
+        let part = ScanDir::new(dir).samples_part();
         let file = File::create(&part).with_context(|| format!("creating {}", part.display()))?;
         Ok(SampleWriter {
             csv: csv::Writer::from_writer(file),
             part,
-            done: dir.join("samples.csv"),
+            done: ScanDir::new(dir).samples(),
         })
     }
 
     /// Appends to the samples of an interrupted scan. A last line cut short
     /// by a crash is dropped (its point is measured again).
     pub fn append(dir: &Path) -> Result<Self> {
-        let part = dir.join("samples.csv.part");
+        let part = ScanDir::new(dir).samples_part();
         if !part.exists() {
             return Self::create(dir);
         }
@@ -113,7 +114,7 @@ impl SampleWriter {
         Ok(SampleWriter {
             csv: csv::WriterBuilder::new().has_headers(whole == 0).from_writer(file),
             part,
-            done: dir.join("samples.csv"),
+            done: ScanDir::new(dir).samples(),
         })
     }
 
@@ -142,7 +143,7 @@ fn whole_lines(path: &Path) -> Result<Vec<u8>> {
 
 /// The rows an interrupted scan stored whole in `dir` (none if it stored nothing).
 pub fn stored_rows(dir: &Path) -> Result<Vec<Row>> {
-    let part = dir.join("samples.csv.part");
+    let part = ScanDir::new(dir).samples_part();
     if !part.exists() {
         return Ok(Vec::new());
     }

@@ -6,6 +6,7 @@ use crate::brdf::{Material, ModelId, Param};
 use crate::calibration::{self, Budget, CalibratedRow, Calibration};
 use crate::fit::{self, FitSpec};
 use crate::samples_csv;
+use crate::scan_dir::ScanDir;
 use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Context, Result};
 use serde_json::json;
@@ -111,7 +112,7 @@ impl CalibrateArgs {
 }
 
 fn rows(dir: &std::path::Path) -> Result<Vec<samples_csv::Row>> {
-    let p = dir.join("samples.csv");
+    let p = ScanDir::new(dir).samples();
     if !p.exists() {
         bail!("{} holds no completed scan (no samples.csv)", dir.display());
     }
@@ -151,7 +152,7 @@ fn slope_model(a: &CalibrateArgs, first: &[CalibratedRow]) -> Result<Option<Mate
 
 /// Calibrates a scan directory: writes calibrated.csv and calibration.json.
 pub fn calibrate(a: &CalibrateArgs) -> Result<Calibrated> {
-    let reference = a.reference.clone().unwrap_or_else(|| a.scan.join(super::reference::FILE));
+    let reference = a.reference.clone().unwrap_or_else(|| ScanDir::new(&a.scan).reference());
     let (plate, monitor) = if reference.is_dir() {
         let all = rows(&reference).context("reading the reference plate's scan")?;
         all.into_iter().partition(|r| r.index.is_some())
@@ -176,7 +177,7 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<Calibrated> {
     let (first, _) = cal.apply(&sample, &budget);
     budget.slope = slope_model(a, &first)?;
     let (calibrated, drift) = cal.apply(&sample, &budget);
-    let csv = a.scan.join("calibrated.csv");
+    let csv = ScanDir::new(&a.scan).calibrated();
     calibration::write_csv(&csv, &calibrated)?;
     let (lo, hi) = drift.range();
     let usable = calibrated.iter().filter(|r| r.usable).count();

@@ -5,6 +5,7 @@ use super::detector::DetectorArgs;
 use crate::brdf::Specimen;
 use crate::client::Target;
 use crate::scan::Monitor;
+use crate::scan_dir::ScanDir;
 use crate::sim::faults::Faults;
 use crate::sim::{Imperfections, SimConfig};
 use anyhow::{Context, Result};
@@ -48,8 +49,6 @@ pub struct ScanPlan {
     #[serde(skip)]
     pub faults: Faults,
 }
-
-const FILE: &str = "scan.json";
 
 impl ScanPlan {
     pub fn new(target: &Target, spec: &ScanSpec, detector: &DetectorArgs) -> Self {
@@ -102,13 +101,14 @@ impl ScanPlan {
     }
 
     pub fn write(&self, dir: &Path) -> Result<()> {
-        let path = dir.join(FILE);
+        let path = ScanDir::new(dir).plan();
         std::fs::write(&path, serde_json::to_string_pretty(self)? + "\n").with_context(|| format!("writing {}", path.display()))
     }
 
     pub fn read(dir: &Path) -> Result<Self> {
-        let path = dir.join(FILE);
-        let text = std::fs::read_to_string(&path).with_context(|| format!("{} holds no scan to resume ({FILE} missing)", dir.display()))?;
+        let path = ScanDir::new(dir).plan();
+        let text = std::fs::read_to_string(&path)
+            .with_context(|| format!("{} holds no scan to resume ({} missing)", dir.display(), path.display()))?;
         serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))
     }
 }

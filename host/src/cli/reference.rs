@@ -6,12 +6,10 @@
 
 use crate::client::{Head, Target};
 use crate::samples_csv::Row;
+use crate::scan_dir::ScanDir;
 use anyhow::{Context, Result};
 use gonio_shared::Geometry;
 use std::path::Path;
-
-/// File of the plate's samples in a scan directory.
-pub const FILE: &str = "reference.csv";
 
 /// Plate geometries (θi, θo, Δφ in degrees): pure retroreflection (through
 /// the splitter) and off-retro directions clear of the blind zone.
@@ -53,7 +51,7 @@ fn mount(target: &Target, plate: bool, json: bool) -> Result<()> {
 /// Measures the plate, writes `reference.csv`, and puts the sample back.
 pub async fn measure_plate(head: &Head, target: &Target, dir: &Path, json: bool) -> Result<()> {
     mount(target, true, json)?;
-    let path = dir.join(FILE);
+    let path = ScanDir::new(dir).reference();
     let mut w = csv::Writer::from_path(&path).with_context(|| format!("creating {}", path.display()))?;
     for (ti, to, dp) in PLATE_POINTS {
         let s = head

@@ -12,6 +12,7 @@ use crate::operator::Operator;
 use crate::run_record::RunRecord;
 use crate::samples_csv::{stored_rows, SampleWriter};
 use crate::scan::{self, Monitor, ScanOutcome};
+use crate::scan_dir::ScanDir;
 use crate::scan_order::{dwell_s, lower_bound, scan_time, visit_order};
 use crate::session::{Session, Setup};
 use crate::sim::SimConfig;
@@ -204,7 +205,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
 
 /// The first visit position an interrupted scan has not stored.
 fn resume_from(dir: &Path) -> Result<u32> {
-    if dir.join("samples.csv").exists() {
+    if ScanDir::new(dir).samples().exists() {
         bail!("{} holds a complete scan; nothing to resume", dir.display());
     }
     Ok(stored_rows(dir)?.iter().filter_map(|r| r.order).map(|o| o + 1).max().unwrap_or(0))
@@ -213,10 +214,10 @@ fn resume_from(dir: &Path) -> Result<u32> {
 /// Refuses to mix a new scan into a directory that holds one.
 fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    for f in ["samples.csv", "run.json"] {
-        let p = dir.join(f);
+    for p in ScanDir::new(dir).finished_files() {
         if p.exists() {
             if !force {
+                let f = p.file_name().unwrap_or_default().to_string_lossy();
                 bail!("{} already holds a scan ({f}); choose another --out or pass --force", dir.display());
             }
             std::fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
