@@ -68,6 +68,10 @@ fn user_mistakes_are_errors_not_panics() {
             "valid: kd",
         ),
         (vec!["scan", "--out", out], "required"),
+        (
+            vec!["scan", "--port", "/dev/null", "--out", out, "--inject", "drop@3"],
+            "--inject acts on the simulated head only",
+        ),
     ] {
         let o = gonio(&args);
         assert!(!o.status.success(), "{args:?}");

@@ -183,6 +183,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         return summarise(&outcome, &samples, a.output.json);
     }
     let target = match (&a.port, a.sim) {
+        (Some(_), _) if a.sim_head.inject.is_some() => bail!("--inject acts on the simulated head only (--sim), not on a head at a port"),
         (Some(p), _) => Target::Port(p.clone()),
         (None, true) => Target::Sim(Box::new(a.sim_head.config()?)),
         (None, false) => bail!("one of --sim or --port is required"),
