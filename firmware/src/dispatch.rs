@@ -15,26 +15,6 @@ use postcard_rpc::standard_icd::WireError;
 use postcard_rpc::{Endpoint, Key};
 use serde::{Deserialize, Serialize};
 
-/// A request from the host, decoded.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Command {
-    Identify,
-    Status,
-    Mechanics,
-    Home(HomeRequest),
-    Move(Geometry),
-    Measure(MeasureRequest),
-    Scan(ScanSpec),
-    Plan(PlanChunk),
-    Abort,
-    Pause,
-    Continue,
-    Detection(DetectionSettings),
-    Sanity(SanityConfig),
-    Calibrate(CalibrateRequest),
-    Safety(SafetySettings),
-}
-
 /// A frame that is not a valid request.
 #[derive(Debug, PartialEq)]
 pub enum DecodeError {
@@ -78,44 +58,53 @@ fn body<'a, T: Deserialize<'a>>(hdr: VarHeader, bytes: &'a [u8]) -> Result<T, De
     postcard::from_bytes(bytes).map_err(|_| DecodeError::Wire(hdr, WireError::DeserFailed))
 }
 
-/// Decodes one frame into its header and command.
-pub fn decode(frame: &[u8]) -> Result<(VarHeader, Command), DecodeError> {
-    let (hdr, rest) = VarHeader::take_from_slice(frame).ok_or(DecodeError::NoHeader)?;
-    let k = &hdr.key;
-    let cmd = if is::<IdentifyEndpoint>(k) {
-        body::<()>(hdr, rest).map(|_| Command::Identify)
-    } else if is::<StatusEndpoint>(k) {
-        body::<()>(hdr, rest).map(|_| Command::Status)
-    } else if is::<MechanicsEndpoint>(k) {
-        body::<()>(hdr, rest).map(|_| Command::Mechanics)
-    } else if is::<HomeEndpoint>(k) {
-        body(hdr, rest).map(Command::Home)
-    } else if is::<MoveEndpoint>(k) {
-        body(hdr, rest).map(Command::Move)
-    } else if is::<MeasureEndpoint>(k) {
-        body(hdr, rest).map(Command::Measure)
-    } else if is::<ScanEndpoint>(k) {
-        body(hdr, rest).map(Command::Scan)
-    } else if is::<PlanEndpoint>(k) {
-        body(hdr, rest).map(Command::Plan)
-    } else if is::<AbortEndpoint>(k) {
-        body::<()>(hdr, rest).map(|_| Command::Abort)
-    } else if is::<PauseEndpoint>(k) {
-        body::<()>(hdr, rest).map(|_| Command::Pause)
-    } else if is::<ContinueEndpoint>(k) {
-        body::<()>(hdr, rest).map(|_| Command::Continue)
-    } else if is::<DetectionEndpoint>(k) {
-        body(hdr, rest).map(Command::Detection)
-    } else if is::<SanityEndpoint>(k) {
-        body(hdr, rest).map(Command::Sanity)
-    } else if is::<CalibrateEndpoint>(k) {
-        body(hdr, rest).map(Command::Calibrate)
-    } else if is::<SafetyEndpoint>(k) {
-        body(hdr, rest).map(Command::Safety)
-    } else {
-        Err(DecodeError::Wire(hdr, WireError::UnknownKey))
+/// The one table of the endpoints the head answers: each command and the
+/// endpoint it comes on, with its request type (none: an empty body).
+/// [`Command`] and [`decode`] are generated from it, so a new endpoint is a
+/// line here, its line in `icd.rs` and its arm in the serve loop's `handle`.
+macro_rules! commands {
+    ($( $variant:ident $( ( $ty:ty ) )? = $endpoint:ident ),* $(,)?) => {
+        /// A request from the host, decoded.
+        #[derive(Debug, Clone, PartialEq)]
+        pub enum Command {
+            $( $variant $( ($ty) )? ),*
+        }
+
+        /// Decodes one frame into its header and command.
+        pub fn decode(frame: &[u8]) -> Result<(VarHeader, Command), DecodeError> {
+            let (hdr, rest) = VarHeader::take_from_slice(frame).ok_or(DecodeError::NoHeader)?;
+            $(
+                if is::<$endpoint>(&hdr.key) {
+                    return commands!(@body hdr, rest, $variant $( $ty )?).map(|c| (hdr, c));
+                }
+            )*
+            Err(DecodeError::Wire(hdr, WireError::UnknownKey))
+        }
     };
-    cmd.map(|c| (hdr, c))
+    (@body $hdr:ident, $rest:ident, $variant:ident $ty:ty) => {
+        body::<$ty>($hdr, $rest).map(Command::$variant)
+    };
+    (@body $hdr:ident, $rest:ident, $variant:ident) => {
+        body::<()>($hdr, $rest).map(|()| Command::$variant)
+    };
+}
+
+commands! {
+    Identify = IdentifyEndpoint,
+    Status = StatusEndpoint,
+    Mechanics = MechanicsEndpoint,
+    Home(HomeRequest) = HomeEndpoint,
+    Move(Geometry) = MoveEndpoint,
+    Measure(MeasureRequest) = MeasureEndpoint,
+    Scan(ScanSpec) = ScanEndpoint,
+    Plan(PlanChunk) = PlanEndpoint,
+    Abort = AbortEndpoint,
+    Pause = PauseEndpoint,
+    Continue = ContinueEndpoint,
+    Detection(DetectionSettings) = DetectionEndpoint,
+    Sanity(SanityConfig) = SanityEndpoint,
+    Calibrate(CalibrateRequest) = CalibrateEndpoint,
+    Safety(SafetySettings) = SafetyEndpoint,
 }
 
 /// Encodes a message under `key` (shrunk to `kind`) into `buf`; returns the

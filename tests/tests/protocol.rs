@@ -121,6 +121,25 @@ fn every_request_is_recognised_at_every_key_width() {
     assert_eq!(decode(&frame::<StatusEndpoint>(&())).unwrap().1, Command::Status);
 }
 
+/// Every endpoint of the ICD has its line in the head's command table: its
+/// key is known to the decoder (an empty body may not decode, but it is
+/// never an unknown key).
+#[test]
+fn every_endpoint_of_the_icd_is_decoded() {
+    // The list also holds postcard-rpc's own standard endpoints (ping, ...).
+    let ours = ENDPOINT_LIST.endpoints.iter().filter(|(path, ..)| path.starts_with("gonio/"));
+    assert!(ours.clone().count() > 1, "no gonio/ endpoint in the list");
+    for (path, req_key, _) in ours {
+        let mut buf = [0u8; 64];
+        let n = encode(*req_key, VarKeyKind::Key8, VarSeq::Seq1(1), &(), &mut buf).unwrap();
+        let got = decode(&buf[..n]);
+        assert!(
+            !matches!(got, Err(DecodeError::Wire(_, WireError::UnknownKey))),
+            "{path}: the head's command table has no line for it"
+        );
+    }
+}
+
 #[test]
 fn unknown_keys_are_answered_as_such() {
     let mut buf = [0u8; 64];
