@@ -7,6 +7,7 @@
 //! ([`crate::state`]) in [`Head::apply`].
 
 use crate::board::HeadConfig;
+use crate::conversation::Conversation;
 use crate::detector::{Detector, Measurement};
 use crate::hw::{Board, Clock, Hardware, StepTimer};
 use crate::kinematics;
@@ -24,7 +25,6 @@ use gonio_shared::{
     PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status, PLAN_QUEUE,
 };
 use heapless::Deque;
-use postcard_rpc::header::VarKeyKind;
 
 /// Who this head is; the board and the serial come from the binary.
 #[derive(Debug, Clone)]
@@ -74,13 +74,10 @@ pub struct Head<B: Board> {
     detector: Detector,
     sanity: Option<Sanity>,
     pub(crate) scan: Option<ScanRun>,
-    /// A scan event to publish after the current reply (an abort's `Stopped`).
-    pub(crate) pending_event: Option<ScanEvent>,
     laser_on: bool,
     seq: u32,
-    pub(crate) topic_seq: u32,
-    /// Key width the host uses; replies and topics follow it.
-    pub(crate) key_kind: VarKeyKind,
+    /// What the serve loop keeps of the conversation with the host.
+    pub(crate) talk: Conversation,
     samples_flagged: u32,
     samples_remeasured: u32,
     pub(crate) last_fault: Option<Fault>,
@@ -109,11 +106,9 @@ impl<B: Board> Head<B> {
             detector: Detector::new::<B::Adc>(DetectionSettings::default()),
             sanity: None,
             scan: None,
-            pending_event: None,
             laser_on: false,
             seq: 0,
-            topic_seq: 0,
-            key_kind: VarKeyKind::Key8,
+            talk: Conversation::default(),
             samples_flagged: 0,
             samples_remeasured: 0,
             last_fault: None,
@@ -489,7 +484,7 @@ impl<B: Board> Head<B> {
     pub(crate) fn drop_scan(&mut self, why: Fault) {
         if let Some(run) = self.scan.take() {
             self.last_fault = Some(why);
-            self.pending_event = Some(ScanEvent::Stopped {
+            self.talk.pending_event = Some(ScanEvent::Stopped {
                 run: run.run,
                 next_order: run.next_order,
                 reason: why,
@@ -504,7 +499,7 @@ impl<B: Board> Head<B> {
             if why.is_some() {
                 self.last_fault = why;
             }
-            self.pending_event = Some(ScanEvent::Paused {
+            self.talk.pending_event = Some(ScanEvent::Paused {
                 run: run.run,
                 next_order: run.next_order,
                 reason: why,

@@ -16,6 +16,7 @@
 pub mod log;
 
 pub mod board;
+mod conversation;
 pub mod demod;
 pub mod detector;
 pub mod dispatch;

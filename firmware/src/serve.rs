@@ -130,7 +130,7 @@ impl<B: Board> Head<B> {
     pub async fn serve<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S) -> LinkError {
         let mut inbox = Inbox::new();
         // An event of a session that ended is not for this one.
-        self.pending_event = None;
+        self.talk.pending_event = None;
         loop {
             sentry.alive();
             self.estop_open = sentry.estop_open();
@@ -149,7 +149,7 @@ impl<B: Board> Head<B> {
             } else {
                 self.rest(link, sentry, &mut inbox).await
             };
-            let r = match (r, self.pending_event.take()) {
+            let r = match (r, self.talk.pending_event.take()) {
                 (Ok(()), Some(ev)) => self.publish::<ScanEventTopic, L>(&ev, link).await,
                 (r, _) => r,
             };
@@ -337,7 +337,7 @@ impl<B: Board> Head<B> {
             Err(DecodeError::NoHeader) => return Ok(()),
             Err(DecodeError::Wire(hdr, e)) => return self.send_keyed(ERROR_KEY, hdr.seq_no, &e, link).await,
         };
-        self.key_kind = hdr.key.kind();
+        self.talk.key_kind = hdr.key.kind();
         let seq = hdr.seq_no;
         match cmd {
             Command::Identify => self.reply::<IdentifyEndpoint, L>(seq, &self.identity(), link).await,
@@ -483,19 +483,19 @@ impl<B: Board> Head<B> {
     where
         T::Message: Serialize,
     {
-        let seq = VarSeq::Seq4(self.topic_seq);
-        self.topic_seq = self.topic_seq.wrapping_add(1);
+        let seq = VarSeq::Seq4(self.talk.topic_seq);
+        self.talk.topic_seq = self.talk.topic_seq.wrapping_add(1);
         self.send_keyed(T::TOPIC_KEY, seq, msg, link).await
     }
 
     async fn send_keyed<T: Serialize + ?Sized, L: Link>(&mut self, key: Key, seq: VarSeq, msg: &T, link: &mut L) -> Result<(), LinkError> {
         let mut tx = [0u8; MAX_FRAME];
         let body = MAX_FRAME - check::LEN;
-        let n = match encode(key, self.key_kind, seq, msg, &mut tx[..body]) {
+        let n = match encode(key, self.talk.key_kind, seq, msg, &mut tx[..body]) {
             Some(n) => n,
             // Every message fits MAX_FRAME (a test checks the largest);
             // should one not, the host still learns of it.
-            None => encode(ERROR_KEY, self.key_kind, seq, &WireError::SerFailed, &mut tx[..body]).unwrap_or(0),
+            None => encode(ERROR_KEY, self.talk.key_kind, seq, &WireError::SerFailed, &mut tx[..body]).unwrap_or(0),
         };
         match check::seal(&mut tx, n) {
             Some(n) => link.send(&tx[..n]).await,
