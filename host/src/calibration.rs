@@ -19,11 +19,11 @@
 //!   stage angles' errors times the local slope of the BRDF (from a smooth
 //!   model fitted to the same data: only its slope is used).
 
-use crate::brdf::{Directions, Material};
 use crate::fit::{Dataset, Observation, Units};
 use crate::samples_csv::Row;
 use crate::uncertainty::{Components, HeadUncertainty, K_COVERAGE, SHARED};
 use anyhow::{bail, Result};
+use gonio_brdf::{Directions, Material};
 use gonio_shared::SampleFlags;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;

@@ -1,8 +1,8 @@
 //! A connected head: typed requests with a timeout on every one, and the
 //! identity check that names a protocol mismatch as such.
 
-use crate::link::{self, Workers};
-use crate::sim::SimConfig;
+use crate::link::Workers;
+use crate::target::{Opened, Target};
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_firmware::board::{HeadConfig, REFERENCE};
 use gonio_shared::icd::{
@@ -23,15 +23,6 @@ use serde::Serialize;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-/// Where the head is.
-#[derive(Debug, Clone)]
-pub enum Target {
-    /// A simulated head in this process (boxed: its configuration is large).
-    Sim(Box<SimConfig>),
-    /// A serial port: the head's USB port or a simulated head's pseudo-terminal.
-    Port(String),
-}
-
 /// Timeouts: quick requests, and the ones that move the stages. A lost
 /// request is found much sooner than these (see [`watched`]).
 const QUICK: Duration = Duration::from_secs(5);
@@ -51,22 +42,14 @@ pub struct Head {
     /// The reference configuration with the head's reported mechanics: what
     /// scans are planned and estimated with.
     config: HeadConfig,
-    sim_thread: Option<JoinHandle<()>>,
+    /// The thread serving the head in this process, if any.
+    server: Option<JoinHandle<()>>,
 }
 
 impl Head {
     /// Connects and identifies the head. Must run within a tokio runtime.
-    pub async fn connect(target: &Target) -> Result<Head> {
-        let (client, workers, sim_thread) = match target {
-            Target::Sim(cfg) => {
-                let (c, w, t) = link::in_process_client((**cfg).clone());
-                (c, w, Some(t))
-            }
-            Target::Port(p) => {
-                let (c, w) = link::serial_client(p)?;
-                (c, w, None)
-            }
-        };
+    pub async fn connect(target: &dyn Target) -> Result<Head> {
+        let Opened { client, workers, server } = target.open()?;
         let identity = match call::<IdentifyEndpoint>(&client, &(), QUICK).await {
             Ok(i) => i,
             Err(CallError::UnknownKey(_)) => {
@@ -96,7 +79,7 @@ impl Head {
             workers,
             identity,
             config: REFERENCE.with_mechanics(&mechanics),
-            sim_thread,
+            server,
         })
     }
 
@@ -191,12 +174,13 @@ impl Head {
     }
 
     /// Closes the link: the port is released (another client may open it at
-    /// once) and a simulated head has reached its safe state and stopped.
+    /// once) and a head served in this process has reached its safe state and
+    /// stopped.
     pub async fn close(mut self) {
         self.client.close();
         drop(self.client);
         self.workers.join().await;
-        if let Some(t) = self.sim_thread.take() {
+        if let Some(t) = self.server.take() {
             let _ = tokio::task::spawn_blocking(move || t.join()).await;
         }
     }

@@ -4,9 +4,9 @@
 //! marked, a projected-hemisphere map `(θo·cosΔφ, θo·sinΔφ)` of the
 //! measured values, and a map of the first fit's relative residuals.
 
-use crate::brdf::{Directions, Material};
 use crate::fit::{data::theta_in, Dataset, Observation};
 use anyhow::{anyhow, Context, Result};
+use gonio_brdf::{Directions, Material};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::colors::colormaps::ViridisRGB;

@@ -1,10 +1,10 @@
 //! `run.json`: what was scanned, with what, and how it went. Written once the
 //! scan completed, next to `samples.csv`.
 
-use crate::brdf::Specimen;
 use crate::scan::ScanOutcome;
 use crate::scan_dir::ScanDir;
 use anyhow::{Context, Result};
+use gonio_brdf::Specimen;
 use gonio_shared::{CalibrationReport, DetectionReport, Identity, ScanSpec};
 use serde::Serialize;
 use std::path::Path;

@@ -4,10 +4,12 @@
 //! same port or, for a real head plugged back in, on whichever port it came
 //! back on; then prepare it again, since it may have been power-cycled.
 
-use crate::client::{is_link_loss, Head, Target};
+use crate::client::{is_link_loss, Head};
 use crate::operator::Operator;
+use crate::target::Target;
 use anyhow::{bail, Context, Result};
 use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Geometry, Reference, SafetySettings};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 /// How long the host looks for a head that went away.
@@ -29,7 +31,7 @@ pub struct Setup {
 }
 
 pub struct Session {
-    pub target: Target,
+    pub target: Arc<dyn Target>,
     setup: Setup,
     head: Option<Head>,
     serial: String,
@@ -43,8 +45,8 @@ pub struct Session {
 
 impl Session {
     /// Connects (nothing else: a head that cannot be reached leaves no trace).
-    pub async fn connect(target: Target, setup: Setup, operator: Operator) -> Result<Session> {
-        let head = Head::connect(&target).await?;
+    pub async fn connect(target: Arc<dyn Target>, setup: Setup, operator: Operator) -> Result<Session> {
+        let head = Head::connect(target.as_ref()).await?;
         Ok(Session {
             serial: head.identity().serial.to_string(),
             target,
@@ -130,7 +132,7 @@ impl Session {
         let mut last_err = None;
         while t0.elapsed() < RECONNECT_WINDOW {
             for target in self.candidates() {
-                match Head::connect(&target).await {
+                match Head::connect(target.as_ref()).await {
                     Ok(h) if h.identity().serial.as_str() == self.serial => {
                         self.head = Some(h);
                         self.reconnections += 1;
@@ -178,14 +180,11 @@ impl Session {
                 .is_ok_and(|st| st.homed && matches!(st.state, gonio_shared::HeadState::Paused { .. }))
     }
 
-    /// Where to look for the head: its target, and a real head's current port.
-    fn candidates(&self) -> Vec<Target> {
+    /// Where to look for the head: its target, and wherever else the target
+    /// says the same head may be now.
+    fn candidates(&self) -> Vec<Arc<dyn Target>> {
         let mut c = vec![self.target.clone()];
-        if let Target::Port(p) = &self.target {
-            if let Some(q) = crate::usb::port_of_serial(&self.serial).filter(|q| q != p) {
-                c.push(Target::Port(q));
-            }
-        }
+        c.extend(self.target.elsewhere(&self.serial));
         c
     }
 

@@ -2,7 +2,7 @@
 //! drift of ±5 % during the scan, monitor readings, `gonio calibrate`, and
 //! the calibrated BRDF against the virtual material's truth.
 
-use gonio_host::brdf::{Directions, Material};
+use gonio_brdf::{Directions, Material};
 use gonio_host::calibration::{Budget, Calibration};
 use gonio_host::samples_csv::{self, Row};
 use std::path::Path;

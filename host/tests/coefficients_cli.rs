@@ -2,7 +2,7 @@
 //! measured data, and the uncertainty budget carried from the calibrated
 //! samples through the fit to the coefficients, on an imperfect simulated head.
 
-use gonio_host::brdf::Material;
+use gonio_brdf::Material;
 use gonio_host::coefficients::{self, Set, Source};
 use gonio_host::fit;
 use gonio_host::formats;

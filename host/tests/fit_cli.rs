@@ -1,7 +1,7 @@
 //! `gonio fit`, `compare`, `eval` and `dhr` as a user runs them, on ALTA and
 //! CSV files written here from a known material.
 
-use gonio_host::brdf::{Material, ModelId};
+use gonio_brdf::{Material, ModelId};
 use gonio_host::fit::{Dataset, Observation, Units};
 use gonio_host::formats::alta;
 use serde_json::Value;

@@ -5,7 +5,7 @@ precomputes, targets, weights, start, bounds), fits with method 'trf' and
 scipy's default tolerances and 2-point Jacobian, and prints one JSON object:
 seconds (median over `repeats` least_squares calls), params, cost (sum of squared
 residuals), nfev. The models are the parameter-dependent parts of
-host/src/brdf/*.rs, vectorised with numpy; fit-bench checks that they agree
+brdf/src/*.rs, vectorised with numpy; fit-bench checks that they agree
 with the Rust models before it trusts the comparison.
 """
 

@@ -8,8 +8,8 @@
 //! cosines), and a sharp `retro-phong` lobe with exponent 10⁴. A point passes
 //! when `|error| ≤ max(1e-3·|f|, 1e-4 sr⁻¹)`.
 
+use gonio_brdf::{Directions, Material, ModelId, Param};
 use gonio_firmware::sanity::{FixedGeometry, FixedModel};
-use gonio_host::brdf::{Directions, Material, ModelId, Param};
 use gonio_shared::{Geometry, SanityKind, SanityModel};
 
 /// One material, as the host fits it and as the head receives it.

@@ -1,15 +1,15 @@
 //! Frames as the host sends them to the head and reads them back, for tests
-//! that drive the firmware frame by frame (`gonio_host::sim::FrameHead`):
+//! that drive the firmware frame by frame (`gonio_sim::FrameHead`):
 //! requests encoded and sealed, the head's scan events and replies decoded.
 
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::dispatch;
 use gonio_firmware::motion::PARK;
 use gonio_host::scan_order::visit_order;
-use gonio_host::sim::Sent;
 use gonio_shared::icd::{PlanEndpoint, ScanEndpoint, ScanEventTopic};
 use gonio_shared::wire::{check, framing};
 use gonio_shared::{PlanChunk, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
+use gonio_sim::Sent;
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Key, Topic};
 use serde::de::DeserializeOwned;

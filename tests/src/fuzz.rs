@@ -6,7 +6,6 @@
 use crate::frames::{request, sealed};
 use gonio_firmware::dispatch;
 use gonio_host::formats::{alta, brdf_csv};
-use gonio_host::sim::{FrameHead, SimConfig};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
     MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
@@ -17,6 +16,7 @@ use gonio_shared::wire::framing::{self, Decoder};
 use gonio_shared::{
     AngleRange, CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, SanityKind, SanityModel, ScanSpec,
 };
+use gonio_sim::{FrameHead, SimConfig};
 
 /// The head's receive path on a byte stream: COBS frames, their check, and
 /// the request decoder; the decoder also sees the raw bytes, since random

@@ -6,9 +6,9 @@ use crate::frames::{scan_events, scan_frames, send};
 use crate::stops::{decel_s_max, duration_s, offset, ready, small_scan, status, trial, Activity, Stop, Trigger};
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::kinematics;
-use gonio_host::sim::{Cue, FrameHead, SimConfig};
 use gonio_shared::icd::{AbortEndpoint, ContinueEndpoint, PauseEndpoint};
 use gonio_shared::{Axis, Geometry, HeadState, ScanEvent, ScanSpec};
+use gonio_sim::{Cue, FrameHead, SimConfig};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
 use serde_json::json;
@@ -75,7 +75,7 @@ impl Worst {
 }
 
 /// Positions a scan's events cover, each counted.
-fn visits(events: &[(ScanEvent, &gonio_host::sim::Sent)], seen: &mut BTreeMap<u32, u32>) {
+fn visits(events: &[(ScanEvent, &gonio_sim::Sent)], seen: &mut BTreeMap<u32, u32>) {
     for (e, _) in events {
         let index = match e {
             ScanEvent::Sample(s) => s.scan.map(|p| p.index),
@@ -255,7 +255,7 @@ pub fn run(per_trigger: u32) -> serde_json::Value {
         "by_activity": by_activity.iter().map(|(k, w)| (k.to_string(), w.json())).collect::<serde_json::Map<_, _>>(),
         "moments_by_axis_phase": phases,
         "activity_durations_s": {"homing": home_s, "measurement": meas_s, "scan": scan_s},
-        "sim_slice_s": gonio_host::sim::clock::SLICE_S,
+        "sim_slice_s": gonio_sim::clock::SLICE_S,
         "seed": SEED,
         "bars": bars,
         "all_bars_met": met,

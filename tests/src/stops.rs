@@ -8,12 +8,12 @@
 use crate::frames::{replies, scan_events, scan_frames, send};
 use gonio_firmware::board::{AxisConfig, REFERENCE};
 use gonio_firmware::motion;
-use gonio_host::sim::{Cue, FrameHead, Sent};
 use gonio_shared::icd::{
     AbortEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint,
     SafetyEndpoint, StatusEndpoint,
 };
 use gonio_shared::{DetectionSettings, Geometry, SafetySettings, ScanEvent, ScanSpec, Status};
+use gonio_sim::{Cue, FrameHead, Sent};
 
 /// Largest change of step interval between two consecutive steps, relative
 /// to the change a ramp at the acceleration limit `a` (steps/s²) makes at

@@ -11,7 +11,7 @@
 //! `cargo test`) the steps whose tool is missing are skipped and said so on
 //! stderr, while the parameter blocks and naga's check still run.
 
-use gonio_host::brdf::{Directions, Material, ModelId, Param};
+use gonio_brdf::{Directions, Material, ModelId, Param};
 use gonio_host::formats::brdf_explorer;
 use gonio_tests::synthetic;
 use rand::{Rng, SeedableRng};

@@ -2,19 +2,22 @@
 //! on a link, the firmware's dispatcher, motion, auto-range and demodulation,
 //! and the virtual photodiode.
 
+use gonio_brdf::{Directions, Material, Specimen};
 use gonio_firmware::board::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
-use gonio_host::brdf::{Directions, Material, Specimen};
-use gonio_host::client::{Head, Target};
+use gonio_host::cli::simulated::Simulated;
+use gonio_host::client::Head;
 use gonio_host::operator::Operator;
 use gonio_host::scan;
 use gonio_host::scan_order::{dwell_s, scan_time, visit_order};
 use gonio_host::session::{Session, Setup};
-use gonio_host::sim::{serve_pty, SimConfig};
+use gonio_host::target::{Port, Target};
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, Reference, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
+use gonio_sim::{serve_pty, SimConfig};
 use gonio_tests::scanning::scan_and_read;
 use std::collections::BTreeSet;
+use std::sync::Arc;
 use std::time::Duration;
 
 fn small_grid() -> ScanSpec {
@@ -26,7 +29,7 @@ fn small_grid() -> ScanSpec {
     }
 }
 
-async fn homed(target: &Target) -> Head {
+async fn homed(target: &dyn Target) -> Head {
     let head = Head::connect(target).await.unwrap();
     head.detection(DetectionSettings::default()).await.unwrap();
     head.home().await.unwrap();
@@ -34,7 +37,7 @@ async fn homed(target: &Target) -> Head {
 }
 
 /// A connected, prepared (homed) session, as `gonio scan` opens it.
-async fn session(target: Target) -> Session {
+async fn session(target: Arc<dyn Target>) -> Session {
     let setup = Setup {
         settings: DetectionSettings::default(),
         calibrate_at: None,
@@ -52,7 +55,7 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
         material: Specimen::Model(Material::tape()),
         ..SimConfig::default()
     };
-    let mut session = session(Target::Sim(Box::new(sim.clone()))).await;
+    let mut session = session(Arc::new(Simulated(sim.clone()))).await;
     let dir = tempfile::tempdir().unwrap();
     let spec = small_grid();
     let (outcome, rows) = scan_and_read(&mut session, &spec, dir.path()).await;
@@ -119,7 +122,7 @@ async fn the_host_plans_for_the_mechanics_the_head_reports() {
         board,
         ..SimConfig::default()
     };
-    let mut session = session(Target::Sim(Box::new(sim))).await;
+    let mut session = session(Arc::new(Simulated(sim))).await;
     let cfg = *session.head().config();
     assert_eq!(cfg.mechanics(), board.mechanics());
     let det = session.detection.unwrap();
@@ -154,10 +157,7 @@ async fn a_protocol_version_mismatch_is_named() {
         protocol_version: PROTOCOL_VERSION + 1,
         ..SimConfig::default()
     };
-    let err = Head::connect(&Target::Sim(Box::new(sim)))
-        .await
-        .err()
-        .expect("connecting must fail");
+    let err = Head::connect(&Simulated(sim)).await.err().expect("connecting must fail");
     let msg = format!("{err:#}");
     assert!(msg.contains("protocol version mismatch"), "{msg}");
     assert!(msg.contains(&format!("v{}", PROTOCOL_VERSION + 1)), "{msg}");
@@ -165,7 +165,7 @@ async fn a_protocol_version_mismatch_is_named() {
 
 #[tokio::test]
 async fn refused_commands_move_nothing() {
-    let head = Head::connect(&Target::Sim(Box::default())).await.unwrap();
+    let head = Head::connect(&Simulated::default()).await.unwrap();
     let err = head.measure(Some(Geometry::new(30.0, 30.0, 0.0))).await.unwrap_err();
     assert!(format!("{err:#}").contains("not homed"), "{err:#}");
     let matched = DetectionSettings {
@@ -193,7 +193,7 @@ async fn refused_commands_move_nothing() {
 
 #[tokio::test]
 async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() {
-    let head = homed(&Target::Sim(Box::default())).await;
+    let head = homed(&Simulated::default()).await;
     let spec = ScanSpec::belcour();
     let order: Vec<u32> = visit_order(&REFERENCE, &spec, PARK).collect();
     let (accepted, mut events) = head.start_scan(&spec).await.unwrap();
@@ -234,7 +234,7 @@ async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() 
 }
 
 /// A simulated head serving on a pseudo-terminal in `dir`, as `gonio sim` runs it.
-async fn pty_head(cfg: SimConfig, dir: &std::path::Path) -> Target {
+async fn pty_head(cfg: SimConfig, dir: &std::path::Path) -> Port {
     let link = dir.join("head");
     let serve_at = link.clone();
     std::thread::spawn(move || serve_pty(cfg, &serve_at, |_| {}));
@@ -244,14 +244,14 @@ async fn pty_head(cfg: SimConfig, dir: &std::path::Path) -> Target {
         }
         tokio::time::sleep(Duration::from_millis(10)).await;
     }
-    Target::Port(link.to_string_lossy().into_owned())
+    Port(link.to_string_lossy().into_owned())
 }
 
 #[tokio::test]
 async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
     let dir = tempfile::tempdir().unwrap();
     let target = pty_head(SimConfig::default(), dir.path()).await;
-    let mut session = session(target.clone()).await;
+    let mut session = session(Arc::new(target.clone())).await;
     assert!(session.head().identity().simulated);
     assert_eq!(session.head().identity().protocol_version, PROTOCOL_VERSION);
     let (outcome, rows) = scan_and_read(&mut session, &small_grid(), dir.path()).await;
@@ -276,10 +276,10 @@ async fn lost_answers_and_requests_over_a_port_are_recovered_by_reconnecting() {
         // starts the scan (its answer, frame 8, is lost); the probe is status
         // traffic, not counted; 9–15 do the same with the head found again
         // and 16, its scan request, is lost.
-        faults: gonio_host::sim::faults::Faults::parse("drop@8,req-drop@16").unwrap(),
+        faults: gonio_sim::faults::Faults::parse("drop@8,req-drop@16").unwrap(),
         ..SimConfig::default()
     };
-    let mut session = session(pty_head(cfg, dir.path()).await).await;
+    let mut session = session(Arc::new(pty_head(cfg, dir.path()).await)).await;
     let (outcome, rows) = scan_and_read(&mut session, &small_grid(), dir.path()).await;
     let stored: BTreeSet<u32> = rows.iter().filter_map(|r| r.index).collect();
     assert_eq!(stored.len(), rows.len(), "a position stored twice");

@@ -6,10 +6,10 @@
 //! leaves). The host's half (recovery, no sample lost or duplicated,
 //! resumption) is host/tests/fault_recovery.rs.
 
-use gonio_host::sim::faults::Faults;
-use gonio_host::sim::{FrameHead, Sent, SimConfig};
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, MoveEndpoint, SafetyEndpoint, ScanEndpoint};
 use gonio_shared::{AngleRange, Axis, Fault, Geometry, SafetySettings, SampleFlags, ScanEvent, ScanSpec};
+use gonio_sim::faults::Faults;
+use gonio_sim::{FrameHead, Sent, SimConfig};
 use gonio_tests::frames::{replies, scan_events, scan_frames, send};
 
 /// 143 points at θi = 30°.

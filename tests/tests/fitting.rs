@@ -2,7 +2,7 @@
 //! of known parameters, every model on data from itself, the global search
 //! without starting points, weights, units, and the ALTA round trip.
 
-use gonio_host::brdf::{ModelId, Param};
+use gonio_brdf::{ModelId, Param};
 use gonio_host::fit::{self, Dataset, FitSpec, Units, Weighting};
 use gonio_host::formats::alta;
 use gonio_tests::synthetic;

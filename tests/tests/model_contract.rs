@@ -3,7 +3,7 @@
 //! head's sanity models and the scipy peer (`tests/python/fit_scipy.py`) name
 //! the same models with the same parameters in the same order.
 
-use gonio_host::brdf::ModelId;
+use gonio_brdf::ModelId;
 use gonio_shared::{SanityKind, SanityModel, MODELS};
 use std::path::Path;
 

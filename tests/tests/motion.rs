@@ -13,7 +13,8 @@ use gonio_firmware::motion::blocks::trapezoid_blocks;
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::motion::{move_by, trapezoid, Position};
 use gonio_firmware::units;
-use gonio_host::client::{Head, Target};
+use gonio_host::cli::simulated::Simulated;
+use gonio_host::client::Head;
 use gonio_shared::{Axis, Geometry};
 use gonio_tests::doubles::{FixedClock, ScriptedAdc};
 use gonio_tests::step_log::{executor, run, LogPin, Scope};
@@ -222,7 +223,7 @@ proptest! {
     fn no_axis_leaves_its_soft_limits(cmds in proptest::collection::vec(command(), 1..12)) {
         let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
         rt.block_on(async {
-            let head = Head::connect(&Target::Sim(Box::default())).await.unwrap();
+            let head = Head::connect(&Simulated::default()).await.unwrap();
             head.home().await.unwrap();
             for g in cmds {
                 let _ = head.move_to(g).await;

@@ -2,14 +2,15 @@
 //! loaded and a 3σ band, dust specks (five times the model value at a few
 //! points) are flagged and measured again, and clean points are not flagged.
 
-use gonio_host::brdf::{Directions, Material, Specimen};
-use gonio_host::client::Target;
+use gonio_brdf::{Directions, Material, Specimen};
+use gonio_host::cli::simulated::Simulated;
 use gonio_host::operator::Operator;
 use gonio_host::session::{Session, Setup};
-use gonio_host::sim::SimConfig;
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, SampleFlags, SanityConfig, ScanSpec};
+use gonio_sim::SimConfig;
 use gonio_tests::scanning::scan_and_read;
 use std::collections::BTreeSet;
+use std::sync::Arc;
 
 #[tokio::test]
 async fn dust_is_flagged_and_clean_data_is_not() {
@@ -36,7 +37,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
         calibrate_at: None,
         calibration_periods: 0,
     };
-    let mut session = Session::connect(Target::Sim(Box::new(sim.clone())), setup, Operator::Silent)
+    let mut session = Session::connect(Arc::new(Simulated(sim.clone())), setup, Operator::Silent)
         .await
         .unwrap();
     session.start().await.unwrap();

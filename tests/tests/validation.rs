@@ -4,12 +4,12 @@
 //! one session; after every refused command the stages are where they were,
 //! the laser was not switched on and no driver was enabled.
 
-use gonio_host::sim::{FrameHead, Sent, SimConfig};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint,
     SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
 use gonio_shared::{CalibrateRequest, Fault, Geometry, SafetySettings};
+use gonio_sim::{FrameHead, Sent, SimConfig};
 use gonio_tests::frames::{refusal, send};
 use gonio_tests::strategies::{any_f32, detection_settings, geometry, sanity_config, scan_spec};
 use proptest::prelude::*;

@@ -2,13 +2,13 @@
 //! a reference-plate scan, corrected for laser drift (`crate::calibration`),
 //! each value with its uncertainty budget (`crate::uncertainty`).
 
-use crate::brdf::{Material, ModelId, Param};
 use crate::calibration::{self, Budget, CalibratedRow, Calibration};
 use crate::fit::{self, FitSpec};
 use crate::samples_csv;
 use crate::scan_dir::ScanDir;
 use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Context, Result};
+use gonio_brdf::{Material, ModelId, Param};
 use serde_json::json;
 use std::path::PathBuf;
 
@@ -100,8 +100,8 @@ impl CalibrateArgs {
         CalibrateArgs {
             scan,
             reference: None,
-            rho_ref: crate::sim::PLATE_RHO,
-            u_rho_ref: crate::sim::PLATE_RHO_U,
+            rho_ref: gonio_sim::PLATE_RHO,
+            u_rho_ref: gonio_sim::PLATE_RHO_U,
             splitter: None,
             slope_model: "retro-phong".into(),
             slope_fit: None,

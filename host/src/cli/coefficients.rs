@@ -1,10 +1,10 @@
 //! `gonio coefficients`: R_A and R_L (CIE 54.2, ASTM E810, EN 1436) from a
 //! fit, a model, or measured data, with standard uncertainties.
 
-use crate::brdf::{Material, ModelId};
 use crate::coefficients::{self, Apertures, Coefficient, Kind, Request, Set, Source, WAVELENGTH_NM};
 use crate::fit;
 use anyhow::{bail, Context, Result};
+use gonio_brdf::{Material, ModelId};
 use serde_json::{json, Value};
 use std::path::PathBuf;
 

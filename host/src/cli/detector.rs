@@ -1,11 +1,12 @@
-//! Detector options of a scan: the reference waveform, its calibration and
-//! the integration time.
+//! Detector options of a scan (the reference waveform, its calibration and
+//! the integration time) as the command line gives them, and as the scan's
+//! plan keeps them once checked.
 
 use anyhow::{bail, Context, Result};
 use gonio_shared::{DetectionSettings, Geometry, Reference};
+use serde::{Deserialize, Serialize};
 
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum, serde::Serialize, serde::Deserialize)]
-#[serde(rename_all = "lowercase")]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
 pub enum ReferenceArg {
     Square,
     Sine,
@@ -13,7 +14,7 @@ pub enum ReferenceArg {
     Matched,
 }
 
-#[derive(Debug, Clone, clap::Args, serde::Serialize, serde::Deserialize)]
+#[derive(Debug, Clone, clap::Args)]
 pub struct DetectorArgs {
     /// Demodulation reference.
     #[arg(long, value_enum, default_value = "square")]
@@ -38,27 +39,50 @@ impl DetectorArgs {
         }
     }
 
-    /// Settings for the scan and the calibration geometry, checked.
-    pub fn plan(&self) -> Result<(DetectionSettings, Option<Geometry>)> {
-        let base = DetectionSettings::default();
+    /// The options checked, as the plan keeps them.
+    pub fn checked(&self) -> Result<DetectorPlan> {
         if !(self.integration_s.is_finite() && self.integration_s > 0.0 && self.integration_s <= DetectionSettings::INTEGRATION_MAX_S) {
             bail!("--integration-s must be in (0, {}] s", DetectionSettings::INTEGRATION_MAX_S);
         }
-        let settings = DetectionSettings {
-            periods: base.periods_for(self.integration_s),
-            reference: match self.reference {
-                ReferenceArg::Square => Reference::Square,
-                ReferenceArg::Sine => Reference::Sine,
-                ReferenceArg::Matched => Reference::Matched,
-            },
-            ..base
+        let reference = match self.reference {
+            ReferenceArg::Square => Reference::Square,
+            ReferenceArg::Sine => Reference::Sine,
+            ReferenceArg::Matched => Reference::Matched,
         };
-        let at = match &self.calibrate_at {
-            None if settings.reference == Reference::Matched => bail!("--reference matched needs --calibrate-at TI,TO,DPHI"),
+        let calibrate_at = match &self.calibrate_at {
+            None if reference == Reference::Matched => bail!("--reference matched needs --calibrate-at TI,TO,DPHI"),
             None => None,
             Some(s) => Some(parse_geometry(s).context("--calibrate-at")?),
         };
-        Ok((settings, at))
+        Ok(DetectorPlan {
+            reference,
+            calibrate_at,
+            integration_s: self.integration_s,
+        })
+    }
+}
+
+/// The detector's part of a scan's plan (`scan.json`): checked values, so
+/// that a resumed scan measures exactly as its start did.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct DetectorPlan {
+    /// Demodulation reference.
+    pub reference: Reference,
+    /// Where the detector learns its phase and waveform before the scan.
+    pub calibrate_at: Option<Geometry>,
+    /// Integration time per point (s), rounded to whole chop periods.
+    pub integration_s: f32,
+}
+
+impl DetectorPlan {
+    /// The head's detection settings for this plan.
+    pub fn settings(&self) -> DetectionSettings {
+        let base = DetectionSettings::default();
+        DetectionSettings {
+            periods: base.periods_for(self.integration_s),
+            reference: self.reference,
+            ..base
+        }
     }
 }
 

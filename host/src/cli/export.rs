@@ -15,7 +15,7 @@ pub struct ExportArgs {
 }
 
 /// Writes a fitted material as `.brdf`, naming where it came from in the header.
-pub fn write_brdf(m: &crate::brdf::Material, source: &str, out: &Path) -> Result<()> {
+pub fn write_brdf(m: &gonio_brdf::Material, source: &str, out: &Path) -> Result<()> {
     let text = brdf_explorer::write(m, &[format!("from {source}")]);
     std::fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))
 }

@@ -1,9 +1,9 @@
 //! `gonio fit` and `gonio compare`: models fitted to a data file (ALTA `.dat`
 //! or the calibrated sample CSV).
 
-use crate::brdf::{ModelId, Param};
 use crate::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
 use anyhow::{bail, Context, Result};
+use gonio_brdf::{ModelId, Param};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 

@@ -1,9 +1,12 @@
 //! Options shared by the commands that start a simulated head.
 
-use crate::brdf::{Material, ModelId, Specimen};
-use crate::sim::{Imperfections, SimConfig, PLATE_RHO_U};
 use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Context, Result};
+use gonio_brdf::{Material, ModelId, Specimen};
+use gonio_sim::{Imperfections, SimConfig, PLATE_RHO, PLATE_RHO_U};
+use rand::rngs::StdRng;
+use rand::{Rng, SeedableRng};
+use rand_distr::{Distribution, Normal};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct SimHeadArgs {
@@ -70,11 +73,31 @@ impl SimHeadArgs {
         };
         cfg.photodiode.laser_drift = self.laser_drift;
         if self.imperfect {
-            cfg.imperfections = Box::new(Imperfections::draw(self.seed, &HeadUncertainty::default(), PLATE_RHO_U));
+            cfg.imperfections = Box::new(drawn_imperfections(self.seed, &HeadUncertainty::default(), PLATE_RHO_U));
         }
         if let Some(f) = &self.inject {
-            cfg.faults = crate::sim::faults::Faults::parse(f).context("--inject")?;
+            cfg.faults = gonio_sim::faults::Faults::parse(f).context("--inject")?;
         }
         Ok(cfg)
+    }
+}
+
+/// One head drawn from the stated uncertainties: zeros and gains normal,
+/// stray light uniform within its bound, backlash as stated, the plate's
+/// reflectance normal about its certificate (standard uncertainty
+/// `plate_rho_u`). The same seed gives the same head.
+pub fn drawn_imperfections(seed: u64, u: &HeadUncertainty, plate_rho_u: f64) -> Imperfections {
+    let mut rng = StdRng::seed_from_u64(seed ^ 0x1a9e_77e3_5eed_0b1d);
+    let mut normal = |sd: f64| Normal::new(0.0, sd.max(0.0)).map_or(0.0, |d| d.sample(&mut rng));
+    let zero_offset_deg = [0, 1, 2].map(|a| normal(u.zero_deg[a]));
+    let gain_scale = [0; 4].map(|_| 1.0 + normal(u.gain_rel));
+    let plate_rho = (PLATE_RHO + normal(plate_rho_u)).min(1.0);
+    let stray_a = rng.random_range(-1.0..=1.0) * u.stray_a;
+    Imperfections {
+        zero_offset_deg,
+        backlash_deg: u.backlash_deg,
+        gain_scale,
+        stray_a,
+        plate_rho,
     }
 }

@@ -8,13 +8,14 @@ mod devices;
 mod export;
 pub mod fit;
 mod grid;
-mod material;
+pub mod material;
 mod model_eval;
 mod plan;
 mod plot;
 mod reference;
 pub mod scan;
 mod sim;
+pub mod simulated;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};

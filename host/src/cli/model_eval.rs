@@ -2,8 +2,8 @@
 //! geometry, and its directional-hemispherical reflectance.
 
 use super::fit::ParamArg;
-use crate::brdf::{dhr, retro_phong_energy_sum, Directions, Material, ModelId};
 use anyhow::{bail, Result};
+use gonio_brdf::{dhr, retro_phong_energy_sum, Directions, Material, ModelId};
 use serde_json::json;
 
 #[derive(Debug, Clone, clap::Args)]

@@ -1,17 +1,19 @@
 //! `scan.json`: what a scan was asked to do, written before its first sample
 //! so `gonio scan --resume DIR` can finish an interrupted scan exactly.
 
-use super::detector::DetectorArgs;
-use crate::brdf::Specimen;
-use crate::client::Target;
+use super::detector::DetectorPlan;
+use super::simulated::Simulated;
 use crate::scan::Monitor;
 use crate::scan_dir::ScanDir;
-use crate::sim::faults::Faults;
-use crate::sim::{Imperfections, SimConfig};
+use crate::target::{Port, Target};
 use anyhow::{Context, Result};
+use gonio_brdf::Specimen;
 use gonio_shared::ScanSpec;
+use gonio_sim::faults::Faults;
+use gonio_sim::{Imperfections, SimConfig};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Which head.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -36,7 +38,7 @@ pub enum PlanTarget {
 pub struct ScanPlan {
     pub target: PlanTarget,
     pub spec: ScanSpec,
-    pub detector: DetectorArgs,
+    pub detector: DetectorPlan,
     /// Laser-drift monitor: a geometry measured before, every so many points
     /// during, and after the scan.
     #[serde(default)]
@@ -51,21 +53,24 @@ pub struct ScanPlan {
 }
 
 impl ScanPlan {
-    pub fn new(target: &Target, spec: &ScanSpec, detector: &DetectorArgs) -> Self {
-        let faults = match target {
-            Target::Sim(c) => c.faults.clone(),
-            Target::Port(_) => Faults::default(),
+    /// A plan for the head at port `path`.
+    pub fn at_port(path: &str, spec: &ScanSpec, detector: &DetectorPlan) -> Self {
+        Self::new(PlanTarget::Port { path: path.to_string() }, spec, detector, Faults::default())
+    }
+
+    /// A plan for the simulated head `c`; its faults act on this run only.
+    pub fn simulated(c: &SimConfig, spec: &ScanSpec, detector: &DetectorPlan) -> Self {
+        let target = PlanTarget::Sim {
+            material: c.material.clone(),
+            seed: c.seed,
+            laser_drift: c.photodiode.laser_drift,
+            clock_start_s: c.clock_start_s,
+            imperfections: (*c.imperfections).clone(),
         };
-        let target = match target {
-            Target::Sim(c) => PlanTarget::Sim {
-                material: c.material.clone(),
-                seed: c.seed,
-                laser_drift: c.photodiode.laser_drift,
-                clock_start_s: c.clock_start_s,
-                imperfections: (*c.imperfections).clone(),
-            },
-            Target::Port(p) => PlanTarget::Port { path: p.clone() },
-        };
+        Self::new(target, spec, detector, c.faults.clone())
+    }
+
+    fn new(target: PlanTarget, spec: &ScanSpec, detector: &DetectorPlan, faults: Faults) -> Self {
         ScanPlan {
             target,
             spec: spec.clone(),
@@ -76,7 +81,8 @@ impl ScanPlan {
         }
     }
 
-    pub fn target(&self) -> Target {
+    /// The head this plan runs on.
+    pub fn target(&self) -> Arc<dyn Target> {
         match &self.target {
             PlanTarget::Sim {
                 material,
@@ -94,9 +100,17 @@ impl ScanPlan {
                     ..SimConfig::default()
                 };
                 c.photodiode.laser_drift = *laser_drift;
-                Target::Sim(Box::new(c))
+                Arc::new(Simulated(c))
             }
-            PlanTarget::Port { path } => Target::Port(path.clone()),
+            PlanTarget::Port { path } => Arc::new(Port(path.clone())),
+        }
+    }
+
+    /// The material on a simulated head (what the run record keeps as the truth).
+    pub fn material(&self) -> Option<Specimen> {
+        match &self.target {
+            PlanTarget::Sim { material, .. } => Some(material.clone()),
+            PlanTarget::Port { .. } => None,
         }
     }
 

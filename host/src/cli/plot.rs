@@ -1,9 +1,9 @@
 //! `gonio plot`: the pictures of a data file, with fitted models drawn over it.
 
-use crate::brdf::Material;
 use crate::fit;
 use crate::plot;
 use anyhow::Result;
+use gonio_brdf::Material;
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]

@@ -4,9 +4,11 @@
 //! laser's clock running throughout (so `gonio calibrate` can tie the
 //! plate's scale to the sample's drift monitor without a gap).
 
-use crate::client::{Head, Target};
+use crate::client::Head;
+use crate::operator::Operator;
 use crate::samples_csv::Row;
 use crate::scan_dir::ScanDir;
+use crate::target::{Holder, Target};
 use anyhow::{Context, Result};
 use gonio_shared::Geometry;
 use std::path::Path;
@@ -32,25 +34,9 @@ const PLATE_POINTS: [(f32, f32, f32); 16] = [
     (15.0, 60.0, 0.0),
 ];
 
-/// Asks the operator (or the simulation) to put `what` on the holder.
-fn mount(target: &Target, plate: bool, json: bool) -> Result<()> {
-    match target {
-        Target::Sim(c) => c.mount.set_plate(plate),
-        Target::Port(_) => {
-            let what = if plate { "the reference plate" } else { "the sample" };
-            if !json {
-                eprintln!("mount {what} on the holder and press Enter");
-            }
-            let mut line = String::new();
-            std::io::stdin().read_line(&mut line).context("waiting for the operator")?;
-        }
-    }
-    Ok(())
-}
-
 /// Measures the plate, writes `reference.csv`, and puts the sample back.
-pub async fn measure_plate(head: &Head, target: &Target, dir: &Path, json: bool) -> Result<()> {
-    mount(target, true, json)?;
+pub async fn measure_plate(head: &Head, target: &dyn Target, dir: &Path, operator: Operator) -> Result<()> {
+    target.mount(Holder::ReferencePlate, operator)?;
     let path = ScanDir::new(dir).reference();
     let mut w = csv::Writer::from_path(&path).with_context(|| format!("creating {}", path.display()))?;
     for (ti, to, dp) in PLATE_POINTS {
@@ -61,9 +47,11 @@ pub async fn measure_plate(head: &Head, target: &Target, dir: &Path, json: bool)
         w.serialize(Row::from(&s))?;
     }
     w.flush().with_context(|| format!("writing {}", path.display()))?;
-    mount(target, false, json)?;
-    if !json {
-        eprintln!("reference plate measured at {} geometries: {}", PLATE_POINTS.len(), path.display());
-    }
+    target.mount(Holder::Sample, operator)?;
+    operator.notice(format_args!(
+        "reference plate measured at {} geometries: {}",
+        PLATE_POINTS.len(),
+        path.display()
+    ));
     Ok(())
 }

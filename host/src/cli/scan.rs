@@ -7,7 +7,6 @@ use super::grid::GridArgs;
 use super::material::SimHeadArgs;
 use super::plan::{PlanTarget, ScanPlan};
 use super::reference;
-use crate::client::Target;
 use crate::operator::Operator;
 use crate::run_record::RunRecord;
 use crate::samples_csv::{stored_rows, SampleWriter};
@@ -15,11 +14,11 @@ use crate::scan::{self, Monitor, ScanOutcome};
 use crate::scan_dir::ScanDir;
 use crate::scan_order::{dwell_s, lower_bound, scan_time, visit_order};
 use crate::session::{Session, Setup};
-use crate::sim::SimConfig;
 use anyhow::{bail, Context, Result};
 use gonio_firmware::board::HeadConfig;
 use gonio_firmware::motion::PARK;
 use gonio_shared::{DetectionReport, ScanSpec};
+use gonio_sim::SimConfig;
 
 /// Length of the detector calibration (s).
 const CALIBRATION_S: f32 = 1.0;
@@ -123,7 +122,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
             "calibration".to_string(),
             format!(
                 "reference plate ρ = {}: K = {:.5e} A·sr (±{:.3} %), splitter {:.4}",
-                crate::sim::PLATE_RHO,
+                gonio_sim::PLATE_RHO,
                 calibrated.cal.scale_a_sr,
                 100.0 * calibrated.cal.scale_rel_sd,
                 calibrated.cal.splitter
@@ -167,7 +166,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
 /// then the Belcour grid (quiet with `output.json`). Returns the outcome and
 /// the samples file.
 pub async fn demo_scan(sim: SimConfig, dir: &Path, output: &OutputArgs) -> Result<(ScanOutcome, PathBuf)> {
-    let mut plan = ScanPlan::new(&Target::Sim(Box::new(sim)), &ScanSpec::belcour(), &DetectorArgs::demo());
+    let mut plan = ScanPlan::simulated(&sim, &ScanSpec::belcour(), &DetectorArgs::demo().checked()?);
     plan.reference_plate = true;
     scan_to_dir(&plan, dir, output, None).await
 }
@@ -182,13 +181,13 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         let (outcome, samples) = scan_to_dir(&plan, dir, &a.output, Some(resume_from(dir)?)).await?;
         return summarise(&outcome, &samples, a.output.json);
     }
-    let target = match (&a.port, a.sim) {
+    let (spec, det) = (a.grid.spec()?, &a.detector.checked()?);
+    let mut plan = match (&a.port, a.sim) {
         (Some(_), _) if a.sim_head.inject.is_some() => bail!("--inject acts on the simulated head only (--sim), not on a head at a port"),
-        (Some(p), _) => Target::Port(p.clone()),
-        (None, true) => Target::Sim(Box::new(a.sim_head.config()?)),
+        (Some(p), _) => ScanPlan::at_port(p, &spec, det),
+        (None, true) => ScanPlan::simulated(&a.sim_head.config()?, &spec, det),
         (None, false) => bail!("one of --sim or --port is required"),
     };
-    let mut plan = ScanPlan::new(&target, &a.grid.spec()?, &a.detector);
     if let Some(m) = &a.monitor {
         if a.monitor_every == 0 {
             bail!("--monitor-every must be at least 1");
@@ -237,7 +236,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         first_order: resume.unwrap_or(0),
         ..plan.spec.clone()
     };
-    let (settings, calibrate_at) = det.plan()?;
+    let (settings, calibrate_at) = (det.settings(), det.calibrate_at);
     let setup = Setup {
         settings,
         calibrate_at,
@@ -263,7 +262,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     let reconnected_before_scan = session.reconnections;
     let detection = session.detection.context("the head's detection settings")?;
     if plan.reference_plate && resume.is_none() {
-        reference::measure_plate(session.head(), &target, dir, json).await?;
+        reference::measure_plate(session.head(), target.as_ref(), dir, Operator::for_json(json)).await?;
     }
     let config = *session.head().config();
     let estimate = estimate_s(&config, spec, &detection);
@@ -308,11 +307,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         outcome.measured = crate::samples_csv::read(&samples)?.iter().filter(|r| r.index.is_some()).count() as u32;
         outcome.skipped = outcome.points - outcome.measured;
     }
-    let material = match &target {
-        Target::Sim(c) => Some(c.material.clone()),
-        Target::Port(_) => None,
-    };
-    let mut record = RunRecord::new(&id, material, spec, &detection, session.calibration, outcome.clone());
+    let mut record = RunRecord::new(&id, plan.material(), spec, &detection, session.calibration, outcome.clone());
     record.estimated_s = Some(estimate);
     record.write(dir)?;
     session.close().await;

@@ -1,8 +1,8 @@
 //! `gonio sim`: a simulated head on a pseudo-terminal.
 
 use super::material::SimHeadArgs;
-use crate::sim::serve_pty;
 use anyhow::Result;
+use gonio_sim::serve_pty;
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]

@@ -15,7 +15,7 @@
 //! it changes nothing here and is carried for the report only.
 //! Derivation and hand-computed cases: `docs/retroreflection.md`.
 
-use crate::brdf::Directions;
+use gonio_brdf::Directions;
 use serde::Serialize;
 
 /// One geometry of the CIE system, in degrees.
@@ -87,7 +87,7 @@ pub fn sample_angles_deg(d: &Directions) -> [f64; 3] {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::brdf::frame::dot;
+    use gonio_brdf::frame::dot;
 
     fn close(a: [f64; 3], b: [f64; 3], tol: f64) -> bool {
         a.iter().zip(b).all(|(x, y)| (x - y).abs() < tol)

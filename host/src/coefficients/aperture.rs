@@ -9,8 +9,8 @@
 //! narrow-lobe case against a brute-force Monte Carlo average.
 
 use super::angles::{in_sample_frame, Cie};
-use crate::brdf::frame::{cross, normalize};
-use crate::brdf::Directions;
+use gonio_brdf::frame::{cross, normalize};
+use gonio_brdf::Directions;
 use serde::Serialize;
 
 /// Angular diameters (degrees) of the source and the receiver as seen from the sample.

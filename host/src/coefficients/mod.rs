@@ -189,7 +189,7 @@ pub fn compute(source: &Source, requests: &[Request]) -> Result<Vec<Coefficient>
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::brdf::{Material, ModelId};
+    use gonio_brdf::{Material, ModelId};
 
     fn lambert() -> Source {
         Source::model(Material::parse(ModelId::Lambert, "kd=0.5").unwrap())

@@ -4,10 +4,10 @@
 
 use super::aperture;
 use super::Request;
-use crate::brdf::frame::angle_between;
-use crate::brdf::{Directions, Material};
 use crate::fit::{Dataset, Units};
 use anyhow::{bail, Result};
+use gonio_brdf::frame::angle_between;
+use gonio_brdf::{Directions, Material};
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};

@@ -2,9 +2,9 @@
 //! came from: geometry in radians, a value in the file's units, and an
 //! optional standard uncertainty.
 
-use crate::brdf::{Directions, GeometryTerms};
 use crate::uncertainty::SHARED;
 use anyhow::{bail, Result};
+use gonio_brdf::{Directions, GeometryTerms};
 use serde::{Deserialize, Serialize};
 
 /// Units of a value (`models.md` §1, ALTA's `#PARAM_OUT`).

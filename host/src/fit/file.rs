@@ -3,8 +3,8 @@
 //! one, for `gonio plot --fit` and `gonio export`.
 
 use super::{Fit, Metrics, Units};
-use crate::brdf::{Material, ModelId, Param};
 use anyhow::{bail, Context, Result};
+use gonio_brdf::{Material, ModelId, Param};
 use serde_json::{json, Map, Value};
 use std::path::Path;
 

@@ -14,7 +14,7 @@
 
 use super::problem::{Normal, Problem};
 use super::transform::{slope, to_external, to_internal};
-use crate::brdf::Bound;
+use gonio_brdf::Bound;
 use nalgebra::{DMatrix, DVector};
 
 /// Stop when a step lowers the cost by less than this fraction.

@@ -15,8 +15,8 @@ pub use data::{Dataset, Observation, Units};
 pub use metrics::Metrics;
 pub use problem::Problem;
 
-use crate::brdf::{Material, ModelId, Param};
 use anyhow::{bail, Result};
+use gonio_brdf::{Material, ModelId, Param};
 use nalgebra::DMatrix;
 use std::time::Instant;
 
@@ -116,13 +116,13 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
             );
         }
         let d = model.bounds()[i];
-        if d.spread == crate::brdf::Spread::Log && lo <= 0.0 {
+        if d.spread == gonio_brdf::Spread::Log && lo <= 0.0 {
             bail!(
                 "the box of {} must stay above 0 (it is searched in its logarithm)",
                 model.param_names()[i]
             );
         }
-        bounds_all[i] = crate::brdf::Bound { lo, hi, ..d };
+        bounds_all[i] = gonio_brdf::Bound { lo, hi, ..d };
     }
     let mut template: Vec<f64> = bounds_all.iter().map(|b| (b.lo + b.hi) / 2.0).collect();
     for &(i, v) in &spec.fixed {

@@ -4,8 +4,8 @@
 //! fitting units (1 or `cosθo`), and exact Jacobians by forward-mode
 //! differentiation (`num-dual`).
 
-use crate::brdf::{Bound, GeometryTerms, ModelId, Param};
 use crate::uncertainty::SHARED;
+use gonio_brdf::{Bound, GeometryTerms, ModelId, Param};
 use nalgebra::{Const, DMatrix, DVector, U1};
 use num_dual::DualSVec64;
 use rayon::prelude::*;
@@ -294,7 +294,7 @@ impl Problem {
 /// geometries, with a deterministic ±3 % ripple standing in for noise.
 #[cfg(test)]
 pub(super) fn retro_phong_fixture(m: usize) -> Problem {
-    use crate::brdf::Directions;
+    use gonio_brdf::Directions;
     let model = ModelId::RetroPhong;
     let truth = [0.3, 30.0, 0.2, 0.05, 0.01, 4.0];
     let geos: Vec<GeometryTerms> = (0..m)

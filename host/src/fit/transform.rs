@@ -7,7 +7,7 @@
 //! bounds as [`Spread`] says (linear, logarithmic, or cubic for amplitudes
 //! spanning decades down to zero).
 
-use crate::brdf::{Bound, Spread};
+use gonio_brdf::{Bound, Spread};
 
 pub fn to_internal(b: &Bound, x: f64) -> f64 {
     let s = (2.0 * (x - b.lo) / (b.hi - b.lo) - 1.0).clamp(-1.0, 1.0);

@@ -28,11 +28,11 @@
 //! lower and upper ends (absolute); both taken as k = 2 intervals. The
 //! writer uses `#VS 2` when every value has an uncertainty.
 
-use crate::brdf::frame::dot;
-use crate::brdf::Directions;
 use crate::fit::{Dataset, Observation, Units};
 use crate::uncertainty::K_COVERAGE;
 use anyhow::{anyhow, bail, Result};
+use gonio_brdf::frame::dot;
+use gonio_brdf::Directions;
 use std::fmt::Write;
 
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -3,14 +3,14 @@
 //! search bounds, the fitted value as default) and a GLSL function
 //! `vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)`.
 //!
-//! The GLSL is the host's f64 model (`crate::brdf`) written once more, in the
+//! The GLSL is the host's f64 model (`gonio_brdf`) written once more, in the
 //! tool's language: it first takes `L` and `V` into the local frame `(X, Y, N)`
-//! and then follows [`crate::brdf::GeometryTerms`] and the model's `eval` line by
+//! and then follows [`gonio_brdf::GeometryTerms`] and the model's `eval` line by
 //! line, so that the tests can compile it as C++ (host/tests/brdf_export.rs)
 //! and compare it with the Rust model at many geometries. BRDF Explorer
 //! multiplies by `n·l` itself: the function returns `f_r` (sr⁻¹), grey.
 
-use crate::brdf::{Material, ModelId, Param};
+use gonio_brdf::{Material, ModelId, Param};
 use std::fmt::Write;
 
 /// Helpers shared by every model: the vectors of `Directions`, Schlick's

@@ -1,12 +1,12 @@
 //! Transports from the host to a head, as postcard-rpc `HostClient` wires:
 //! a byte stream carrying COBS frames (the head's USB CDC-ACM port, or the
-//! simulated head's pseudo-terminal) and in-process channels (the simulated
-//! head in a thread). Both use the wire format of the message crate (`gonio_shared::wire`).
+//! simulated head's pseudo-terminal) and in-process channels (a head served
+//! by a thread of this process). Both use the wire format of the message crate (`gonio_shared::wire`).
 
-mod inproc;
+mod channel;
 mod stream;
 
-pub use inproc::in_process_client;
+pub use channel::channel_client;
 pub use stream::serial_client;
 
 use postcard_rpc::header::VarSeqKind;

@@ -11,14 +11,14 @@
 //!
 //! `cargo run --release -p tests --bin coverage-bench [-- SCANS]` (default 100).
 
-use gonio_host::brdf::{Directions, Material, ModelId, Param, Specimen};
+use gonio_brdf::{Directions, Material, ModelId, Param, Specimen};
 use gonio_host::calibration;
 use gonio_host::cli::calibrate::{self, CalibrateArgs};
 use gonio_host::cli::scan::{demo_scan, OutputArgs};
 use gonio_host::coefficients::{self, Source};
 use gonio_host::fit::{self, FitSpec, Weighting};
-use gonio_host::sim::{Imperfections, SimConfig, PLATE_RHO_U};
 use gonio_host::uncertainty::{HeadUncertainty, K_COVERAGE};
+use gonio_sim::{SimConfig, PLATE_RHO_U};
 use serde_json::json;
 use std::collections::BTreeMap;
 
@@ -54,7 +54,7 @@ fn main() -> anyhow::Result<()> {
     let mut per_scan = Vec::new();
     for seed in 1..=scans {
         let dir = tempfile::tempdir()?;
-        let imperfections = Imperfections::draw(seed, &HeadUncertainty::default(), PLATE_RHO_U);
+        let imperfections = gonio_host::cli::material::drawn_imperfections(seed, &HeadUncertainty::default(), PLATE_RHO_U);
         let sim = SimConfig {
             seed,
             imperfections: Box::new(imperfections.clone()),

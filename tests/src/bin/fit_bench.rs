@@ -37,7 +37,7 @@
 //! Installs scipy (pinned) with pip if it is missing or another version;
 //! prints one JSON object, with the peer's versions and BLAS.
 
-use gonio_host::brdf::{Directions, GeometryTerms, GlassBeads, ModelId};
+use gonio_brdf::{Directions, GeometryTerms, GlassBeads, ModelId};
 use gonio_host::fit::{self, transform, FitSpec, Problem};
 use gonio_tests::synthetic;
 use rand::{Rng, SeedableRng};

@@ -3,7 +3,7 @@
 
 use super::optics::Photodiode;
 use super::SimConfig;
-use crate::brdf::{Directions, Material, Specimen};
+use gonio_brdf::{Directions, Material, Specimen};
 use gonio_firmware::board::HeadConfig;
 use gonio_firmware::hw::ChopTiming;
 use gonio_firmware::units;
@@ -117,7 +117,7 @@ impl World {
             chop: None,
             material: sim.material.clone(),
             plate: Specimen::Model(
-                Material::parse(crate::brdf::ModelId::Lambert, &format!("kd={}", sim.imperfections.plate_rho)).expect("a valid Lambertian"),
+                Material::parse(gonio_brdf::ModelId::Lambert, &format!("kd={}", sim.imperfections.plate_rho)).expect("a valid Lambertian"),
             ),
             mount: sim.mount.clone(),
             photodiode: sim.photodiode.clone(),

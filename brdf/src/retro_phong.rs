@@ -57,14 +57,14 @@ pub fn energy_sum(p: &[f64], cos_i: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::brdf::Directions;
+    use crate::Directions;
 
     #[test]
     fn hand_gradient_matches_dual_numbers() {
         let p = [0.62, 24.0, 0.158, 0.0415, 0.00133, 5.47];
         // Both lobes lit; the mirror lobe dark (its cosine negative); at the retro peak.
         let geometries = [(30.0, 31.0, 5.0), (60.0, 58.0, 180.0), (15.0, 40.0, 90.0), (60.0, 60.0, 0.0)];
-        crate::brdf::catalog::assert_hand_gradient(crate::brdf::ModelId::RetroPhong, p, &geometries);
+        crate::catalog::assert_hand_gradient(crate::ModelId::RetroPhong, p, &geometries);
     }
 
     #[test]

@@ -97,7 +97,7 @@ pub fn dhr(material: &Material, theta_i: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::brdf::{ModelId, Param};
+    use crate::{ModelId, Param};
 
     #[test]
     fn lambert_reflects_its_albedo() {

@@ -45,8 +45,8 @@ pub fn value_and_gradient(g: &GeometryTerms, p: &[f64], _: Param, grad: &mut [f6
 
 #[cfg(test)]
 mod tests {
-    use crate::brdf::catalog::assert_hand_gradient;
-    use crate::brdf::ModelId;
+    use crate::catalog::assert_hand_gradient;
+    use crate::ModelId;
 
     #[test]
     fn hand_gradient_matches_dual_numbers() {

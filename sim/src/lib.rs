@@ -21,7 +21,7 @@ pub use optics::Photodiode;
 pub use pty::serve_pty;
 pub use world::World;
 
-use crate::brdf::Specimen;
+use gonio_brdf::Specimen;
 use gonio_firmware::board::{HeadConfig, REFERENCE};
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::Head;

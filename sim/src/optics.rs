@@ -4,7 +4,7 @@
 //! ambient light, mains pickup, amplifier bandwidth, noise, offset,
 //! quantisation and saturation.
 
-use crate::brdf::{Directions, Specimen};
+use gonio_brdf::{Directions, Specimen};
 use gonio_firmware::board::HeadConfig;
 use rand::Rng;
 use rand_distr::StandardNormal;
