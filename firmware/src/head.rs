@@ -14,6 +14,7 @@ use crate::kinematics;
 use crate::motion::{self, Position};
 use crate::sanity::geometry::FixedGeometry;
 use crate::sanity::Sanity;
+use crate::scan_run::ScanRun;
 use crate::state::{self, Drivers, Event, Laser, Mode};
 use crate::{homing, units};
 use embedded_hal::digital::OutputPin;
@@ -21,10 +22,9 @@ use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
-    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Field, Geometry, HeadState, Identity, PlanChunk,
-    PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status, PLAN_QUEUE,
+    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, PlanChunk,
+    PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Status,
 };
-use heapless::Deque;
 
 /// Who this head is; the board and the serial come from the binary.
 #[derive(Debug, Clone)]
@@ -47,23 +47,6 @@ pub const SUSPECT_RUN: u32 = 8;
 struct SuspectRuns {
     saturated: u32,
     dark: u32,
-}
-
-pub(crate) struct ScanRun {
-    /// Number of the run since power-up (`ScanAccepted::run`).
-    pub(crate) run: u32,
-    pub(crate) spec: ScanSpec,
-    /// The visit order the host has sent and the head not yet taken
-    /// (canonical indices), and the visit position after its last.
-    pub(crate) plan: Deque<u32, PLAN_QUEUE>,
-    pub(crate) queued_to: u32,
-    pub(crate) total: u32,
-    pub(crate) next_order: u32,
-    pub(crate) measured: u32,
-    pub(crate) skipped: u32,
-    /// The point taken from the plan and not yet done: a stop in the middle
-    /// of it leaves it here, and continuing visits it again.
-    pub(crate) current: Option<(u32, Geometry)>,
 }
 
 pub struct Head<B: Board> {
@@ -234,7 +217,7 @@ impl<B: Board> Head<B> {
     }
 
     pub fn status(&self) -> Status {
-        let (run, next_order, total) = self.scan.as_ref().map_or((0, 0, 0), |s| (s.run, s.next_order, s.total));
+        let (run, next_order, total) = self.scan.as_ref().map_or((0, 0, 0), ScanRun::progress);
         Status {
             state: match self.mode {
                 Mode::Idle => HeadState::Idle,
@@ -438,17 +421,7 @@ impl<B: Board> Head<B> {
         self.suspect = SuspectRuns::default();
         self.last_heard_us = self.hw.clock.now_us();
         self.runs = self.runs.wrapping_add(1);
-        self.scan = Some(ScanRun {
-            run: self.runs,
-            spec,
-            plan: Deque::new(),
-            queued_to: first_order,
-            total,
-            next_order: first_order,
-            measured: 0,
-            skipped: 0,
-            current: None,
-        });
+        self.scan = Some(ScanRun::new(self.runs, spec, total));
         Ok(ScanAccepted {
             points: total,
             first_order,
@@ -460,35 +433,17 @@ impl<B: Board> Head<B> {
     /// A chunk that does not start where the queue ends takes nothing, and
     /// what does not fit is left out: the answer says where to go on.
     pub fn queue_plan(&mut self, chunk: &PlanChunk) -> Reply<PlanQueued> {
-        let Some(run) = self.scan.as_mut().filter(|r| chunk.run == 0 || r.run == chunk.run) else {
-            return Err(Fault::NotScanning);
-        };
-        if chunk.indices.iter().any(|&i| i >= run.total) {
-            return Err(Fault::InvalidValue(Field::ScanRange));
+        match self.scan.as_mut().filter(|r| r.is_addressed_by(chunk)) {
+            Some(run) => run.queue(chunk),
+            None => Err(Fault::NotScanning),
         }
-        if chunk.first_order == run.queued_to {
-            for &i in &chunk.indices {
-                if run.queued_to >= run.total || run.plan.push_back(i).is_err() {
-                    break;
-                }
-                run.queued_to += 1;
-            }
-        }
-        Ok(PlanQueued {
-            next_order: run.queued_to,
-            room: (PLAN_QUEUE - run.plan.len()) as u32,
-        })
     }
 
     /// Drops a scan, running or held, with a `Stopped` event for `why`.
     pub(crate) fn drop_scan(&mut self, why: Fault) {
         if let Some(run) = self.scan.take() {
             self.last_fault = Some(why);
-            self.talk.pending_event = Some(ScanEvent::Stopped {
-                run: run.run,
-                next_order: run.next_order,
-                reason: why,
-            });
+            self.talk.pending_event = Some(run.stopped(why));
         }
     }
 
@@ -499,11 +454,7 @@ impl<B: Board> Head<B> {
             if why.is_some() {
                 self.last_fault = why;
             }
-            self.talk.pending_event = Some(ScanEvent::Paused {
-                run: run.run,
-                next_order: run.next_order,
-                reason: why,
-            });
+            self.talk.pending_event = Some(run.paused(why));
         }
     }
 

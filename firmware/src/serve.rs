@@ -14,6 +14,7 @@ use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
 use crate::head::Head;
 use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
+use crate::scan_run::Next;
 use crate::state::{Event, Mode};
 use embassy_futures::select::{select, Either};
 use embedded_hal_async::delay::DelayNs;
@@ -406,23 +407,14 @@ impl<B: Board> Head<B> {
             let _ = self.apply(Event::Done);
             return Ok(());
         };
-        if run.current.is_none() {
-            // Indices were checked against the grid when they were queued.
-            run.current = run.plan.pop_front().and_then(|i| run.spec.point(i).map(|g| (i, g)));
-        }
-        let (order, run_no) = (run.next_order, run.run);
-        if run.current.is_none() && order < run.total {
-            return self.starved(link, sentry, inbox).await;
-        }
-        let Some((index, g)) = run.current else {
-            let ev = ScanEvent::Finished {
-                run: run_no,
-                measured: run.measured,
-                skipped: run.skipped,
-            };
-            self.scan = None;
-            let _ = self.apply(Event::Done);
-            return self.publish::<ScanEventTopic, L>(&ev, link).await;
+        let (index, order, g) = match run.next() {
+            Next::Visit { index, order, at } => (index, order, at),
+            Next::Starved => return self.starved(link, sentry, inbox).await,
+            Next::Finished(ev) => {
+                self.scan = None;
+                let _ = self.apply(Event::Done);
+                return self.publish::<ScanEventTopic, L>(&ev, link).await;
+            }
         };
         let at = Some(ScanPosition { index, order });
         let visit = async |h: &mut Self| {
@@ -436,21 +428,24 @@ impl<B: Board> Head<B> {
                 return Ok(());
             }
             Ok(Ok(s)) => {
-                self.advance(|r| r.measured += 1);
+                if let Some(run) = self.scan.as_mut() {
+                    run.measured();
+                }
                 ScanEvent::Sample(s)
             }
             Ok(Err(reason @ (Fault::Unreachable(_) | Fault::InvalidValue(_)))) => {
-                self.advance(|r| r.skipped += 1);
+                if let Some(run) = self.scan.as_mut() {
+                    run.skipped();
+                }
                 ScanEvent::Skipped { index, order, reason }
             }
             Ok(Err(reason)) => {
-                self.scan = None;
+                let ev = self.scan.take().map(|r| r.stopped(reason));
                 self.last_fault = Some(reason);
                 let _ = self.apply(Event::Failed);
-                ScanEvent::Stopped {
-                    run: run_no,
-                    next_order: order,
-                    reason,
+                match ev {
+                    Some(ev) => ev,
+                    None => return Ok(()),
                 }
             }
         };
@@ -462,14 +457,6 @@ impl<B: Board> Head<B> {
     /// next step sees and holds the scan for).
     async fn starved<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
         self.wait(link, sentry, inbox, self.silence_deadline(), true).await.map(drop)
-    }
-
-    fn advance(&mut self, count: impl FnOnce(&mut crate::head::ScanRun)) {
-        if let Some(run) = self.scan.as_mut() {
-            count(run);
-            run.current = None;
-            run.next_order += 1;
-        }
     }
 
     async fn reply<E: Endpoint, L: Link>(&mut self, seq: VarSeq, msg: &E::Response, link: &mut L) -> Result<(), LinkError>

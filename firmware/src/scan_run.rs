@@ -1,0 +1,143 @@
+//! A scan in progress, apart from the head that runs it: its visit order as
+//! the host has queued it, where it stands, what it has counted, and the
+//! events that say so. The head decides *when* (its state table, the serve
+//! loop's watch); this says *what comes next*. Nothing here moves or
+//! measures, so every operation is a few integer steps.
+
+use gonio_shared::{Fault, Field, Geometry, PlanChunk, PlanQueued, Reply, ScanEvent, ScanSpec, PLAN_QUEUE};
+use heapless::Deque;
+
+pub(crate) struct ScanRun {
+    /// Number of the run since power-up (`ScanAccepted::run`).
+    run: u32,
+    spec: ScanSpec,
+    /// The visit order the host has sent and the head not yet taken
+    /// (canonical indices), and the visit position after its last.
+    plan: Deque<u32, PLAN_QUEUE>,
+    queued_to: u32,
+    total: u32,
+    next_order: u32,
+    measured: u32,
+    skipped: u32,
+    /// The point taken from the plan and not yet done: a stop in the middle
+    /// of it leaves it here, and continuing visits it again.
+    current: Option<(u32, Geometry)>,
+}
+
+/// What the scan does next.
+pub(crate) enum Next {
+    /// Visit point `index` (canonical) at visit position `order`.
+    Visit { index: u32, order: u32, at: Geometry },
+    /// The plan has run dry before the last point: wait for the host.
+    Starved,
+    /// Every point is done.
+    Finished(ScanEvent),
+}
+
+impl ScanRun {
+    /// Run `run` of `spec` (already validated: `total` points), from its
+    /// `first_order`.
+    pub(crate) fn new(run: u32, spec: ScanSpec, total: u32) -> Self {
+        let first = spec.first_order;
+        ScanRun {
+            run,
+            spec,
+            plan: Deque::new(),
+            queued_to: first,
+            total,
+            next_order: first,
+            measured: 0,
+            skipped: 0,
+            current: None,
+        }
+    }
+
+    /// `(run, next visit position, points)`, for the status.
+    pub(crate) fn progress(&self) -> (u32, u32, u32) {
+        (self.run, self.next_order, self.total)
+    }
+
+    /// Whether `chunk` is addressed to this run (0: whichever runs).
+    pub(crate) fn is_addressed_by(&self, chunk: &PlanChunk) -> bool {
+        chunk.run == 0 || chunk.run == self.run
+    }
+
+    /// Queues the next stretch of the visit order. A chunk that does not
+    /// start where the queue ends takes nothing, and what does not fit is
+    /// left out: the answer says where to go on.
+    pub(crate) fn queue(&mut self, chunk: &PlanChunk) -> Reply<PlanQueued> {
+        if chunk.indices.iter().any(|&i| i >= self.total) {
+            return Err(Fault::InvalidValue(Field::ScanRange));
+        }
+        if chunk.first_order == self.queued_to {
+            for &i in &chunk.indices {
+                if self.queued_to >= self.total || self.plan.push_back(i).is_err() {
+                    break;
+                }
+                self.queued_to += 1;
+            }
+        }
+        Ok(PlanQueued {
+            next_order: self.queued_to,
+            room: (PLAN_QUEUE - self.plan.len()) as u32,
+        })
+    }
+
+    /// The point to visit next: the one a stop interrupted, else the next of
+    /// the plan.
+    pub(crate) fn next(&mut self) -> Next {
+        if self.current.is_none() {
+            // Indices were checked against the grid when they were queued.
+            self.current = self.plan.pop_front().and_then(|i| self.spec.point(i).map(|g| (i, g)));
+        }
+        match self.current {
+            Some((index, at)) => Next::Visit {
+                index,
+                order: self.next_order,
+                at,
+            },
+            None if self.next_order < self.total => Next::Starved,
+            None => Next::Finished(ScanEvent::Finished {
+                run: self.run,
+                measured: self.measured,
+                skipped: self.skipped,
+            }),
+        }
+    }
+
+    /// The current point was measured.
+    pub(crate) fn measured(&mut self) {
+        self.measured += 1;
+        self.advance();
+    }
+
+    /// The current point was skipped (unreachable, or refused).
+    pub(crate) fn skipped(&mut self) {
+        self.skipped += 1;
+        self.advance();
+    }
+
+    fn advance(&mut self) {
+        self.current = None;
+        self.next_order += 1;
+    }
+
+    /// The event of this run stopped for `reason` (it will not go on).
+    pub(crate) fn stopped(&self, reason: Fault) -> ScanEvent {
+        ScanEvent::Stopped {
+            run: self.run,
+            next_order: self.next_order,
+            reason,
+        }
+    }
+
+    /// The event of this run held at its next point: at the host's request
+    /// (`None`) or for a fault.
+    pub(crate) fn paused(&self, reason: Option<Fault>) -> ScanEvent {
+        ScanEvent::Paused {
+            run: self.run,
+            next_order: self.next_order,
+            reason,
+        }
+    }
+}
