@@ -1,6 +1,7 @@
-//! What the library tells the person at the instrument while it works:
-//! notices (a calibration's result, a recovery under way) and progress bars.
-//! The command line chooses where they go: stderr and a bar on a terminal
+//! The person at the instrument, as the library sees them: what it tells
+//! them while it works (notices: a calibration's result, a recovery under
+//! way; progress bars), and what it asks them to do by hand (mount the
+//! reference plate). The command line chooses where notices go: stderr and a bar on a terminal
 //! run, nowhere under `--json` (whose output says it all) or in tests.
 //! Library code never prints itself.
 
@@ -31,6 +32,17 @@ impl Operator {
         if self == Operator::Terminal {
             eprintln!("{msg}");
         }
+    }
+
+    /// Asks the operator to do something by hand and waits until they say
+    /// it is done: a line on stdin (Enter), prompted on a terminal; under
+    /// `--json` whatever drives `gonio` writes the line unprompted.
+    pub fn ask(self, task: impl Display) -> anyhow::Result<()> {
+        use anyhow::Context;
+        self.notice(format_args!("{task} and press Enter"));
+        let mut line = String::new();
+        std::io::stdin().read_line(&mut line).context("waiting for the operator")?;
+        Ok(())
     }
 
     /// A bar over `len` `items` for `task`, hidden for a silent operator.

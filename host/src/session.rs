@@ -92,6 +92,9 @@ impl Session {
             None => None,
         };
         let detection = head.detection(self.setup.settings).await?;
+        // What the head reports of itself, whatever link it is on (a
+        // simulated head on a pseudo-terminal too): a watch kept on a
+        // simulated clock would trip between the host's wall-clock messages.
         let watch = if head.identity().simulated { 0.0 } else { HOST_TIMEOUT_S };
         head.safety(SafetySettings {
             host_timeout_s: watch,

@@ -6,7 +6,7 @@
 
 use crate::link::{self, Workers};
 use crate::operator::Operator;
-use anyhow::{Context, Result};
+use anyhow::Result;
 use postcard_rpc::host_client::HostClient;
 use postcard_rpc::standard_icd::WireError;
 use std::fmt::Debug;
@@ -43,7 +43,7 @@ pub trait Target: Send + Sync + Debug {
     /// Opens a link to the head (called again after the link was lost).
     fn open(&self) -> Result<Opened>;
 
-    /// Puts `what` on the head's holder: a person's hands at a real head.
+    /// Puts `what` on the head's holder: the operator's hands at a real head.
     fn mount(&self, what: Holder, operator: Operator) -> Result<()>;
 
     /// Where the same head (serial `serial`) may be found when it is no
@@ -71,10 +71,7 @@ impl Target for Port {
     }
 
     fn mount(&self, what: Holder, operator: Operator) -> Result<()> {
-        operator.notice(format_args!("mount {} on the holder and press Enter", what.describe()));
-        let mut line = String::new();
-        std::io::stdin().read_line(&mut line).context("waiting for the operator")?;
-        Ok(())
+        operator.ask(format_args!("mount {} on the holder", what.describe()))
     }
 
     fn elsewhere(&self, serial: &str) -> Option<Arc<dyn Target>> {

@@ -49,7 +49,7 @@ pub struct SimConfig {
     /// Faults to suffer on the link and in the hardware.
     pub faults: faults::Faults,
     /// Angle, gain, stray-light and plate errors the firmware does not know
-    /// of (boxed: most heads have none, and `Target` stays small).
+    /// of (boxed: most heads have none, and the configuration stays small).
     pub imperfections: Box<Imperfections>,
     /// Wall-clock seconds per simulated second while the head works (1: a
     /// move takes as long as on the reference head), for tests that act on

@@ -41,36 +41,36 @@ impl DetectorArgs {
 
     /// The options checked, as the plan keeps them.
     pub fn checked(&self) -> Result<DetectorPlan> {
-        if !(self.integration_s.is_finite() && self.integration_s > 0.0 && self.integration_s <= DetectionSettings::INTEGRATION_MAX_S) {
-            bail!("--integration-s must be in (0, {}] s", DetectionSettings::INTEGRATION_MAX_S);
-        }
-        let reference = match self.reference {
-            ReferenceArg::Square => Reference::Square,
-            ReferenceArg::Sine => Reference::Sine,
-            ReferenceArg::Matched => Reference::Matched,
-        };
-        let calibrate_at = match &self.calibrate_at {
-            None if reference == Reference::Matched => bail!("--reference matched needs --calibrate-at TI,TO,DPHI"),
-            None => None,
-            Some(s) => Some(parse_geometry(s).context("--calibrate-at")?),
-        };
-        Ok(DetectorPlan {
-            reference,
-            calibrate_at,
+        DetectorPlan {
+            reference: match self.reference {
+                ReferenceArg::Square => Reference::Square,
+                ReferenceArg::Sine => Reference::Sine,
+                ReferenceArg::Matched => Reference::Matched,
+            },
+            calibrate_at: self
+                .calibrate_at
+                .as_deref()
+                .map(parse_geometry)
+                .transpose()
+                .context("--calibrate-at")?,
             integration_s: self.integration_s,
-        })
+        }
+        .check()
     }
 }
 
 /// The detector's part of a scan's plan (`scan.json`): checked values, so
-/// that a resumed scan measures exactly as its start did.
+/// that a resumed scan measures exactly as its start did. Read back, it is
+/// checked again.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(try_from = "StoredDetector")]
 pub struct DetectorPlan {
     /// Demodulation reference.
     pub reference: Reference,
     /// Where the detector learns its phase and waveform before the scan.
     pub calibrate_at: Option<Geometry>,
-    /// Integration time per point (s), rounded to whole chop periods.
+    /// Integration time per point as asked (s); the head integrates whole
+    /// chop periods ([`DetectorPlan::settings`]).
     pub integration_s: f32,
 }
 
@@ -82,6 +82,63 @@ impl DetectorPlan {
             periods: base.periods_for(self.integration_s),
             reference: self.reference,
             ..base
+        }
+    }
+
+    fn check(self) -> Result<Self> {
+        if !(self.integration_s.is_finite() && self.integration_s > 0.0 && self.integration_s <= DetectionSettings::INTEGRATION_MAX_S) {
+            bail!("--integration-s must be in (0, {}] s", DetectionSettings::INTEGRATION_MAX_S);
+        }
+        if self.reference == Reference::Matched && self.calibrate_at.is_none() {
+            bail!("--reference matched needs --calibrate-at TI,TO,DPHI");
+        }
+        Ok(self)
+    }
+}
+
+/// The detector in `scan.json` as read: this plan, or the command line's
+/// options as gonio wrote them before it had a plan of its own (so that a
+/// scan interrupted under an older gonio resumes).
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum StoredDetector {
+    Plan {
+        reference: Reference,
+        calibrate_at: Option<Geometry>,
+        integration_s: f32,
+    },
+    Options {
+        reference: String,
+        calibrate_at: Option<String>,
+        integration_s: f32,
+    },
+}
+
+impl TryFrom<StoredDetector> for DetectorPlan {
+    type Error = anyhow::Error;
+
+    fn try_from(stored: StoredDetector) -> Result<Self> {
+        match stored {
+            StoredDetector::Plan {
+                reference,
+                calibrate_at,
+                integration_s,
+            } => DetectorPlan {
+                reference,
+                calibrate_at,
+                integration_s,
+            }
+            .check(),
+            StoredDetector::Options {
+                reference,
+                calibrate_at,
+                integration_s,
+            } => DetectorArgs {
+                reference: clap::ValueEnum::from_str(&reference, true).map_err(|e| anyhow::anyhow!("reference: {e}"))?,
+                calibrate_at,
+                integration_s,
+            }
+            .checked(),
         }
     }
 }
@@ -99,4 +156,32 @@ pub fn parse_geometry(s: &str) -> Result<Geometry> {
         bail!("angles must be finite, got `{s}`");
     }
     Ok(Geometry::new(ti, to, dp))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// `scan.json` as gonio wrote it before the plan had a type of its own
+    /// (the command line's options) resumes as the same plan.
+    #[test]
+    fn a_plan_written_as_options_reads_as_the_same_plan() {
+        let old = r#"{"reference":"matched","calibrate_at":"30,30,0","integration_s":0.1}"#;
+        let plan: DetectorPlan = serde_json::from_str(old).unwrap();
+        assert_eq!(plan, DetectorArgs::demo().checked().unwrap());
+        let again: DetectorPlan = serde_json::from_str(&serde_json::to_string(&plan).unwrap()).unwrap();
+        assert_eq!(again, plan);
+    }
+
+    #[test]
+    fn a_plan_read_back_is_checked_again() {
+        for bad in [
+            r#"{"reference":"Square","calibrate_at":null,"integration_s":0.0}"#,
+            r#"{"reference":"Matched","calibrate_at":null,"integration_s":0.1}"#,
+            r#"{"reference":"square","calibrate_at":"30,x,0","integration_s":0.1}"#,
+            r#"{"reference":"cosine","calibrate_at":null,"integration_s":0.1}"#,
+        ] {
+            assert!(serde_json::from_str::<DetectorPlan>(bad).is_err(), "{bad}");
+        }
+    }
 }
