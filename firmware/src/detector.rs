@@ -7,7 +7,7 @@ use crate::demod::{Design, Estimate, Integrator, Learned, Learner, Reference, MA
 use crate::hw::{AdcStream, Board, ChopTiming, Hardware};
 use crate::units;
 use embedded_hal::digital::OutputPin;
-use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags};
+use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags, Signal};
 
 /// Gain up when the largest code would still sit below this fraction of full
 /// scale at ten times the gain; down when codes reach the rails. The band in
@@ -22,21 +22,6 @@ const PHASE_TOLERANCE_DEG: f64 = 20.0;
 /// Calibration needs at least this signal-to-noise ratio and period count.
 const CALIBRATION_SNR: f64 = 30.0;
 const CALIBRATION_MIN_PERIODS: u16 = 8;
-
-/// A demodulated measurement in SI units, before geometry is attached.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Measurement {
-    pub in_phase_v: f32,
-    pub quadrature_v: f32,
-    pub amplitude_v: f32,
-    pub magnitude_v: f32,
-    pub phase_deg: f32,
-    pub noise_v: f32,
-    pub gain_index: u8,
-    pub gain_v_per_a: f32,
-    pub periods: u16,
-    pub flags: SampleFlags,
-}
 
 pub struct Detector {
     settings: DetectionSettings,
@@ -197,7 +182,7 @@ impl Detector {
     }
 
     /// Takes one sample at the current position.
-    pub async fn measure<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig) -> Result<Measurement, Fault> {
+    pub async fn measure<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig) -> Result<Signal, Fault> {
         let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];
         let buf = &mut buf[..self.samples_per_period()];
@@ -214,7 +199,7 @@ impl Detector {
         embassy_futures::yield_now().await;
         let e = it.estimate_with(drift);
         self.flag(&e, Self::full_scale::<B>(), &mut flags);
-        Ok(self.measurement::<B>(cfg, &e, flags))
+        Ok(self.signal::<B>(cfg, &e, flags))
     }
 
     fn flag(&self, e: &Estimate, full: u16, flags: &mut SampleFlags) {
@@ -237,9 +222,9 @@ impl Detector {
         }
     }
 
-    fn measurement<B: Board>(&self, cfg: &HeadConfig, e: &Estimate, flags: SampleFlags) -> Measurement {
+    fn signal<B: Board>(&self, cfg: &HeadConfig, e: &Estimate, flags: SampleFlags) -> Signal {
         let volts = |c: f64| units::codes_to_volts(c as f32, <B::Adc as AdcStream>::BITS, cfg.detector.adc_vref);
-        Measurement {
+        Signal {
             in_phase_v: volts(e.i),
             quadrature_v: volts(e.q),
             amplitude_v: volts(e.amplitude),

@@ -8,7 +8,7 @@
 
 use crate::board::HeadConfig;
 use crate::conversation::Conversation;
-use crate::detector::{Detector, Measurement};
+use crate::detector::Detector;
 use crate::hw::{Board, Clock, Hardware, StepTimer};
 use crate::kinematics;
 use crate::motion::{self, Position};
@@ -23,7 +23,7 @@ use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
     Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, PlanChunk,
-    PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Status,
+    PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status,
 };
 
 /// Who this head is; the board and the serial come from the binary.
@@ -345,23 +345,14 @@ impl<B: Board> Head<B> {
             target,
             reached,
             axes,
-            in_phase_v: m.in_phase_v,
-            quadrature_v: m.quadrature_v,
-            amplitude_v: m.amplitude_v,
-            magnitude_v: m.magnitude_v,
-            phase_deg: m.phase_deg,
-            noise_v: m.noise_v,
-            gain_v_per_a: m.gain_v_per_a,
-            gain_index: m.gain_index,
-            periods: m.periods,
-            flags,
+            signal: Signal { flags, ..m },
         };
         self.seq = self.seq.wrapping_add(1);
         Ok(s)
     }
 
     /// One detector reading, checked against the loaded model.
-    async fn measure_checked(&mut self, at: &Geometry, through_splitter: bool) -> Reply<Measurement> {
+    async fn measure_checked(&mut self, at: &Geometry, through_splitter: bool) -> Reply<Signal> {
         let mut m = match self.detector.measure(&mut self.hw, &self.cfg).await {
             Ok(m) => m,
             Err(f) => {
@@ -536,10 +527,10 @@ impl<B: Board> Head<B> {
             *n = if hit { *n + 1 } else { 0 };
             *n >= SUSPECT_RUN
         };
-        if run(&mut self.suspect.saturated, s.flags.contains(SampleFlags::SATURATED)) {
+        if run(&mut self.suspect.saturated, s.signal.flags.contains(SampleFlags::SATURATED)) {
             return Err(Fault::Saturated);
         }
-        if run(&mut self.suspect.dark, s.flags.contains(SampleFlags::BELOW_NOISE)) {
+        if run(&mut self.suspect.dark, s.signal.flags.contains(SampleFlags::BELOW_NOISE)) {
             return Err(Fault::NoSignal);
         }
         Ok(())

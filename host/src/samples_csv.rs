@@ -48,7 +48,7 @@ impl Row {
 
 impl From<&Sample> for Row {
     fn from(s: &Sample) -> Self {
-        let names: Vec<String> = s.flags.iter_names().map(|(n, _)| n.to_ascii_lowercase()).collect();
+        let names: Vec<String> = s.signal.flags.iter_names().map(|(n, _)| n.to_ascii_lowercase()).collect();
         Row {
             seq: s.seq,
             index: s.scan.map(|p| p.index),
@@ -63,16 +63,16 @@ impl From<&Sample> for Row {
             omega_deg: s.axes.omega_deg,
             tau_deg: s.axes.tau_deg,
             psi_deg: s.axes.psi_deg,
-            in_phase_v: s.in_phase_v,
-            quadrature_v: s.quadrature_v,
-            amplitude_v: s.amplitude_v,
-            magnitude_v: s.magnitude_v,
-            phase_deg: s.phase_deg,
-            noise_v: s.noise_v,
-            gain_v_per_a: s.gain_v_per_a,
-            gain_index: s.gain_index,
-            periods: s.periods,
-            flags: s.flags.bits(),
+            in_phase_v: s.signal.in_phase_v,
+            quadrature_v: s.signal.quadrature_v,
+            amplitude_v: s.signal.amplitude_v,
+            magnitude_v: s.signal.magnitude_v,
+            phase_deg: s.signal.phase_deg,
+            noise_v: s.signal.noise_v,
+            gain_v_per_a: s.signal.gain_v_per_a,
+            gain_index: s.signal.gain_index,
+            periods: s.signal.periods,
+            flags: s.signal.flags.bits(),
             flag_names: names.join("|"),
         }
     }

@@ -359,7 +359,7 @@ impl ScanDriver<'_> {
                 ScanEvent::Sample(s) => {
                     out.push(&s)?;
                     outcome.measured += 1;
-                    if s.flags.doubtful() {
+                    if s.signal.flags.doubtful() {
                         outcome.flagged += 1;
                     }
                     clock.saw(s.timestamp_us);

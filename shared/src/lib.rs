@@ -30,7 +30,7 @@ pub use identity::{Capabilities, Identity, PROTOCOL_VERSION};
 pub use mechanics::{AxisMechanics, Mechanics};
 pub use models::{ModelSpec, MODELS};
 pub use safety::SafetySettings;
-pub use sample::{Sample, SampleFlags};
+pub use sample::{Sample, SampleFlags, Signal};
 pub use sanity::{SanityConfig, SanityKind, SanityModel};
 pub use scan::{AngleRange, PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
 pub use status::{HeadState, Status};

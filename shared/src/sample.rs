@@ -78,6 +78,17 @@ pub struct Sample {
     /// Geometry actually reached, from the step counts.
     pub reached: Geometry,
     pub axes: AxisAngles,
+    /// What the detector made of it (last on the wire, as its fields were
+    /// when they were the sample's own).
+    pub signal: Signal,
+}
+
+/// What the detector made of one integration, in SI units: the demodulated
+/// signal, its noise, the gain it was taken at, and its quality flags. The
+/// detector's result, before the head attaches where it was measured.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Signal {
     /// In-phase and quadrature amplitudes at the ADC input (V).
     pub in_phase_v: f32,
     pub quadrature_v: f32,

@@ -131,7 +131,7 @@ fn a_stalled_move_stops_the_scan() {
 #[test]
 fn one_lost_adc_block_is_measured_again_and_a_lasting_overrun_stops_the_scan() {
     let samples = finished(&scan("overrun@30:1", 0.0).1);
-    assert!(samples.iter().all(|s| !s.flags.contains(SampleFlags::OVERRUN)));
+    assert!(samples.iter().all(|s| !s.signal.flags.contains(SampleFlags::OVERRUN)));
     let (reason, next, _) = stopped(&scan("overrun@30:40", 0.0).1);
     assert_eq!((reason, next), (Fault::AdcOverrun, 30));
 }

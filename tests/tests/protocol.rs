@@ -171,16 +171,18 @@ fn largest_messages_fit_the_frame_buffer() {
         target: Geometry::new(1.0, 2.0, 3.0),
         reached: Geometry::new(1.0, 2.0, 3.0),
         axes: AxisAngles::default(),
-        in_phase_v: 1.0,
-        quadrature_v: 1.0,
-        amplitude_v: 1.0,
-        magnitude_v: 1.0,
-        phase_deg: 1.0,
-        noise_v: 1.0,
-        gain_v_per_a: 1.0,
-        gain_index: u8::MAX,
-        periods: u16::MAX,
-        flags: SampleFlags::from_bits_retain(u16::MAX),
+        signal: Signal {
+            in_phase_v: 1.0,
+            quadrature_v: 1.0,
+            amplitude_v: 1.0,
+            magnitude_v: 1.0,
+            phase_deg: 1.0,
+            noise_v: 1.0,
+            gain_v_per_a: 1.0,
+            gain_index: u8::MAX,
+            periods: u16::MAX,
+            flags: SampleFlags::from_bits_retain(u16::MAX),
+        },
     };
     // The frame check takes the last bytes of the buffer.
     let mut buf = [0u8; MAX_FRAME - gonio_shared::wire::check::LEN];

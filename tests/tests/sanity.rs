@@ -47,7 +47,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
     let at = Geometry::new(30.0, 20.0, 90.0);
     let s = head.measure(Some(at)).await.unwrap();
     let d = Directions::from_degrees(at.theta_i_deg as f64, at.theta_o_deg as f64, at.dphi_deg as f64);
-    let current = s.amplitude_v as f64 / s.gain_v_per_a as f64 / (material.eval(&d) * d.cos_o());
+    let current = s.signal.amplitude_v as f64 / s.signal.gain_v_per_a as f64 / (material.eval(&d) * d.cos_o());
     head.sanity(SanityConfig {
         model: material.sanity_model().unwrap(),
         current_a_per_sr_inv: current as f32,
