@@ -2,7 +2,7 @@
 //! periods the amplifier spends settling, integrate, flag. Also the
 //! calibration that learns the electronics' phase and the matched waveform.
 
-use crate::board::HeadConfig;
+use crate::config::HeadConfig;
 use crate::demod::{Design, Estimate, Integrator, Learned, Learner, Reference, MAX_M};
 use crate::hw::{AdcStream, Board, ChopTiming, Hardware};
 use crate::units;

@@ -6,7 +6,7 @@
 //! Every change of what the head does goes through the state table
 //! ([`crate::state`]) in [`Head::apply`].
 
-use crate::board::HeadConfig;
+use crate::config::HeadConfig;
 use crate::conversation::Conversation;
 use crate::detector::Detector;
 use crate::hw::{Board, Clock, Hardware, StepTimer};

@@ -7,7 +7,7 @@
 //! the last approach does not overshoot, so homing repeats to the
 //! microstep and a stop that re-homes an axis leaves no offset behind.
 
-use crate::board::HeadConfig;
+use crate::config::HeadConfig;
 use crate::hw::{Board, Hardware};
 use crate::motion::{move_by, Position};
 use crate::units;

@@ -9,7 +9,7 @@
 //! would lose half the digits; one inverse solution per move makes the cost of
 //! soft-float f64 on the Cortex-M4 irrelevant.
 
-use crate::board::HeadConfig;
+use crate::config::HeadConfig;
 use crate::units;
 use gonio_shared::{Axis, AxisAngles, Fault, Field, Geometry, Unreachable};
 use libm::{atan2, cos, sin, sqrt};
@@ -129,7 +129,7 @@ pub fn through_splitter(cfg: &HeadConfig, a: &AxisAngles) -> bool {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::board::REFERENCE;
+    use crate::config::REFERENCE;
     use proptest::prelude::*;
 
     #[test]

@@ -15,7 +15,7 @@
 
 pub mod log;
 
-pub mod board;
+pub mod config;
 mod conversation;
 pub mod demod;
 pub mod detector;

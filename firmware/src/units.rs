@@ -2,7 +2,7 @@
 //! seconds ↔ timer ticks, hertz ↔ timer reloads, ADC codes ↔ volts. Nothing
 //! else in the firmware converts.
 
-use crate::board::AxisConfig;
+use crate::config::AxisConfig;
 use crate::hw::ChopTiming;
 use gonio_shared::DetectionSettings;
 

@@ -4,7 +4,7 @@
 use crate::link::Workers;
 use crate::target::{Opened, Target};
 use anyhow::{anyhow, bail, Context, Result};
-use gonio_firmware::board::{HeadConfig, REFERENCE};
+use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
     MeasureRequest, MechanicsEndpoint, MoveEndpoint, MoveReport, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,

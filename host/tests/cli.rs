@@ -180,7 +180,7 @@ fn a_scan_killed_at_a_random_point_resumes_to_exactly_the_grid() {
     );
     let spec = gonio_shared::ScanSpec::belcour();
     let reachable: BTreeSet<u32> = (0..spec.len())
-        .filter(|&i| gonio_firmware::kinematics::inverse(&gonio_firmware::board::REFERENCE, &spec.point(i).unwrap()).is_ok())
+        .filter(|&i| gonio_firmware::kinematics::inverse(&gonio_firmware::config::REFERENCE, &spec.point(i).unwrap()).is_ok())
         .collect();
     assert_eq!(unique, reachable, "points missing after resuming (killed after {kill_after} rows)");
     assert!(!part.exists());

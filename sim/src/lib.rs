@@ -22,7 +22,7 @@ pub use pty::serve_pty;
 pub use world::World;
 
 use gonio_brdf::Specimen;
-use gonio_firmware::board::{HeadConfig, REFERENCE};
+use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::Head;
 use gonio_shared::PROTOCOL_VERSION;
@@ -57,8 +57,8 @@ pub struct SimConfig {
     /// as fast as it can.
     pub pace: f32,
     /// The head's machine: gearing, travel, speeds, optics (the reference
-    /// board unless a test builds another).
-    pub board: HeadConfig,
+    /// head's unless a test builds another).
+    pub machine: HeadConfig,
 }
 
 /// Which target sits on the sample holder. Shared between the host (the
@@ -96,7 +96,7 @@ impl Default for SimConfig {
             faults: faults::Faults::default(),
             imperfections: Box::default(),
             pace: 0.0,
-            board: REFERENCE,
+            machine: REFERENCE,
         }
     }
 }
@@ -108,7 +108,7 @@ pub(crate) fn sentry(world: &Rc<RefCell<World>>) -> clock::SimSentry {
 
 /// Builds a firmware head on a fresh virtual world.
 pub(crate) fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World>>) {
-    let world = Rc::new(RefCell::new(World::new(cfg.board, cfg)));
+    let world = Rc::new(RefCell::new(World::new(cfg.machine, cfg)));
     let hw = board::hardware(&world);
     let info = HeadInfo {
         board: "simulated STM32F405 head",
@@ -116,5 +116,5 @@ pub(crate) fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World
         simulated: true,
         protocol_version: cfg.protocol_version,
     };
-    (Head::new(cfg.board, hw, info), world)
+    (Head::new(cfg.machine, hw, info), world)
 }

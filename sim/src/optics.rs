@@ -5,7 +5,7 @@
 //! quantisation and saturation.
 
 use gonio_brdf::{Directions, Specimen};
-use gonio_firmware::board::HeadConfig;
+use gonio_firmware::config::HeadConfig;
 use rand::Rng;
 use rand_distr::StandardNormal;
 

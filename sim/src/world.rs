@@ -4,7 +4,7 @@
 use super::optics::Photodiode;
 use super::SimConfig;
 use gonio_brdf::{Directions, Material, Specimen};
-use gonio_firmware::board::HeadConfig;
+use gonio_firmware::config::HeadConfig;
 use gonio_firmware::hw::ChopTiming;
 use gonio_firmware::units;
 use gonio_shared::Geometry;

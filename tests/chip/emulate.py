@@ -285,7 +285,7 @@ PWR = 0x4000_7000
 TIM4_CNT = 0x4000_0824
 OTG_FS = 0x5000_0000
 GPIO = {"A": 0x4002_0000, "B": 0x4002_0400, "C": 0x4002_0800}
-# The safe state at the executor's first idle wait (chip/board.rs): laser
+# The safe state at the executor's first idle wait (chip/pins.rs): laser
 # enable PB0 low, STEP PC0/PC4/PC8 low, active-low EN PC2/PC6/PC10 high, all
 # driven (output mode).
 SAFE_PINS = [("B", 0, 0), ("C", 0, 0), ("C", 4, 0), ("C", 8, 0), ("C", 2, 1), ("C", 6, 1), ("C", 10, 1)]

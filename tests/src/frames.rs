@@ -2,7 +2,7 @@
 //! that drive the firmware frame by frame (`gonio_sim::FrameHead`):
 //! requests encoded and sealed, the head's scan events and replies decoded.
 
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::dispatch;
 use gonio_firmware::motion::PARK;
 use gonio_host::scan_order::visit_order;

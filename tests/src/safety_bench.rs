@@ -4,7 +4,7 @@
 
 use crate::frames::{scan_events, scan_frames, send};
 use crate::stops::{decel_s_max, duration_s, offset, ready, small_scan, status, trial, Activity, Stop, Trigger};
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_shared::icd::{AbortEndpoint, ContinueEndpoint, PauseEndpoint};
 use gonio_shared::{Axis, Geometry, HeadState, ScanEvent, ScanSpec};

@@ -6,7 +6,7 @@
 //! still matches the motors'. Shared by `safety-bench` and the tests.
 
 use crate::frames::{replies, scan_events, scan_frames, send};
-use gonio_firmware::board::{AxisConfig, REFERENCE};
+use gonio_firmware::config::{AxisConfig, REFERENCE};
 use gonio_firmware::motion;
 use gonio_shared::icd::{
     AbortEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint,

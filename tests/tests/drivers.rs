@@ -5,7 +5,7 @@
 use embedded_hal_mock::eh1::delay::{CheckedDelay, Transaction as Delay};
 use embedded_hal_mock::eh1::digital::{State, Transaction as Pin};
 use futures::executor::block_on;
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::detector::Detector;
 use gonio_firmware::homing::home_axis;
 use gonio_firmware::motion::Position;

@@ -3,7 +3,7 @@
 //! and the virtual photodiode.
 
 use gonio_brdf::{Directions, Material, Specimen};
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
 use gonio_host::cli::simulated::Simulated;
@@ -111,20 +111,20 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
 /// head whose arm is slower and whose rotation stage is geared otherwise, it
 /// learns the mechanics from the head, visits in the order planned for them,
 /// and its estimate is the head time to 1 % (189.47 s for 189.50 s); the
-/// reference board's estimate is 30 % short, and its order another.
+/// reference head's estimate is 30 % short, and its order another.
 #[tokio::test]
 async fn the_host_plans_for_the_mechanics_the_head_reports() {
-    let mut board = REFERENCE;
-    board.axes[2].max_speed_dps = 12.0;
-    board.axes[2].max_accel_dps2 = 18.0;
-    board.axes[0].microsteps_per_rev = 200 * 16 * 45;
+    let mut machine = REFERENCE;
+    machine.axes[2].max_speed_dps = 12.0;
+    machine.axes[2].max_accel_dps2 = 18.0;
+    machine.axes[0].microsteps_per_rev = 200 * 16 * 45;
     let sim = SimConfig {
-        board,
+        machine,
         ..SimConfig::default()
     };
     let mut session = session(Arc::new(Simulated(sim))).await;
     let cfg = *session.head().config();
-    assert_eq!(cfg.mechanics(), board.mechanics());
+    assert_eq!(cfg.mechanics(), machine.mechanics());
     let det = session.detection.unwrap();
     let dir = tempfile::tempdir().unwrap();
     let spec = small_grid();
@@ -140,7 +140,7 @@ async fn the_host_plans_for_the_mechanics_the_head_reports() {
 
     let (settle, acquire) = dwell_s(&det);
     let estimate =
-        |c: &gonio_firmware::board::HeadConfig| scan_time(c, &spec, visit_order(c, &spec, PARK), PARK, settle, acquire).total_s();
+        |c: &gonio_firmware::config::HeadConfig| scan_time(c, &spec, visit_order(c, &spec, PARK), PARK, settle, acquire).total_s();
     let (ours, reference) = (estimate(&cfg), estimate(&REFERENCE));
     let head = outcome.head_time_s;
     assert!((ours - head).abs() < 0.01 * head, "estimate {ours} s, head time {head} s");

@@ -1,7 +1,7 @@
 //! The scan grid shared by head and host: canonical indexing, the
 //! serpentine visit order, and the host's plan against its lower bound.
 
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::{target_steps, PARK};
 use gonio_host::scan_order::{lower_bound, scan_time, visit_order, ScanTime};

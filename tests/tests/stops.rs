@@ -3,7 +3,7 @@
 //! measurement and a scan by an abort, the E-STOP and the idle watch; a
 //! paused scan continued. docs/faults.md#stops states what is checked.
 
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::hw::StepBlock;
 use gonio_firmware::motion::blocks::{self, trapezoid_blocks};
 use gonio_firmware::motion::executor::Executor;

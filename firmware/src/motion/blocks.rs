@@ -38,9 +38,9 @@ const Q32: f64 = 4_294_967_296.0;
 pub const BLOCK_PLAN_INSTRUCTIONS: u32 = 5_000;
 
 /// Time (s) the chip spends planning `blocks` blocks, one instruction a
-/// cycle at [`crate::board::CPU_HZ`].
+/// cycle at [`crate::config::CPU_HZ`].
 pub fn plan_s(blocks: usize) -> f64 {
-    blocks as f64 * BLOCK_PLAN_INSTRUCTIONS as f64 / crate::board::CPU_HZ
+    blocks as f64 * BLOCK_PLAN_INSTRUCTIONS as f64 / crate::config::CPU_HZ
 }
 
 /// Emitted tick of the `k`-th step (1-based) of a block starting at `start`

@@ -10,7 +10,7 @@ pub mod executor;
 pub mod step_irq;
 pub mod trapezoid;
 
-use crate::board::{AxisConfig, HeadConfig};
+use crate::config::{AxisConfig, HeadConfig};
 use crate::hw::{Board, Hardware, StepTimer};
 use crate::units;
 use embassy_futures::select::{select, Either};

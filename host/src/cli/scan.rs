@@ -15,7 +15,7 @@ use crate::scan_dir::ScanDir;
 use crate::scan_order::{dwell_s, lower_bound, scan_time, visit_order};
 use crate::session::{Session, Setup};
 use anyhow::{bail, Context, Result};
-use gonio_firmware::board::HeadConfig;
+use gonio_firmware::config::HeadConfig;
 use gonio_firmware::motion::PARK;
 use gonio_shared::{DetectionReport, ScanSpec};
 use gonio_sim::SimConfig;

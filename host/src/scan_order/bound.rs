@@ -23,7 +23,7 @@
 
 use super::duration::ScanTime;
 use super::{move_s, stage_targets};
-use gonio_firmware::board::HeadConfig;
+use gonio_firmware::config::HeadConfig;
 use gonio_shared::ScanSpec;
 
 /// Reachable points up to which the bound is computed (a few seconds).

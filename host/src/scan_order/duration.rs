@@ -1,7 +1,7 @@
 //! What a visit order costs in head time: the moves under the axis limits,
 //! the chip's planning of them, and the dwell at every measured point.
 
-use gonio_firmware::board::HeadConfig;
+use gonio_firmware::config::HeadConfig;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::plan_s;
 use gonio_firmware::motion::{move_blocks, move_time, target_steps};

@@ -25,7 +25,7 @@ mod tour;
 pub use bound::{lower_bound, MoveBound, BOUND_CAPACITY};
 pub use duration::{dwell_s, scan_time, ScanTime};
 
-use gonio_firmware::board::HeadConfig;
+use gonio_firmware::config::HeadConfig;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::{move_time, target_steps};
 use gonio_shared::ScanSpec;

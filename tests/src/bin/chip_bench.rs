@@ -45,7 +45,7 @@
 //!   `probe_stack_bytes_max`: the probe image's own deepest point.
 
 use anyhow::{bail, Context, Result};
-use gonio_firmware::board::CPU_HZ;
+use gonio_firmware::config::CPU_HZ;
 use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
 use gonio_shared::scan::PLAN_CHUNK;
 use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};

@@ -19,7 +19,7 @@
 //!   order (`scan-bench` compares it with its lower bound) and in raster order (θi, θo, Δφ loops, Δφ innermost), moves under
 //!   the reference axis limits plus 50 ms settle and 100 ms integration per point.
 
-use gonio_firmware::board::{HeadConfig, REFERENCE};
+use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::hw::StepBlock;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::trapezoid_blocks;

@@ -8,7 +8,7 @@
 //!   (`scan_order::lower_bound`), beside the old nearest-neighbour plan's
 //!   figure (`old_plan_s`, replayed here).
 
-use gonio_firmware::board::{HeadConfig, REFERENCE};
+use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::motion::PARK;
 use gonio_host::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
 use gonio_shared::ScanSpec;

@@ -15,7 +15,7 @@ use core::task::{Context, Poll, Waker};
 use embassy_futures::yield_now as wait;
 use embedded_hal::digital::{ErrorType, InputPin, OutputPin};
 use embedded_hal_async::delay::DelayNs;
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::hw::{AdcStream, Board, ChopTiming, Clock, Hardware, Overrun, QueueFull, Sentry, StepBlock, StepTimer, Wake};
 use gonio_firmware::link::{Link, LinkError};
 

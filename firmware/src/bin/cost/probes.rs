@@ -11,7 +11,7 @@ use static_cell::StaticCell;
 // The vector table (the image is the chip's: cortex-m-rt wants its interrupts).
 use embassy_stm32 as _;
 use embedded_hal::digital::{ErrorType, OutputPin};
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::demod::{Design, Integrator, Reference};
 use gonio_firmware::dispatch;
 use gonio_firmware::head::HeadInfo;

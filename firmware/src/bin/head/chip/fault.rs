@@ -9,7 +9,7 @@ use cortex_m_rt::{exception, ExceptionFrame};
 
 #[exception]
 unsafe fn HardFault(_frame: &ExceptionFrame) -> ! {
-    super::board::force_safe_state();
+    super::pins::force_safe_state();
     loop {
         cortex_m::asm::nop();
     }

@@ -1,9 +1,9 @@
 //! Chip entry point: clocks, peripherals, tasks.
 
 mod adc_stream;
-mod board;
 mod cpu;
 mod fault;
+mod pins;
 mod sentry;
 mod step_timer;
 mod usb_link;
@@ -78,11 +78,11 @@ async fn main(spawner: Spawner) {
     let p = embassy_stm32::init(clocks());
     cpu::setup();
     defmt::info!("gonio head {} starting", env!("CARGO_PKG_VERSION"));
-    // Read before anything else can hang: the pins come up safe (board.rs),
+    // Read before anything else can hang: the pins come up safe (pins.rs),
     // the watchdog then guards the rest.
     let restarted_by_watchdog = watchdog::reset_cause();
     watchdog::start(&spawner, p.IWDG);
-    let pins = board::Pins::new(
+    let pins = pins::Pins::new(
         p.PA1, p.PA6, p.PB0, p.PB1, p.PB2, p.PC0, p.PC1, p.PC2, p.PC3, p.PC4, p.PC5, p.PC6, p.PC7, p.PC8, p.PC9, p.PC10, p.PC11,
     );
     let adc = TimedAdc::new(p.ADC1, pins.photodiode, p.DMA2_CH0, p.TIM2, p.TIM3, pins.chop);
@@ -103,12 +103,12 @@ async fn main(spawner: Spawner) {
         estop: embassy_stm32::exti::ExtiInput::new(p.PB12, p.EXTI12, embassy_stm32::gpio::Pull::Up, Irqs),
     };
     let info = HeadInfo {
-        board: board::NAME,
+        board: pins::NAME,
         serial: heapless::String::try_from(embassy_stm32::uid::uid_hex()).unwrap_or_default(),
         simulated: false,
         protocol_version: gonio_shared::PROTOCOL_VERSION,
     };
-    let mut head = Head::new(gonio_firmware::board::REFERENCE, hw, info);
+    let mut head = Head::new(gonio_firmware::config::REFERENCE, hw, info);
     if restarted_by_watchdog {
         head.restarted_by(gonio_shared::Fault::WatchdogReset);
     }

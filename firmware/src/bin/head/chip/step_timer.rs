@@ -13,7 +13,7 @@ use embassy_stm32::Peri;
 use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
 use embassy_sync::blocking_mutex::Mutex;
 use embassy_sync::signal::Signal;
-use gonio_firmware::board::REFERENCE;
+use gonio_firmware::config::REFERENCE;
 use gonio_firmware::hw::{QueueFull, StepBlock, StepTimer};
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::motion::step_irq::{self, CompareTimer};

@@ -1,6 +1,7 @@
-//! The reference head, in SI units: axis gearing, travel, speed limits, the
-//! arm's blind zone, detector gains and the ADC. The chip binary's board
-//! module maps these onto pins; the simulated head builds the same machine.
+//! The head's configuration, and the reference head's, in SI units: axis
+//! gearing, travel, speed limits, the arm's blind zone, detector gains and
+//! the ADC. The chip binary wires them to pins (`chip/pins.rs`); the
+//! simulated head builds the same machine.
 
 use gonio_shared::{Axis, AxisMechanics, Mechanics};
 
