@@ -3,11 +3,7 @@
 //! fuzzers hit. Keys are matched at the width the host chose (postcard-rpc
 //! shrinks keys when unambiguous) and replies use the same width.
 
-use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
-    StatusEndpoint,
-};
+use gonio_shared::icd::{AbortEndpoint, HomeRequest, MeasureRequest, PauseEndpoint};
 use gonio_shared::wire::{check, key_is};
 use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, PlanChunk, SafetySettings, SanityConfig, ScanSpec};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
@@ -58,16 +54,15 @@ fn body<'a, T: Deserialize<'a>>(hdr: VarHeader, bytes: &'a [u8]) -> Result<T, De
     postcard::from_bytes(bytes).map_err(|_| DecodeError::Wire(hdr, WireError::DeserFailed))
 }
 
-/// The one table of the endpoints the head answers: each command and the
-/// endpoint it comes on, with its request type (none: an empty body).
-/// [`Command`] and [`decode`] are generated from it, so a new endpoint is a
-/// line here, its line in `icd.rs` and its arm in the serve loop's `handle`.
+/// [`Command`] and [`decode`], generated from the one table of the head's
+/// endpoints (`gonio_shared::icd`): each command carries its endpoint's
+/// request (`()` for an empty body).
 macro_rules! commands {
-    ($( $variant:ident $( ( $ty:ty ) )? = $endpoint:ident ),* $(,)?) => {
+    ($( $variant:ident ( $ty:ty ) = $endpoint:path ),* $(,)?) => {
         /// A request from the host, decoded.
         #[derive(Debug, Clone, PartialEq)]
         pub enum Command {
-            $( $variant $( ($ty) )? ),*
+            $( $variant($ty) ),*
         }
 
         /// Decodes one frame into its header and command.
@@ -75,37 +70,15 @@ macro_rules! commands {
             let (hdr, rest) = VarHeader::take_from_slice(frame).ok_or(DecodeError::NoHeader)?;
             $(
                 if is::<$endpoint>(&hdr.key) {
-                    return commands!(@body hdr, rest, $variant $( $ty )?).map(|c| (hdr, c));
+                    return body::<$ty>(hdr, rest).map(|r| (hdr, Command::$variant(r)));
                 }
             )*
             Err(DecodeError::Wire(hdr, WireError::UnknownKey))
         }
     };
-    (@body $hdr:ident, $rest:ident, $variant:ident $ty:ty) => {
-        body::<$ty>($hdr, $rest).map(Command::$variant)
-    };
-    (@body $hdr:ident, $rest:ident, $variant:ident) => {
-        body::<()>($hdr, $rest).map(|()| Command::$variant)
-    };
 }
 
-commands! {
-    Identify = IdentifyEndpoint,
-    Status = StatusEndpoint,
-    Mechanics = MechanicsEndpoint,
-    Home(HomeRequest) = HomeEndpoint,
-    Move(Geometry) = MoveEndpoint,
-    Measure(MeasureRequest) = MeasureEndpoint,
-    Scan(ScanSpec) = ScanEndpoint,
-    Plan(PlanChunk) = PlanEndpoint,
-    Abort = AbortEndpoint,
-    Pause = PauseEndpoint,
-    Continue = ContinueEndpoint,
-    Detection(DetectionSettings) = DetectionEndpoint,
-    Sanity(SanityConfig) = SanityEndpoint,
-    Calibrate(CalibrateRequest) = CalibrateEndpoint,
-    Safety(SafetySettings) = SafetyEndpoint,
-}
+gonio_shared::for_each_endpoint!(commands);
 
 /// Encodes a message under `key` (shrunk to `kind`) into `buf`; returns the
 /// frame length, or `None` if it does not fit.

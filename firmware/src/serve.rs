@@ -341,9 +341,9 @@ impl<B: Board> Head<B> {
         self.talk.key_kind = hdr.key.kind();
         let seq = hdr.seq_no;
         match cmd {
-            Command::Identify => self.reply::<IdentifyEndpoint, L>(seq, &self.identity(), link).await,
-            Command::Status => self.reply::<StatusEndpoint, L>(seq, &self.status(), link).await,
-            Command::Mechanics => self.reply::<MechanicsEndpoint, L>(seq, &self.cfg.mechanics(), link).await,
+            Command::Identify(()) => self.reply::<IdentifyEndpoint, L>(seq, &self.identity(), link).await,
+            Command::Status(()) => self.reply::<StatusEndpoint, L>(seq, &self.status(), link).await,
+            Command::Mechanics(()) => self.reply::<MechanicsEndpoint, L>(seq, &self.cfg.mechanics(), link).await,
             Command::Home(r) => {
                 let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.home(r).await).await?;
                 self.reply::<HomeEndpoint, L>(seq, &resp, link).await
@@ -368,15 +368,15 @@ impl<B: Board> Head<B> {
                 let resp = self.queue_plan(&chunk);
                 self.reply::<PlanEndpoint, L>(seq, &resp, link).await
             }
-            Command::Abort => {
+            Command::Abort(()) => {
                 let resp = self.abort().await;
                 self.reply::<AbortEndpoint, L>(seq, &resp, link).await
             }
-            Command::Pause => {
+            Command::Pause(()) => {
                 let resp = self.pause().await;
                 self.reply::<PauseEndpoint, L>(seq, &resp, link).await
             }
-            Command::Continue => {
+            Command::Continue(()) => {
                 let resp = self.resume(sentry).await;
                 self.reply::<ContinueEndpoint, L>(seq, &resp, link).await
             }

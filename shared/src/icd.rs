@@ -69,25 +69,61 @@ pub type PauseReply = Reply<Status>;
 pub type ContinueReply = Reply<Status>;
 pub type PlanReply = Reply<PlanQueued>;
 
-endpoints! {
-    list = ENDPOINT_LIST;
-    | EndpointTy            | RequestTy         | ResponseTy              | Path                 |
-    | ----------            | ---------         | ----------              | ----                 |
-    | IdentifyEndpoint      | ()                | Identity                | "gonio/identify"     |
-    | StatusEndpoint        | ()                | Status                  | "gonio/status"       |
-    | MechanicsEndpoint     | ()                | Mechanics               | "gonio/mechanics"    |
-    | HomeEndpoint          | HomeRequest       | HomeReply               | "gonio/home"         |
-    | MoveEndpoint          | Geometry          | MoveReply               | "gonio/move"         |
-    | MeasureEndpoint       | MeasureRequest    | MeasureReply            | "gonio/measure"      |
-    | ScanEndpoint          | ScanSpec          | ScanReply               | "gonio/scan"         |
-    | AbortEndpoint         | ()                | Status                  | "gonio/abort"        |
-    | DetectionEndpoint     | DetectionSettings | DetectionReply          | "gonio/detection"    |
-    | SanityEndpoint        | SanityConfig      | SanityReply             | "gonio/sanity"       |
-    | CalibrateEndpoint     | CalibrateRequest  | CalibrateReply          | "gonio/calibrate"    |
-    | SafetyEndpoint        | SafetySettings    | SafetyReply             | "gonio/safety"       |
-    | PauseEndpoint         | ()                | PauseReply              | "gonio/pause"        |
-    | ContinueEndpoint      | ()                | ContinueReply           | "gonio/continue"     |
-    | PlanEndpoint          | PlanChunk         | PlanReply               | "gonio/plan"         |
+/// The one table of the head's endpoints: the command each carries, its
+/// marker type, request, response and path. It makes postcard-rpc's
+/// endpoints (keys, schemas, [`ENDPOINT_LIST`]) and [`for_each_endpoint!`],
+/// which hands the commands to code generated per endpoint (the firmware's
+/// `Command` and `decode`). A new endpoint is a row here and its arm in the
+/// firmware's `handle` (which the compiler asks for), plus the host client's
+/// typed method; the firmware's `dispatch.rs` imports its request type, as
+/// the generated code names request types as the caller sees them. Each
+/// type is one token (postcard-rpc's table takes no paths or generics): a
+/// reply type is an alias above.
+macro_rules! head_endpoints {
+    (
+        $d:tt
+        | Command | EndpointTy | RequestTy | ResponseTy | Path |
+        | $(-)* | $(-)* | $(-)* | $(-)* | $(-)* |
+        $( | $cmd:ident | $ep:ident | $req:tt | $resp:tt | $path:literal | )*
+    ) => {
+        endpoints! {
+            list = ENDPOINT_LIST;
+            | EndpointTy | RequestTy | ResponseTy | Path |
+            | ---------- | --------- | ---------- | ---- |
+            $( | $ep | $req | $resp | $path | )*
+        }
+
+        /// Calls `$m! { Command(Request) = Endpoint, ... }` with every
+        /// endpoint of the head, from the one table in `icd.rs` (the request
+        /// types are named as the caller imports them).
+        #[macro_export]
+        macro_rules! for_each_endpoint {
+            ($d m:ident) => {
+                $d m! { $( $cmd($req) = $d crate::icd::$ep, )* }
+            };
+        }
+    };
+}
+
+head_endpoints! {
+    $
+    | Command    | EndpointTy            | RequestTy         | ResponseTy              | Path                 |
+    | -------    | ----------            | ---------         | ----------              | ----                 |
+    | Identify   | IdentifyEndpoint      | ()                | Identity                | "gonio/identify"     |
+    | Status     | StatusEndpoint        | ()                | Status                  | "gonio/status"       |
+    | Mechanics  | MechanicsEndpoint     | ()                | Mechanics               | "gonio/mechanics"    |
+    | Home       | HomeEndpoint          | HomeRequest       | HomeReply               | "gonio/home"         |
+    | Move       | MoveEndpoint          | Geometry          | MoveReply               | "gonio/move"         |
+    | Measure    | MeasureEndpoint       | MeasureRequest    | MeasureReply            | "gonio/measure"      |
+    | Scan       | ScanEndpoint          | ScanSpec          | ScanReply               | "gonio/scan"         |
+    | Abort      | AbortEndpoint         | ()                | Status                  | "gonio/abort"        |
+    | Detection  | DetectionEndpoint     | DetectionSettings | DetectionReply          | "gonio/detection"    |
+    | Sanity     | SanityEndpoint        | SanityConfig      | SanityReply             | "gonio/sanity"       |
+    | Calibrate  | CalibrateEndpoint     | CalibrateRequest  | CalibrateReply          | "gonio/calibrate"    |
+    | Safety     | SafetyEndpoint        | SafetySettings    | SafetyReply             | "gonio/safety"       |
+    | Pause      | PauseEndpoint         | ()                | PauseReply              | "gonio/pause"        |
+    | Continue   | ContinueEndpoint      | ()                | ContinueReply           | "gonio/continue"     |
+    | Plan       | PlanEndpoint          | PlanChunk         | PlanReply               | "gonio/plan"         |
 }
 
 topics! {

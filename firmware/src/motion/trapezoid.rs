@@ -19,7 +19,7 @@ pub struct Trapezoid {
 }
 
 impl Trapezoid {
-    /// `v` and `a` must be positive and finite (the board configuration is).
+    /// `v` and `a` must be positive and finite (a `HeadConfig`'s are).
     pub fn new(n: u32, v: f64, a: f64) -> Self {
         let nf = n as f64;
         let (x1, peak) = if v * v / a >= nf {
