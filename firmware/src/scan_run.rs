@@ -4,7 +4,7 @@
 //! loop's watch); this says *what comes next*. Nothing here moves or
 //! measures, so every operation is a few integer steps.
 
-use gonio_shared::{Fault, Field, Geometry, PlanChunk, PlanQueued, Reply, ScanEvent, ScanSpec, PLAN_QUEUE};
+use gonio_shared::{Fault, Field, Geometry, PlanChunk, PlanQueued, Reply, Sample, ScanEvent, ScanSpec, PLAN_QUEUE};
 use heapless::Deque;
 
 pub(crate) struct ScanRun {
@@ -32,6 +32,14 @@ pub(crate) enum Next {
     Starved,
     /// Every point is done.
     Finished(ScanEvent),
+}
+
+/// What became of a visited point: its event, and whether the scan goes on.
+pub(crate) enum Recorded {
+    /// Measured or skipped: the scan goes on with its next point.
+    GoesOn(ScanEvent),
+    /// The visit failed for `reason`: the scan ends with this `Stopped` event.
+    Ends(Fault, ScanEvent),
 }
 
 impl ScanRun {
@@ -105,16 +113,23 @@ impl ScanRun {
         }
     }
 
-    /// The current point was measured.
-    pub(crate) fn measured(&mut self) {
-        self.measured += 1;
-        self.advance();
-    }
-
-    /// The current point was skipped (unreachable, or refused).
-    pub(crate) fn skipped(&mut self) {
-        self.skipped += 1;
-        self.advance();
+    /// Counts what became of point `index` at visit position `order`: a
+    /// sample goes on, an unreachable or refused geometry is skipped, any
+    /// other fault ends the scan (it resumes at this point).
+    pub(crate) fn record(&mut self, index: u32, order: u32, result: Reply<Sample>) -> Recorded {
+        match result {
+            Ok(s) => {
+                self.measured += 1;
+                self.advance();
+                Recorded::GoesOn(ScanEvent::Sample(s))
+            }
+            Err(reason @ (Fault::Unreachable(_) | Fault::InvalidValue(_))) => {
+                self.skipped += 1;
+                self.advance();
+                Recorded::GoesOn(ScanEvent::Skipped { index, order, reason })
+            }
+            Err(reason) => Recorded::Ends(reason, self.stopped(reason)),
+        }
     }
 
     fn advance(&mut self) {
@@ -139,5 +154,63 @@ impl ScanRun {
             next_order: self.next_order,
             reason,
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gonio_shared::Unreachable;
+
+    fn belcour_run(indices: &[u32]) -> ScanRun {
+        let spec = ScanSpec::belcour();
+        let total = spec.validate().unwrap();
+        let mut run = ScanRun::new(1, spec, total);
+        let chunk = PlanChunk {
+            run: 1,
+            first_order: 0,
+            indices: heapless::Vec::from_slice(indices).unwrap(),
+        };
+        assert_eq!(run.queue(&chunk).unwrap().next_order, indices.len() as u32);
+        run
+    }
+
+    fn visit(run: &mut ScanRun) -> (u32, u32) {
+        match run.next() {
+            Next::Visit { index, order, .. } => (index, order),
+            _ => panic!("a queued point is visited next"),
+        }
+    }
+
+    #[test]
+    fn a_skipped_point_goes_on_and_a_failed_one_ends_the_scan_where_it_failed() {
+        let mut run = belcour_run(&[5, 7, 9]);
+        assert_eq!(visit(&mut run), (5, 0));
+        let unreachable = Fault::Unreachable(Unreachable::BlindZone);
+        match run.record(5, 0, Err(unreachable)) {
+            Recorded::GoesOn(ScanEvent::Skipped {
+                index: 5,
+                order: 0,
+                reason,
+            }) => assert_eq!(reason, unreachable),
+            _ => panic!("an unreachable point is skipped"),
+        }
+        assert_eq!(visit(&mut run), (7, 1));
+        match run.record(7, 1, Err(Fault::WeakSignal)) {
+            Recorded::Ends(
+                Fault::WeakSignal,
+                ScanEvent::Stopped {
+                    run: 1,
+                    next_order: 1,
+                    reason,
+                },
+            ) => {
+                assert_eq!(reason, Fault::WeakSignal)
+            }
+            _ => panic!("a failed visit ends the scan"),
+        }
+        // Held instead of dropped, it would visit the failed point again.
+        assert_eq!(visit(&mut run), (7, 1));
+        assert_eq!(run.progress(), (1, 1, 3441));
     }
 }

@@ -14,7 +14,7 @@ use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
 use crate::head::Head;
 use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
-use crate::scan_run::Next;
+use crate::scan_run::{Next, Recorded};
 use crate::state::{Event, Mode};
 use embassy_futures::select::{select, Either};
 use embedded_hal_async::delay::DelayNs;
@@ -26,7 +26,7 @@ use gonio_shared::icd::{
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::wire::check;
 use gonio_shared::wire::framing::MAX_FRAME;
-use gonio_shared::{Fault, Reply, ScanEvent, Status};
+use gonio_shared::{Fault, Reply, Status};
 use heapless::{Deque, Vec};
 use postcard_rpc::header::VarSeq;
 use postcard_rpc::standard_icd::{WireError, ERROR_KEY};
@@ -402,16 +402,20 @@ impl<B: Board> Head<B> {
             self.tripped(Trip::HostSilent).await?;
             return Ok(());
         }
-        let Some(run) = self.scan.as_mut() else {
+        // The run is out of the head while its point is visited (the visit
+        // needs the whole head), and goes back unless the visit ended it.
+        let Some(mut run) = self.scan.take() else {
             // Nothing to scan (cannot happen: scanning starts with a run).
             let _ = self.apply(Event::Done);
             return Ok(());
         };
         let (index, order, g) = match run.next() {
             Next::Visit { index, order, at } => (index, order, at),
-            Next::Starved => return self.starved(link, sentry, inbox).await,
+            Next::Starved => {
+                self.scan = Some(run);
+                return self.starved(link, sentry, inbox).await;
+            }
             Next::Finished(ev) => {
-                self.scan = None;
                 let _ = self.apply(Event::Done);
                 return self.publish::<ScanEventTopic, L>(&ev, link).await;
             }
@@ -422,31 +426,24 @@ impl<B: Board> Head<B> {
             // completed it is not sent, and the scan resumes at it.
             h.acquire(Some(g), at).await.and_then(|s| h.watch(&s).map(|()| s))
         };
-        let ev = match self.guarded(link, sentry, inbox, true, visit).await {
+        let result = match self.guarded(link, sentry, inbox, true, visit).await {
+            Ok(result) => result,
             Err(trip) => {
+                // Held or dropped with its event, as any stop does.
+                self.scan = Some(run);
                 self.tripped(trip).await?;
                 return Ok(());
             }
-            Ok(Ok(s)) => {
-                if let Some(run) = self.scan.as_mut() {
-                    run.measured();
-                }
-                ScanEvent::Sample(s)
+        };
+        let ev = match run.record(index, order, result) {
+            Recorded::GoesOn(ev) => {
+                self.scan = Some(run);
+                ev
             }
-            Ok(Err(reason @ (Fault::Unreachable(_) | Fault::InvalidValue(_)))) => {
-                if let Some(run) = self.scan.as_mut() {
-                    run.skipped();
-                }
-                ScanEvent::Skipped { index, order, reason }
-            }
-            Ok(Err(reason)) => {
-                let ev = self.scan.take().map(|r| r.stopped(reason));
+            Recorded::Ends(reason, ev) => {
                 self.last_fault = Some(reason);
                 let _ = self.apply(Event::Failed);
-                match ev {
-                    Some(ev) => ev,
-                    None => return Ok(()),
-                }
+                ev
             }
         };
         self.publish::<ScanEventTopic, L>(&ev, link).await

@@ -6,14 +6,9 @@ use crate::target::{Opened, Target};
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MechanicsEndpoint, MoveEndpoint, MoveReport, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
-    ScanEventTopic, StatusEndpoint,
+    Answer, ContinueEndpoint, HeadEndpoint, IdentifyEndpoint, Latency, MechanicsEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
-use gonio_shared::{
-    AxisAngles, CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Identity, PlanChunk, PlanQueued,
-    SafetySettings, Sample, SanityConfig, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION,
-};
+use gonio_shared::{Identity, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION};
 use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
 use postcard_rpc::standard_icd::WireError;
 use postcard_rpc::Endpoint;
@@ -23,8 +18,9 @@ use serde::Serialize;
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-/// Timeouts: quick requests, and the ones that move the stages. A lost
-/// request is found much sooner than these (see [`watched`]).
+/// Timeouts of the three [`Latency`] classes: prompt requests, the ones that
+/// move the stages, homing. A lost request is found much sooner than these
+/// (see [`watched`]).
 const QUICK: Duration = Duration::from_secs(5);
 const HOMING: Duration = Duration::from_secs(300);
 const MOTION: Duration = Duration::from_secs(120);
@@ -93,56 +89,18 @@ impl Head {
         &self.config
     }
 
-    pub async fn status(&self) -> Result<Status> {
-        Ok(call::<StatusEndpoint>(&self.client, &(), QUICK).await?)
-    }
-
-    pub async fn home(&self) -> Result<AxisAngles> {
-        fault(watched::<HomeEndpoint>(&self.client, &HomeRequest::ALL, HOMING).await?).context("homing failed")
-    }
-
-    pub async fn move_to(&self, g: Geometry) -> Result<MoveReport> {
-        fault(watched::<MoveEndpoint>(&self.client, &g, MOTION).await?).context("move refused")
-    }
-
-    pub async fn measure(&self, at: Option<Geometry>) -> Result<Sample> {
-        fault(watched::<MeasureEndpoint>(&self.client, &MeasureRequest { at }, MOTION).await?).context("measurement failed")
-    }
-
-    pub async fn detection(&self, s: DetectionSettings) -> Result<DetectionReport> {
-        fault(watched::<DetectionEndpoint>(&self.client, &s, QUICK).await?).context("detection settings refused")
-    }
-
-    /// Learns the detection chain on the signal at the current position.
-    pub async fn calibrate(&self, periods: u16) -> Result<CalibrationReport> {
-        fault(watched::<CalibrateEndpoint>(&self.client, &CalibrateRequest { periods }, MOTION).await?)
-            .context("detector calibration failed")
-    }
-
-    /// Loads the model, scale and tolerance band the head checks samples against.
-    pub async fn sanity(&self, cfg: SanityConfig) -> Result<()> {
-        fault(watched::<SanityEndpoint>(&self.client, &cfg, QUICK).await?).context("sanity model refused")
-    }
-
-    /// Sets how long the head tolerates host silence during a scan.
-    pub async fn safety(&self, s: SafetySettings) -> Result<()> {
-        fault(watched::<SafetyEndpoint>(&self.client, &s, QUICK).await?).context("safety settings refused")
-    }
-
-    pub async fn abort(&self) -> Result<Status> {
-        Ok(watched::<AbortEndpoint>(&self.client, &(), QUICK).await?)
-    }
-
-    /// Holds the running scan at its next position (a move in progress is
-    /// braked); its events end with `ScanEvent::Paused`.
-    pub async fn pause(&self) -> Result<Status> {
-        fault(watched::<PauseEndpoint>(&self.client, &(), MOTION).await?).context("pause refused")
-    }
-
-    /// Continues a held scan where it stopped (its events go on under the
-    /// same run), or re-arms the head after its E-STOP was closed.
-    pub async fn continue_scan(&self) -> Result<Status> {
-        fault(watched::<ContinueEndpoint>(&self.client, &(), QUICK).await?).context("continue refused")
+    /// Sends any request of the head's endpoint table and waits for its
+    /// answer as long as the endpoint's [`Latency`] allows (a lost request is
+    /// found much sooner: see [`watched`]). A refusal is an error naming the
+    /// endpoint and the head's reason.
+    pub async fn request<E>(&self, req: &E::Request) -> Result<<E::Response as Answer>::Accepted>
+    where
+        E: HeadEndpoint,
+        E::Request: Serialize + Schema,
+        E::Response: DeserializeOwned + Schema + Answer,
+    {
+        let answer = watched::<E>(&self.client, req, timeout(E::LATENCY)).await?;
+        answer.accepted().map_err(|f| anyhow!("{}: head refused: {f}", E::PATH))
     }
 
     /// Subscribes to scan events; opened before a request that starts them.
@@ -156,21 +114,15 @@ impl Head {
     /// Continues a held scan; its further events arrive on the subscription.
     pub async fn continue_events(&self) -> Result<(Status, Subscription<ScanEvent>)> {
         let sub = self.scan_events().await?;
-        Ok((self.continue_scan().await?, sub))
+        Ok((self.request::<ContinueEndpoint>(&()).await?, sub))
     }
 
     /// Starts a scan; its events arrive on the returned subscription, which is
     /// opened before the request so none is missed.
     pub async fn start_scan(&self, spec: &ScanSpec) -> Result<(ScanAccepted, Subscription<ScanEvent>)> {
         let sub = self.scan_events().await?;
-        let accepted = fault(watched::<ScanEndpoint>(&self.client, spec, QUICK).await?).context("scan refused")?;
+        let accepted = self.request::<ScanEndpoint>(spec).await?;
         Ok((accepted, sub))
-    }
-
-    /// Queues the next stretch of a scan's visit order on the head (answered
-    /// between two points: as long as a point may take).
-    pub async fn plan(&self, chunk: &PlanChunk) -> Result<PlanQueued> {
-        fault(watched::<PlanEndpoint>(&self.client, chunk, MOTION).await?).context("plan refused")
     }
 
     /// Closes the link: the port is released (another client may open it at
@@ -197,8 +149,13 @@ pub fn is_link_loss(e: &anyhow::Error) -> bool {
     })
 }
 
-fn fault<T>(r: gonio_shared::Reply<T>) -> Result<T> {
-    r.map_err(|f| anyhow!("head refused: {f}"))
+/// How long the host waits for an answer of the given latency.
+fn timeout(latency: Latency) -> Duration {
+    match latency {
+        Latency::Prompt => QUICK,
+        Latency::Motion => MOTION,
+        Latency::Homing => HOMING,
+    }
 }
 
 /// Why a request got no valid answer.

@@ -7,6 +7,9 @@ use crate::scan_order::visit_order;
 use crate::session::Session;
 use anyhow::{bail, Context, Result};
 use gonio_firmware::motion::PARK;
+use gonio_shared::icd::{
+    AbortEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, PauseEndpoint, PlanEndpoint, StatusEndpoint,
+};
 use gonio_shared::{Fault, Geometry, HeadState, PlanChunk, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
 use indicatif::ProgressBar;
 use serde::Serialize;
@@ -210,7 +213,7 @@ impl ScanDriver<'_> {
             Interruption::Rehome(_) => self
                 .session
                 .head()
-                .home()
+                .request::<HomeEndpoint>(&HomeRequest::ALL)
                 .await
                 .map(drop)
                 .with_context(|| format!("homing after a stalled move; resume from position {next}")),
@@ -249,7 +252,7 @@ impl ScanDriver<'_> {
         // A scan the head holds where this stretch begins (paused for the
         // monitor, or after host silence or a lost link) is continued
         // without replanning; otherwise it starts (or replaces the held one).
-        let held = match head.status().await {
+        let held = match head.request::<StatusEndpoint>(&()).await {
             Ok(st) => {
                 clock.start(st.uptime_us);
                 match st.state {
@@ -291,7 +294,7 @@ impl ScanDriver<'_> {
                     // No event for a while: ask the head where it is (this is
                     // also the heartbeat the head watches for).
                     beat = Instant::now();
-                    let st = match head.status().await {
+                    let st = match head.request::<StatusEndpoint>(&()).await {
                         Ok(st) => st,
                         Err(e) => return lost(e, expected),
                     };
@@ -306,7 +309,7 @@ impl ScanDriver<'_> {
                             continue;
                         }
                         HeadState::Scanning { .. } => {
-                            if let Err(e) = head.abort().await {
+                            if let Err(e) = head.request::<AbortEndpoint>(&()).await {
                                 return lost(e, expected);
                             }
                             return Ok(Stretch::Interrupted(expected, Interruption::Gap));
@@ -324,7 +327,7 @@ impl ScanDriver<'_> {
             };
             if beat.elapsed() > self.session.heartbeat() {
                 beat = Instant::now();
-                if let Err(e) = head.status().await {
+                if let Err(e) = head.request::<StatusEndpoint>(&()).await {
                     return lost(e, expected);
                 }
             }
@@ -340,7 +343,7 @@ impl ScanDriver<'_> {
                     continue;
                 }
                 if o > expected {
-                    if let Err(e) = head.abort().await {
+                    if let Err(e) = head.request::<AbortEndpoint>(&()).await {
                         return lost(e, expected);
                     }
                     return Ok(Stretch::Interrupted(expected, Interruption::Gap));
@@ -391,7 +394,7 @@ impl ScanDriver<'_> {
             }
             pb.set_message(format!("{} measured, {} unreachable", outcome.measured, outcome.skipped));
             if !pausing && stop_at.is_some_and(|p| expected >= p && expected < outcome.points) {
-                if let Err(e) = head.pause().await {
+                if let Err(e) = head.request::<PauseEndpoint>(&()).await {
                     return lost(e.context("pausing the scan for the laser-drift monitor"), expected);
                 }
                 pausing = true;
@@ -416,7 +419,7 @@ pub async fn feed(head: &Head, run: u32, order: &[u32], mut from: u32) -> Result
             first_order: from,
             indices: rest.iter().copied().take(PLAN_CHUNK).collect(),
         };
-        match head.plan(&chunk).await {
+        match head.request::<PlanEndpoint>(&chunk).await {
             // A chunk taken in part filled the queue: room is then 0.
             Ok(q) => {
                 from = q.next_order;
@@ -440,7 +443,10 @@ pub const MONITOR_READINGS: usize = 4;
 async fn read_monitor(head: &Head, m: &Monitor, out: &mut SampleWriter, clock: &mut HeadClock) -> Result<()> {
     for k in 0..MONITOR_READINGS {
         let at = (k == 0).then_some(m.at);
-        let s = head.measure(at).await.context("measuring the laser-drift monitor")?;
+        let s = head
+            .request::<MeasureEndpoint>(&MeasureRequest { at })
+            .await
+            .context("measuring the laser-drift monitor")?;
         out.push(&s)?;
         clock.saw(s.timestamp_us);
     }

@@ -8,7 +8,10 @@ use crate::client::{is_link_loss, Head};
 use crate::operator::Operator;
 use crate::target::Target;
 use anyhow::{bail, Context, Result};
-use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Geometry, Reference, SafetySettings};
+use gonio_shared::icd::{
+    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MoveEndpoint, SafetyEndpoint, StatusEndpoint,
+};
+use gonio_shared::{CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Reference, SafetySettings};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -71,18 +74,24 @@ impl Session {
         // A head found again may still be running the scan whose answer was
         // lost (its events then went nowhere): stop it first, or every
         // setting below would be refused as busy.
-        head.abort().await?;
+        head.request::<AbortEndpoint>(&()).await?;
         // The chop timing is set first: a calibration holds for that timing.
-        head.detection(DetectionSettings {
+        head.request::<DetectionEndpoint>(&DetectionSettings {
             reference: Reference::Square,
             ..self.setup.settings
         })
         .await?;
-        head.home().await?;
+        head.request::<HomeEndpoint>(&HomeRequest::ALL).await?;
         let calibration = match self.setup.calibrate_at {
             Some(g) => {
-                head.move_to(g).await.context("moving to the calibration geometry")?;
-                let c = head.calibrate(self.setup.calibration_periods).await?;
+                head.request::<MoveEndpoint>(&g)
+                    .await
+                    .context("moving to the calibration geometry")?;
+                let c = head
+                    .request::<CalibrateEndpoint>(&CalibrateRequest {
+                        periods: self.setup.calibration_periods,
+                    })
+                    .await?;
                 self.operator.notice(format_args!(
                     "detector calibrated: phase {:.1}°, {:.3} V at gain {}, SNR {:.0}",
                     c.phase_deg, c.amplitude_v, c.gain_index, c.snr
@@ -91,12 +100,12 @@ impl Session {
             }
             None => None,
         };
-        let detection = head.detection(self.setup.settings).await?;
+        let detection = head.request::<DetectionEndpoint>(&self.setup.settings).await?;
         // What the head reports of itself, whatever link it is on (a
         // simulated head on a pseudo-terminal too): a watch kept on a
         // simulated clock would trip between the host's wall-clock messages.
         let watch = if head.identity().simulated { 0.0 } else { HOST_TIMEOUT_S };
-        head.safety(SafetySettings {
+        head.request::<SafetyEndpoint>(&SafetySettings {
             host_timeout_s: watch,
             ..SafetySettings::default()
         })
@@ -178,7 +187,7 @@ impl Session {
         self.detection.is_some()
             && self
                 .head()
-                .status()
+                .request::<StatusEndpoint>(&())
                 .await
                 .is_ok_and(|st| st.homed && matches!(st.state, gonio_shared::HeadState::Paused { .. }))
     }

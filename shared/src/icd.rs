@@ -18,7 +18,7 @@ use crate::sanity::SanityConfig;
 use crate::scan::{PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec};
 use crate::status::Status;
 use crate::Reply;
-use postcard_rpc::{endpoints, topics, TopicDirection};
+use postcard_rpc::{endpoints, topics, Endpoint, TopicDirection};
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
 
@@ -56,6 +56,51 @@ pub struct MeasureRequest {
     pub at: Option<Geometry>,
 }
 
+/// How long the head may take to answer a request, a promise of its serve
+/// loop: the host's timeout for each request follows from it.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Latency {
+    /// Answered at once: settings, status, abort, a scan's acceptance.
+    Prompt,
+    /// Answered after a move, a measured point or a calibration: seconds,
+    /// a minute or two for the longest move.
+    Motion,
+    /// Answered once every axis has homed: minutes.
+    Homing,
+}
+
+/// An endpoint of the head's table, with how long its answer may take.
+pub trait HeadEndpoint: Endpoint {
+    const LATENCY: Latency;
+}
+
+/// What a request's answer says: accepted, with what it carries, or refused
+/// with a [`Fault`]. Requests that cannot be refused answer with their value.
+pub trait Answer {
+    type Accepted;
+    fn accepted(self) -> Reply<Self::Accepted>;
+}
+
+impl<T> Answer for Reply<T> {
+    type Accepted = T;
+    fn accepted(self) -> Reply<T> {
+        self
+    }
+}
+
+/// Answers that cannot be a refusal.
+macro_rules! always_accepted {
+    ($($t:ty),*) => {$(
+        impl Answer for $t {
+            type Accepted = $t;
+            fn accepted(self) -> Reply<$t> {
+                Ok(self)
+            }
+        }
+    )*};
+}
+always_accepted!(Identity, Status, Mechanics);
+
 // The endpoint table takes plain type names, so each reply type is named here.
 pub type HomeReply = Reply<AxisAngles>;
 pub type MoveReply = Reply<MoveReport>;
@@ -70,21 +115,24 @@ pub type ContinueReply = Reply<Status>;
 pub type PlanReply = Reply<PlanQueued>;
 
 /// The one table of the head's endpoints: the command each carries, its
-/// marker type, request, response and path. It makes postcard-rpc's
-/// endpoints (keys, schemas, [`ENDPOINT_LIST`]) and [`for_each_endpoint!`],
-/// which hands the commands to code generated per endpoint (the firmware's
-/// `Command` and `decode`). A new endpoint is a row here and its arm in the
-/// firmware's `handle` (which the compiler asks for), plus the host client's
-/// typed method; the firmware's `dispatch.rs` imports its request type, as
+/// marker type, request, response, path and [`Latency`]. It makes
+/// postcard-rpc's endpoints (keys, schemas, [`ENDPOINT_LIST`]), their
+/// [`HeadEndpoint`] latencies and [`for_each_endpoint!`], which hands the
+/// commands to code generated per endpoint (the firmware's `Command` and
+/// `decode`). A new endpoint is a row here and its arm in the firmware's
+/// `handle` (which the compiler asks for); the host's client sends any
+/// endpoint of the table (`Head::request`), and a response type that cannot
+/// be refused also needs its line in `always_accepted!`. The firmware's
+/// `dispatch.rs` imports its request type, as
 /// the generated code names request types as the caller sees them. Each
 /// type is one token (postcard-rpc's table takes no paths or generics): a
 /// reply type is an alias above.
 macro_rules! head_endpoints {
     (
         $d:tt
-        | Command | EndpointTy | RequestTy | ResponseTy | Path |
-        | $(-)* | $(-)* | $(-)* | $(-)* | $(-)* |
-        $( | $cmd:ident | $ep:ident | $req:tt | $resp:tt | $path:literal | )*
+        | Command | EndpointTy | RequestTy | ResponseTy | Path | Latency |
+        | $(-)* | $(-)* | $(-)* | $(-)* | $(-)* | $(-)* |
+        $( | $cmd:ident | $ep:ident | $req:tt | $resp:tt | $path:literal | $lat:ident | )*
     ) => {
         endpoints! {
             list = ENDPOINT_LIST;
@@ -92,6 +140,10 @@ macro_rules! head_endpoints {
             | ---------- | --------- | ---------- | ---- |
             $( | $ep | $req | $resp | $path | )*
         }
+
+        $( impl HeadEndpoint for $ep {
+            const LATENCY: Latency = Latency::$lat;
+        } )*
 
         /// Calls `$m! { Command(Request) = Endpoint, ... }` with every
         /// endpoint of the head, from the one table in `icd.rs` (the request
@@ -107,23 +159,23 @@ macro_rules! head_endpoints {
 
 head_endpoints! {
     $
-    | Command    | EndpointTy            | RequestTy         | ResponseTy              | Path                 |
-    | -------    | ----------            | ---------         | ----------              | ----                 |
-    | Identify   | IdentifyEndpoint      | ()                | Identity                | "gonio/identify"     |
-    | Status     | StatusEndpoint        | ()                | Status                  | "gonio/status"       |
-    | Mechanics  | MechanicsEndpoint     | ()                | Mechanics               | "gonio/mechanics"    |
-    | Home       | HomeEndpoint          | HomeRequest       | HomeReply               | "gonio/home"         |
-    | Move       | MoveEndpoint          | Geometry          | MoveReply               | "gonio/move"         |
-    | Measure    | MeasureEndpoint       | MeasureRequest    | MeasureReply            | "gonio/measure"      |
-    | Scan       | ScanEndpoint          | ScanSpec          | ScanReply               | "gonio/scan"         |
-    | Abort      | AbortEndpoint         | ()                | Status                  | "gonio/abort"        |
-    | Detection  | DetectionEndpoint     | DetectionSettings | DetectionReply          | "gonio/detection"    |
-    | Sanity     | SanityEndpoint        | SanityConfig      | SanityReply             | "gonio/sanity"       |
-    | Calibrate  | CalibrateEndpoint     | CalibrateRequest  | CalibrateReply          | "gonio/calibrate"    |
-    | Safety     | SafetyEndpoint        | SafetySettings    | SafetyReply             | "gonio/safety"       |
-    | Pause      | PauseEndpoint         | ()                | PauseReply              | "gonio/pause"        |
-    | Continue   | ContinueEndpoint      | ()                | ContinueReply           | "gonio/continue"     |
-    | Plan       | PlanEndpoint          | PlanChunk         | PlanReply               | "gonio/plan"         |
+    | Command    | EndpointTy            | RequestTy         | ResponseTy              | Path                 | Latency  |
+    | -------    | ----------            | ---------         | ----------              | ----                 | -------  |
+    | Identify   | IdentifyEndpoint      | ()                | Identity                | "gonio/identify"     | Prompt   |
+    | Status     | StatusEndpoint        | ()                | Status                  | "gonio/status"       | Prompt   |
+    | Mechanics  | MechanicsEndpoint     | ()                | Mechanics               | "gonio/mechanics"    | Prompt   |
+    | Home       | HomeEndpoint          | HomeRequest       | HomeReply               | "gonio/home"         | Homing   |
+    | Move       | MoveEndpoint          | Geometry          | MoveReply               | "gonio/move"         | Motion   |
+    | Measure    | MeasureEndpoint       | MeasureRequest    | MeasureReply            | "gonio/measure"      | Motion   |
+    | Scan       | ScanEndpoint          | ScanSpec          | ScanReply               | "gonio/scan"         | Prompt   |
+    | Abort      | AbortEndpoint         | ()                | Status                  | "gonio/abort"        | Prompt   |
+    | Detection  | DetectionEndpoint     | DetectionSettings | DetectionReply          | "gonio/detection"    | Prompt   |
+    | Sanity     | SanityEndpoint        | SanityConfig      | SanityReply             | "gonio/sanity"       | Prompt   |
+    | Calibrate  | CalibrateEndpoint     | CalibrateRequest  | CalibrateReply          | "gonio/calibrate"    | Motion   |
+    | Safety     | SafetyEndpoint        | SafetySettings    | SafetyReply             | "gonio/safety"       | Prompt   |
+    | Pause      | PauseEndpoint         | ()                | PauseReply              | "gonio/pause"        | Motion   |
+    | Continue   | ContinueEndpoint      | ()                | ContinueReply           | "gonio/continue"     | Prompt   |
+    | Plan       | PlanEndpoint          | PlanChunk         | PlanReply               | "gonio/plan"         | Motion   |
 }
 
 topics! {

@@ -13,6 +13,9 @@ use gonio_host::scan;
 use gonio_host::scan_order::{dwell_s, scan_time, visit_order};
 use gonio_host::session::{Session, Setup};
 use gonio_host::target::{Port, Target};
+use gonio_shared::icd::{
+    AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint, StatusEndpoint,
+};
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, Reference, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
 use gonio_sim::{serve_pty, SimConfig};
 use gonio_tests::scanning::scan_and_read;
@@ -31,8 +34,8 @@ fn small_grid() -> ScanSpec {
 
 async fn homed(target: &dyn Target) -> Head {
     let head = Head::connect(target).await.unwrap();
-    head.detection(DetectionSettings::default()).await.unwrap();
-    head.home().await.unwrap();
+    head.request::<DetectionEndpoint>(&DetectionSettings::default()).await.unwrap();
+    head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
     head
 }
 
@@ -166,26 +169,31 @@ async fn a_protocol_version_mismatch_is_named() {
 #[tokio::test]
 async fn refused_commands_move_nothing() {
     let head = Head::connect(&Simulated::default()).await.unwrap();
-    let err = head.measure(Some(Geometry::new(30.0, 30.0, 0.0))).await.unwrap_err();
+    let err = head
+        .request::<MeasureEndpoint>(&MeasureRequest {
+            at: Some(Geometry::new(30.0, 30.0, 0.0)),
+        })
+        .await
+        .unwrap_err();
     assert!(format!("{err:#}").contains("not homed"), "{err:#}");
     let matched = DetectionSettings {
         reference: Reference::Matched,
         ..DetectionSettings::default()
     };
-    let err = head.detection(matched).await.unwrap_err();
+    let err = head.request::<DetectionEndpoint>(&matched).await.unwrap_err();
     assert!(format!("{err:#}").contains("not calibrated"), "{err:#}");
-    head.home().await.unwrap();
-    let before = head.status().await.unwrap();
+    head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
+    let before = head.request::<StatusEndpoint>(&()).await.unwrap();
     for (g, why) in [
         (Geometry::new(30.0, 33.0, 0.0), "blind zone"),
         (Geometry::new(30.0, 95.0, 0.0), "behind the sample"),
         (Geometry::new(f32::NAN, 10.0, 0.0), "invalid theta_i"),
         (Geometry::new(87.0, 87.0, 180.0), "travel of the arm"),
     ] {
-        let err = head.move_to(g).await.unwrap_err();
+        let err = head.request::<MoveEndpoint>(&g).await.unwrap_err();
         assert!(format!("{err:#}").contains(why), "{g:?}: {err:#}");
     }
-    let after = head.status().await.unwrap();
+    let after = head.request::<StatusEndpoint>(&()).await.unwrap();
     assert_eq!(before.axes, after.axes);
     assert!(!after.laser_on);
     head.close().await;
@@ -202,7 +210,7 @@ async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() 
     for _ in 0..5 {
         events.recv().await.unwrap();
     }
-    let st = head.abort().await.unwrap();
+    let st = head.request::<AbortEndpoint>(&()).await.unwrap();
     assert_eq!(st.state, HeadState::Idle);
     assert!(!st.laser_on);
     let next = loop {
@@ -228,7 +236,7 @@ async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() 
         other => panic!("{other:?}"),
     };
     assert_eq!(first, next);
-    head.abort().await.unwrap();
+    head.request::<AbortEndpoint>(&()).await.unwrap();
     drop(events);
     head.close().await;
 }
@@ -260,7 +268,7 @@ async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
     session.close().await;
     // A second session on the same head works too.
     let again = Head::connect(&target).await.unwrap();
-    assert!(again.status().await.unwrap().homed);
+    assert!(again.request::<StatusEndpoint>(&()).await.unwrap().homed);
     again.close().await;
 }
 
@@ -324,7 +332,7 @@ async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before
     let move_s = gonio_firmware::motion::move_time(&REFERENCE, [0, 1, 2].map(|i| b[i] - a[i]));
     assert!(move_s > 8.0, "the move between the points takes {move_s} s");
     let head = Head::connect(&target).await.unwrap();
-    head.home().await.unwrap();
+    head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
     let (accepted, mut events) = head.start_scan(&spec).await.unwrap();
     scan::feed(&head, accepted.run, &[0, 1], 0).await.unwrap();
     let first = match events.recv().await.unwrap() {
@@ -340,14 +348,14 @@ async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before
     // hang-up is a level, not an edge: the head must see it).
     tokio::time::sleep(Duration::from_millis(50)).await;
     let again = Head::connect(&target).await.unwrap();
-    let st = again.status().await.unwrap();
+    let st = again.request::<StatusEndpoint>(&()).await.unwrap();
     assert!(matches!(st.state, HeadState::Paused { next_order: 1, .. }), "{:?}", st.state);
     assert!(!st.laser_on, "laser on after the link was pulled");
     assert!(!st.drivers_enabled && st.homed);
     // Stopped, and well short of the second point: the axes no longer move
     // although the move had most of its 8 s to go.
     tokio::time::sleep(Duration::from_millis(50)).await;
-    let st2 = again.status().await.unwrap();
+    let st2 = again.request::<StatusEndpoint>(&()).await.unwrap();
     assert_eq!(st.axes, st2.axes, "the motors still move");
     let reached = kinematics::forward(&st2.axes);
     assert!(reached.theta_i_deg < 60.0, "the move nearly reached its end: {reached:?}");

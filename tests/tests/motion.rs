@@ -15,6 +15,7 @@ use gonio_firmware::motion::{move_by, trapezoid, Position};
 use gonio_firmware::units;
 use gonio_host::cli::simulated::Simulated;
 use gonio_host::client::Head;
+use gonio_shared::icd::{HomeEndpoint, HomeRequest, MoveEndpoint, StatusEndpoint};
 use gonio_shared::{Axis, Geometry};
 use gonio_tests::doubles::{FixedClock, ScriptedAdc};
 use gonio_tests::step_log::{executor, run, LogPin, Scope};
@@ -224,10 +225,10 @@ proptest! {
         let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
         rt.block_on(async {
             let head = Head::connect(&Simulated::default()).await.unwrap();
-            head.home().await.unwrap();
+            head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
             for g in cmds {
-                let _ = head.move_to(g).await;
-                let a = head.status().await.unwrap().axes;
+                let _ = head.request::<MoveEndpoint>(&g).await;
+                let a = head.request::<StatusEndpoint>(&()).await.unwrap().axes;
                 for (axis, deg) in [(0, a.omega_deg), (1, a.tau_deg), (2, a.psi_deg)] {
                     let c = &REFERENCE.axes[axis];
                     assert!(deg >= c.min_deg && deg <= c.max_deg, "axis {axis} at {deg}° after {g:?}");

@@ -6,6 +6,7 @@ use gonio_brdf::{Directions, Material, Specimen};
 use gonio_host::cli::simulated::Simulated;
 use gonio_host::operator::Operator;
 use gonio_host::session::{Session, Setup};
+use gonio_shared::icd::{MeasureEndpoint, MeasureRequest, SanityEndpoint, StatusEndpoint};
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, SampleFlags, SanityConfig, ScanSpec};
 use gonio_sim::SimConfig;
 use gonio_tests::scanning::scan_and_read;
@@ -45,10 +46,10 @@ async fn dust_is_flagged_and_clean_data_is_not() {
 
     // The instrument constant from one clean point, as a reference plate would give it.
     let at = Geometry::new(30.0, 20.0, 90.0);
-    let s = head.measure(Some(at)).await.unwrap();
+    let s = head.request::<MeasureEndpoint>(&MeasureRequest { at: Some(at) }).await.unwrap();
     let d = Directions::from_degrees(at.theta_i_deg as f64, at.theta_o_deg as f64, at.dphi_deg as f64);
     let current = s.signal.amplitude_v as f64 / s.signal.gain_v_per_a as f64 / (material.eval(&d) * d.cos_o());
-    head.sanity(SanityConfig {
+    head.request::<SanityEndpoint>(&SanityConfig {
         model: material.sanity_model().unwrap(),
         current_a_per_sr_inv: current as f32,
         splitter_factor: sim.photodiode.splitter_factor as f32,
@@ -62,7 +63,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
 
     let dir = tempfile::tempdir().unwrap();
     let (_, rows) = scan_and_read(&mut session, &spec, dir.path()).await;
-    let status = session.head().status().await.unwrap();
+    let status = session.head().request::<StatusEndpoint>(&()).await.unwrap();
     session.close().await;
 
     let dusty: BTreeSet<u32> = (0..spec.len())

@@ -10,6 +10,7 @@ use crate::samples_csv::Row;
 use crate::scan_dir::ScanDir;
 use crate::target::{Holder, Target};
 use anyhow::{Context, Result};
+use gonio_shared::icd::{MeasureEndpoint, MeasureRequest};
 use gonio_shared::Geometry;
 use std::path::Path;
 
@@ -41,7 +42,9 @@ pub async fn measure_plate(head: &Head, target: &dyn Target, dir: &Path, operato
     let mut w = csv::Writer::from_path(&path).with_context(|| format!("creating {}", path.display()))?;
     for (ti, to, dp) in PLATE_POINTS {
         let s = head
-            .measure(Some(Geometry::new(ti, to, dp)))
+            .request::<MeasureEndpoint>(&MeasureRequest {
+                at: Some(Geometry::new(ti, to, dp)),
+            })
             .await
             .with_context(|| format!("measuring the reference plate at ({ti}°, {to}°, {dp}°)"))?;
         w.serialize(Row::from(&s))?;
