@@ -4,8 +4,11 @@
 
 use crate::config::HeadConfig;
 use crate::demod::{Design, Estimate, Integrator, Learned, Learner, Reference, MAX_M};
-use crate::hw::{AdcStream, Board, ChopTiming, Hardware};
+use crate::hw::{AdcStream, Board, ChopTiming, Hardware, StepTimer};
 use crate::units;
+use core::future::{poll_fn, Future};
+use core::pin::pin;
+use core::task::Poll;
 use embedded_hal::digital::OutputPin;
 use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags, Signal};
 
@@ -187,10 +190,56 @@ impl Detector {
         let mut buf = [0u16; MAX_M];
         let buf = &mut buf[..self.samples_per_period()];
         self.prepare(hw, cfg, buf, &mut flags).await?;
-        let periods = self.settings.periods;
-        let mut it = Integrator::with(&self.reference, self.design.clone());
-        for _ in 0..periods {
-            Self::period(hw, buf, &mut flags).await;
+        Ok(self.integrate(hw, cfg, buf, flags, &self.design, None).await)
+    }
+
+    /// Starts the chop, ranges the gain and settles for a sweep, and returns
+    /// the regression's design of its samples (`periods` each), computed
+    /// once for all of them.
+    pub async fn prepare_sweep<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, periods: u16) -> Result<Design, Fault> {
+        let mut flags = SampleFlags::default();
+        let mut buf = [0u16; MAX_M];
+        let buf = &mut buf[..self.samples_per_period()];
+        self.prepare(hw, cfg, buf, &mut flags).await?;
+        Ok(Design::new(periods as u32, self.chop_hz))
+    }
+
+    /// Takes one swept sample while the step timer runs a move: the chop
+    /// runs on from the previous one (no ranging, no settling), `design`'s
+    /// periods are integrated. Returns its signal and the steps the timer had
+    /// emitted when its first period began and when its last one ended;
+    /// `moving` turns false once the move is over.
+    pub async fn measure_moving<B: Board>(
+        &mut self,
+        hw: &mut Hardware<B>,
+        cfg: &HeadConfig,
+        design: &Design,
+        moving: &mut bool,
+    ) -> (Signal, [u32; 3], [u32; 3]) {
+        let mut buf = [0u16; MAX_M];
+        let buf = &mut buf[..self.samples_per_period()];
+        let first = hw.steps.emitted();
+        let signal = self.integrate(hw, cfg, buf, SampleFlags::default(), design, Some(moving)).await;
+        (signal, first, hw.steps.emitted())
+    }
+
+    /// Integrates `design`'s periods (while a move runs, when `moving` is
+    /// given) into a flagged signal.
+    async fn integrate<B: Board>(
+        &self,
+        hw: &mut Hardware<B>,
+        cfg: &HeadConfig,
+        buf: &mut [u16],
+        mut flags: SampleFlags,
+        design: &Design,
+        mut moving: Option<&mut bool>,
+    ) -> Signal {
+        let mut it = Integrator::with(&self.reference, design.clone());
+        for _ in 0..design.planned() {
+            match moving.as_deref_mut() {
+                Some(m) => period_moving(hw, buf, &mut flags, m).await,
+                None => Self::period(hw, buf, &mut flags).await,
+            }
             it.push(buf);
         }
         // The two fits of the estimate are the longest computations of a
@@ -199,7 +248,7 @@ impl Detector {
         embassy_futures::yield_now().await;
         let e = it.estimate_with(drift);
         self.flag(&e, Self::full_scale::<B>(), &mut flags);
-        Ok(self.signal::<B>(cfg, &e, flags))
+        self.signal::<B>(cfg, &e, flags)
     }
 
     fn flag(&self, e: &Estimate, full: u16, flags: &mut SampleFlags) {
@@ -288,5 +337,29 @@ impl Detector {
             snr: snr as f32,
             periods,
         })
+    }
+}
+
+/// Reads one chop period into `buf` while the step timer runs a move, and
+/// polls the move meanwhile (the simulated head's steps run only when
+/// polled; the chip's interrupt needs nothing): `moving` turns false once
+/// the move is over. The conversions are polled first, so in the simulated
+/// head they run the time and the steps catch up with it.
+async fn period_moving<B: Board>(hw: &mut Hardware<B>, buf: &mut [u16], flags: &mut SampleFlags, moving: &mut bool) {
+    let Hardware { adc, steps, .. } = hw;
+    let mut period = pin!(adc.next_period(buf));
+    let mut done = pin!(steps.finished());
+    let r = poll_fn(|cx| {
+        if let Poll::Ready(r) = period.as_mut().poll(cx) {
+            return Poll::Ready(r);
+        }
+        if *moving && done.as_mut().poll(cx).is_ready() {
+            *moving = false;
+        }
+        Poll::Pending
+    })
+    .await;
+    if r.is_err() {
+        flags.insert(SampleFlags::OVERRUN);
     }
 }

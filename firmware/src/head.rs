@@ -16,14 +16,15 @@ use crate::sanity::geometry::FixedGeometry;
 use crate::sanity::Sanity;
 use crate::scan_run::ScanRun;
 use crate::state::{self, Drivers, Event, Laser, Mode};
-use crate::{homing, units};
+use crate::{homing, sweep, units};
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
     Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, PlanChunk,
-    PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status,
+    PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, SweepReport,
+    SweepRequest, SweptSample,
 };
 
 /// Who this head is; the board and the serial come from the binary.
@@ -385,6 +386,77 @@ impl<B: Board> Head<B> {
         let r = self.acquire(req.at, None).await;
         self.rest_laser();
         self.finish(r)
+    }
+
+    /// Sweeps from `req.from` to `req.to` while the laser chops
+    /// ([`SweepRequest`]): every `periods_per_sample` periods become one
+    /// [`SweptSample`], handed to `emit` as it is made.
+    pub async fn sweep(&mut self, req: SweepRequest, mut emit: impl FnMut(SweptSample)) -> Reply<SweepReport> {
+        self.apply(Event::Measure)?;
+        let r = self.run_sweep(&req, &mut emit).await;
+        self.rest_laser();
+        self.finish(r)
+    }
+
+    async fn run_sweep(&mut self, req: &SweepRequest, emit: &mut impl FnMut(SweptSample)) -> Reply<SweepReport> {
+        sweep::check(req)?;
+        let (from, to) = (kinematics::inverse(&self.cfg, &req.from)?, kinematics::inverse(&self.cfg, &req.to)?);
+        sweep::check_path(&self.cfg, &from, &to)?;
+        if !self.pos.all_homed() {
+            return Err(Fault::NotHomed);
+        }
+        // Refused before anything moves.
+        let (start, end) = (motion::target_steps(&self.cfg, &from), motion::target_steps(&self.cfg, &to));
+        let speeds = sweep::speeds(&self.cfg, [0, 1, 2].map(|i| end[i] - start[i]), req.speed_dps)?;
+        self.detector.stop(&mut self.hw);
+        self.goto(&req.from).await?;
+        self.laser(true)?;
+        let design = match self.detector.prepare_sweep(&mut self.hw, &self.cfg, req.periods_per_sample).await {
+            Ok(d) => d,
+            Err(f) => {
+                self.safe_state();
+                return Err(f);
+            }
+        };
+        let delta = [0, 1, 2].map(|i| end[i] - self.pos.steps[i]);
+        let t0 = self.hw.clock.now_us();
+        let run = match motion::begin(&mut self.hw, &self.cfg, &mut self.pos, delta, speeds).await {
+            Ok(run) => run,
+            Err(f) => {
+                self.safe_state();
+                return Err(f);
+            }
+        };
+        let mut moving = true;
+        let mut samples = 0u32;
+        while moving {
+            if self.hw.clock.now_us().saturating_sub(t0) > run.limit_ms as u64 * 1000 {
+                let f = run.stalled(&mut self.hw, &mut self.pos);
+                self.safe_state();
+                return Err(f);
+            }
+            let start_us = self.hw.clock.now_us();
+            let (signal, first, last) = self.detector.measure_moving(&mut self.hw, &self.cfg, &design, &mut moving).await;
+            let now = self.hw.clock.now_us();
+            emit(SweptSample {
+                seq: self.seq,
+                start_us,
+                duration_s: now.saturating_sub(start_us) as f32 * 1e-6,
+                ..sweep::tag(&self.cfg, &self.pos, first, last, signal)
+            });
+            self.seq = self.seq.wrapping_add(1);
+            samples += 1;
+        }
+        let emitted = self.hw.steps.emitted();
+        if let Err(f) = motion::end(&mut self.hw, &self.cfg, &mut self.pos, &run, emitted).await {
+            self.safe_state();
+            return Err(f);
+        }
+        Ok(SweepReport {
+            samples,
+            duration_s: self.hw.clock.now_us().saturating_sub(t0) as f32 * 1e-6,
+            reached: sweep::reached(&self.cfg, &self.pos),
+        })
     }
 
     /// After a measurement at rest: the chop stops, and the laser goes off

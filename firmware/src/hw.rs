@@ -69,6 +69,9 @@ pub trait StepTimer {
     /// since [`StepTimer::start`]. Dropping the wait leaves the steps running:
     /// a stop brakes them and waits again.
     async fn finished(&mut self) -> [u32; 3];
+    /// Steps emitted per axis since [`StepTimer::start`] so far, read while
+    /// the move runs: where a sweep's samples begin and end.
+    fn emitted(&self) -> [u32; 3];
     /// Cut the running moves short: each axis decelerates from its current
     /// speed to a stop (`brake_ticks` from [`crate::units::brake_ticks`]),
     /// every step counted ([`crate::motion::executor::Executor::brake`]).

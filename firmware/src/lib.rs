@@ -31,6 +31,7 @@ pub mod sanity;
 mod scan_run;
 mod serve;
 pub mod state;
+pub mod sweep;
 pub mod units;
 
 pub use head::Head;

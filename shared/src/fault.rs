@@ -54,6 +54,7 @@ pub enum Field {
     Tolerance,
     HostTimeout,
     IdleTime,
+    SweepSpeed,
 }
 
 impl Field {
@@ -72,6 +73,7 @@ impl Field {
             Field::Tolerance => "sanity tolerance",
             Field::HostTimeout => "host timeout",
             Field::IdleTime => "idle time",
+            Field::SweepSpeed => "sweep speed",
         }
     }
 }

@@ -21,6 +21,7 @@ pub mod sample;
 pub mod sanity;
 pub mod scan;
 pub mod status;
+pub mod sweep;
 pub mod wire;
 
 pub use detection::{CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Reference};
@@ -34,6 +35,7 @@ pub use sample::{Sample, SampleFlags, Signal};
 pub use sanity::{SanityConfig, SanityKind, SanityModel};
 pub use scan::{AngleRange, PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
 pub use status::{HeadState, Status};
+pub use sweep::{SweepReport, SweepRequest, SweptSample};
 
 /// Every fallible command answers with this: the result or the reason it was
 /// refused. A refused command has no side effect (nothing moved, laser unchanged).

@@ -6,7 +6,7 @@
 
 use super::clock::{advance_to, elapse, owe, slice_end};
 use super::faults::HardwareFault;
-use super::world::World;
+use super::world::{Motors, World};
 use gonio_firmware::hw::{AdcStream, Board, ChopTiming, Clock, Hardware, Overrun, QueueFull, StepBlock, StepTimer};
 use gonio_firmware::motion::blocks;
 use gonio_firmware::motion::executor::Executor;
@@ -115,56 +115,102 @@ impl AdcStream for SimAdc {
     }
 
     async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
-        let Some((period_s, lost)) = self.sample_period(out) else {
+        let Some(period) = self.begin_period() else {
             out.fill(0);
             return Err(Overrun);
         };
-        elapse(&self.world, period_s).await;
-        if lost {
+        elapse(&self.world, period.dt * out.len() as f64).await;
+        self.convert(&period, out);
+        if period.lost {
             return Err(Overrun);
         }
         Ok(())
     }
 }
 
+/// A chop period as it began: its timing, the faults it suffers, and where
+/// the motors were.
+struct Period {
+    t0: f64,
+    /// Time between two conversions (s).
+    dt: f64,
+    saturated: bool,
+    dead: bool,
+    lost: bool,
+    laser: bool,
+    laser_factor: f64,
+    motors: Motors,
+}
+
 impl SimAdc {
-    /// The codes of the chop period starting now, and its length (s) and
-    /// whether a block is lost before it; `None` with the chop stopped.
-    fn sample_period(&mut self, out: &mut [u16]) -> Option<(f64, bool)> {
+    /// Starts a chop period now; `None` with the chop stopped.
+    fn begin_period(&mut self) -> Option<Period> {
         let mut w = self.world.borrow_mut();
         let timing = w.chop?;
-        let (saturated, dead) = (
-            w.faults.active(w.moves, |f| *f == HardwareFault::AdcSaturated),
-            w.faults.active(w.moves, |f| *f == HardwareFault::LaserDead),
-        );
         let lost = w.faults.take_overrun(w.moves);
-        let dt = timing.ticks_per_sample as f64 / <Self as AdcStream>::TIMER_HZ as f64;
+        w.period_edges.clear();
+        Some(Period {
+            t0: w.t_s,
+            dt: timing.ticks_per_sample as f64 / <Self as AdcStream>::TIMER_HZ as f64,
+            saturated: w.faults.active(w.moves, |f| *f == HardwareFault::AdcSaturated),
+            dead: w.faults.active(w.moves, |f| *f == HardwareFault::LaserDead),
+            lost,
+            laser: w.laser,
+            laser_factor: w.photodiode.laser_factor(w.t_s),
+            motors: w.motors(),
+        })
+    }
+
+    /// The codes of a period that has run: each conversion sees the
+    /// photodiode's signal with the motors where they were at its instant
+    /// (the steps taken meanwhile replayed), through the amplifier.
+    fn convert(&mut self, p: &Period, out: &mut [u16]) {
+        let mut w = self.world.borrow_mut();
+        let edges = std::mem::take(&mut w.period_edges);
         let m = out.len();
         let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64 * w.imperfections.gain_scale[w.gain_index()];
         let vref = w.cfg.detector.adc_vref as f64;
-        let sig_a = if w.laser && !dead {
-            (w.photodiode.signal_a(w.target(), &w.cfg, w.load_angles(), |d| w.defect(d)) + w.imperfections.stray_a)
-                * w.photodiode.laser_factor(w.t_s)
-        } else {
-            0.0
+        let signal = |w: &World, motors: &Motors| {
+            if p.laser && !p.dead {
+                (w.photodiode.signal_a(w.target(), &w.cfg, w.load_angles(motors), |d| w.defect(d)) + w.imperfections.stray_a)
+                    * p.laser_factor
+            } else {
+                0.0
+            }
         };
-        let alpha = 1.0 - (-dt / w.photodiode.tau_s).exp();
+        let mut motors = p.motors;
+        let mut sig_a = signal(&w, &motors);
+        let mut next = edges.iter().peekable();
+        let alpha = 1.0 - (-p.dt / w.photodiode.tau_s).exp();
         let full = ((1u32 << <Self as AdcStream>::BITS) - 1) as f64;
-        let World { photodiode, rng, t_s, .. } = &mut *w;
-        let t_s = *t_s;
+        let mut seen = Vec::new();
         for (k, o) in out.iter_mut().enumerate() {
+            let t = p.t0 + k as f64 * p.dt;
+            let mut moved = false;
+            while let Some(e) = next.next_if(|e| e.t <= t) {
+                motors.step(e);
+                moved = true;
+            }
+            if moved {
+                sig_a = signal(&w, &motors);
+            }
+            if w.sample_log.is_some() {
+                seen.push((t, w.motor_angles(&motors)));
+            }
             let on = if k < m / 2 { 1.0 } else { 0.0 };
-            let target = gain * (sig_a * on + photodiode.ambient_a);
+            let target = gain * (sig_a * on + w.photodiode.ambient_a);
             self.amp_v += (target - self.amp_v) * alpha;
-            let t = t_s + k as f64 * dt;
+            let World { photodiode, rng, .. } = &mut *w;
             let v = self.amp_v + photodiode.interference_v(t, rng);
-            *o = if saturated {
+            *o = if p.saturated {
                 full as u16
             } else {
                 (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16
             };
         }
-        Some((m as f64 * dt, lost))
+        if let Some(log) = w.sample_log.as_mut() {
+            log.extend(seen);
+        }
     }
 }
 
@@ -234,8 +280,10 @@ impl StepTimer for SimSteps {
                 {
                     let mut w = self.world.borrow_mut();
                     w.t_s = w.t_s.max(at);
+                    w.edge_at = Some(at);
                 }
                 self.next = self.exec.fire(t);
+                self.world.borrow_mut().edge_at = None;
             }
             // The events ran the time themselves: a paced head owes it.
             let ran = self.world.borrow().t_s - start;
@@ -247,6 +295,10 @@ impl StepTimer for SimSteps {
             Poll::Pending
         })
         .await
+    }
+
+    fn emitted(&self) -> [u32; 3] {
+        self.exec.emitted()
     }
 
     fn brake(&mut self, brake_ticks: [f32; 3]) {

@@ -14,6 +14,7 @@ mod optics;
 mod pty;
 mod world;
 
+pub use board::SimBoard;
 pub use frames::{Cue, FrameHead, Sent};
 pub use imperfections::Imperfections;
 pub use inproc::spawn_in_process;
@@ -106,8 +107,9 @@ pub(crate) fn sentry(world: &Rc<RefCell<World>>) -> clock::SimSentry {
     clock::SimSentry { world: world.clone() }
 }
 
-/// Builds a firmware head on a fresh virtual world.
-pub(crate) fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World>>) {
+/// Builds a firmware head on a fresh virtual world: the serve loop's head,
+/// or one a test or benchmark drives directly ([`clock::run`]).
+pub fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World>>) {
     let world = Rc::new(RefCell::new(World::new(cfg.machine, cfg)));
     let hw = board::hardware(&world);
     let info = HeadInfo {

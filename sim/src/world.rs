@@ -19,6 +19,32 @@ const DUST_TOLERANCE_DEG: f64 = 0.05;
 /// Mechanical end stops lie this far beyond the home switch and the soft limit.
 const HARD_STOP_MARGIN_DEG: f32 = 3.0;
 
+/// One motor step: when, which axis, its direction and the change of
+/// position (0 against an end stop).
+#[derive(Debug, Clone, Copy)]
+pub struct Edge {
+    pub t: f64,
+    pub axis: usize,
+    pub dir: i32,
+    pub change: i32,
+}
+
+/// Where the motors are: microstep positions and the direction of each
+/// one's last step (the side backlash leaves the load on).
+#[derive(Debug, Clone, Copy)]
+pub struct Motors {
+    pub steps: [i32; 3],
+    pub last_step: [i32; 3],
+}
+
+impl Motors {
+    /// After `e`.
+    pub fn step(&mut self, e: &Edge) {
+        self.steps[e.axis] += e.change;
+        self.last_step[e.axis] = e.dir;
+    }
+}
+
 pub struct World {
     pub cfg: HeadConfig,
     /// Simulated time (s).
@@ -69,6 +95,15 @@ pub struct World {
     /// Every rising STEP edge (axis, time in s) and every change of the
     /// laser enable (time, level), when a test records them.
     pub step_log: Option<Vec<(usize, f64)>>,
+    /// The true motor angles (degrees) at every ADC sample (time, angles),
+    /// when a test records them.
+    pub sample_log: Option<Vec<(f64, [f64; 3])>>,
+    /// The time of the step event being fired, which may lie before `t_s`
+    /// when the conversions ran the time first in this poll.
+    pub edge_at: Option<f64>,
+    /// The motor steps taken while the current chop period ran: the ADC
+    /// sees the positions at each of its samples.
+    pub period_edges: Vec<Edge>,
     pub laser_log: Option<Vec<(f64, bool)>>,
     /// See [`super::SimConfig::pace`], and the wall-clock time owed to it.
     pub pace: f32,
@@ -131,6 +166,9 @@ impl World {
             estop: false,
             estop_at: None,
             step_log: None,
+            sample_log: None,
+            edge_at: None,
+            period_edges: Vec::new(),
             laser_log: None,
             pace: sim.pace,
             pace_owed_s: 0.0,
@@ -180,12 +218,21 @@ impl World {
         }
         let (lo, hi) = self.stops[axis];
         let d = if self.dir_positive[axis] { 1 } else { -1 };
-        let t = self.t_s;
+        let t = self.edge_at.unwrap_or(self.t_s);
         if let Some(log) = self.step_log.as_mut() {
             log.push((axis, t));
         }
         self.last_step[axis] = d;
-        self.steps[axis] = (self.steps[axis] + d).clamp(lo, hi);
+        let before = self.steps[axis];
+        self.steps[axis] = (before + d).clamp(lo, hi);
+        if self.chop.is_some() {
+            self.period_edges.push(Edge {
+                t,
+                axis,
+                dir: d,
+                change: self.steps[axis] - before,
+            });
+        }
     }
 
     /// True when the home switch of an axis is pressed.
@@ -202,16 +249,29 @@ impl World {
 
     /// True stage angles (degrees).
     pub fn angles(&self) -> [f64; 3] {
-        [0, 1, 2].map(|i| units::steps_to_deg(&self.cfg.axes[i], self.steps[i]) as f64)
+        self.motor_angles(&self.motors())
     }
 
-    /// Angles of the loads the motors drive (degrees): the motor's angle,
-    /// the stage's zero error, and half the backlash behind the last step's
-    /// direction (the load trails the motor).
-    pub fn load_angles(&self) -> [f64; 3] {
-        let m = self.angles();
+    /// Where the motors are now.
+    pub fn motors(&self) -> Motors {
+        Motors {
+            steps: self.steps,
+            last_step: self.last_step,
+        }
+    }
+
+    /// Motor angles (degrees) of positions `m`.
+    pub fn motor_angles(&self, m: &Motors) -> [f64; 3] {
+        [0, 1, 2].map(|i| units::steps_to_deg(&self.cfg.axes[i], m.steps[i]) as f64)
+    }
+
+    /// Angles of the loads the motors drive (degrees) with the motors at
+    /// `m`: the motor's angle, the stage's zero error, and half the backlash
+    /// behind the last step's direction (the load trails the motor).
+    pub fn load_angles(&self, m: &Motors) -> [f64; 3] {
+        let a = self.motor_angles(m);
         let im = &self.imperfections;
-        [0, 1, 2].map(|i| m[i] + im.zero_offset_deg[i] - 0.5 * im.backlash_deg[i] * self.last_step[i] as f64)
+        [0, 1, 2].map(|i| a[i] + im.zero_offset_deg[i] - 0.5 * im.backlash_deg[i] * m.last_step[i] as f64)
     }
 
     /// Reflection factor at a direction pair: a speck of dust or one.

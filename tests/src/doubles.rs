@@ -47,6 +47,10 @@ impl StepTimer for RecordingSteps {
     }
 
     async fn finished(&mut self) -> [u32; 3] {
+        self.emitted()
+    }
+
+    fn emitted(&self) -> [u32; 3] {
         let mut n = [0u32; 3];
         for (a, b) in self.runs.last().into_iter().flatten() {
             n[a.index()] += b.count;

@@ -113,6 +113,9 @@ impl StepTimer for ScopeSteps {
     async fn finished(&mut self) -> [u32; 3] {
         self.exec.emitted()
     }
+    fn emitted(&self) -> [u32; 3] {
+        self.exec.emitted()
+    }
     fn brake(&mut self, _: [f32; 3]) {}
     fn clear(&mut self) {
         self.exec.clear();
@@ -250,6 +253,9 @@ impl StepTimer for Stuck {
     fn start(&mut self) {}
     async fn finished(&mut self) -> [u32; 3] {
         std::future::pending().await
+    }
+    fn emitted(&self) -> [u32; 3] {
+        [0; 3]
     }
     fn brake(&mut self, _: [f32; 3]) {}
     fn clear(&mut self) {}

@@ -121,6 +121,11 @@ impl Design {
         d
     }
 
+    /// Periods the design is for.
+    pub fn planned(&self) -> u32 {
+        self.planned
+    }
+
     /// The regressors of period `period`, the tones' phasors being `phasor`.
     fn regressors(&self, period: u32, phasor: &[(f64, f64); MAX_TONES]) -> [f64; MAX_REG] {
         let mut g = [0.0; MAX_REG];

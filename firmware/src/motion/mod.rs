@@ -47,11 +47,16 @@ impl Position {
     }
 
     pub fn angles(&self, cfg: &HeadConfig) -> AxisAngles {
-        AxisAngles {
-            omega_deg: units::steps_to_deg(&cfg.axes[0], self.steps[0]),
-            tau_deg: units::steps_to_deg(&cfg.axes[1], self.steps[1]),
-            psi_deg: units::steps_to_deg(&cfg.axes[2], self.steps[2]),
-        }
+        axis_angles(cfg, self.steps)
+    }
+}
+
+/// Stage angles of microstep positions.
+pub fn axis_angles(cfg: &HeadConfig, steps: [i32; 3]) -> AxisAngles {
+    AxisAngles {
+        omega_deg: units::steps_to_deg(&cfg.axes[0], steps[0]),
+        tau_deg: units::steps_to_deg(&cfg.axes[1], steps[1]),
+        psi_deg: units::steps_to_deg(&cfg.axes[2], steps[2]),
     }
 }
 
@@ -106,15 +111,33 @@ async fn prepare<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, dirs: [Option
     Ok(())
 }
 
-/// Moves the axes by signed microstep counts at the given speeds (deg/s),
-/// concurrently; updates `pos` by the steps actually emitted.
-pub async fn move_by<B: Board>(
+/// A move the step timer runs, from [`begin`] to [`end`].
+pub struct Running {
+    delta: [i32; 3],
+    /// Beyond this (ms) from its start the move counts as stalled.
+    pub limit_ms: u32,
+}
+
+impl Running {
+    /// Drops a move that outlasted its limit: the stall fault of its first
+    /// moving axis.
+    pub fn stalled<B: Board>(&self, hw: &mut Hardware<B>, pos: &mut Position) -> Fault {
+        hw.steps.clear();
+        pos.in_flight = None;
+        let axis = Axis::ALL.into_iter().find(|a| self.delta[a.index()] != 0).unwrap_or(Axis::Rotation);
+        Fault::StepTimer(axis)
+    }
+}
+
+/// Plans a move of the axes by signed microstep counts at the given speeds
+/// (deg/s), all axes together, and starts it on the step timer.
+pub async fn begin<B: Board>(
     hw: &mut Hardware<B>,
     cfg: &HeadConfig,
     pos: &mut Position,
     delta: [i32; 3],
     speed_dps: [f32; 3],
-) -> Result<(), Fault> {
+) -> Result<Running, Fault> {
     let tick_hz = <B::Steps as StepTimer>::TICK_HZ;
     let dirs = delta.map(|d| if d == 0 { None } else { Some(d > 0) });
     prepare(hw, cfg, dirs).await?;
@@ -138,37 +161,64 @@ pub async fn move_by<B: Board>(
     let expected = (0..3)
         .map(|i| trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), speed_dps[i]).duration())
         .fold(0.0, f64::max);
-    let limit_ms = (expected * 2.0 * 1e3) as u32 + STALL_MARGIN_MS;
     pos.in_flight = Some(delta.map(|d| d.signum() as i8));
     hw.steps.start();
-    let emitted = match select(hw.steps.finished(), hw.delay.delay_ms(limit_ms)).await {
-        Either::First(e) => e,
-        Either::Second(()) => {
-            hw.steps.clear();
-            pos.in_flight = None;
-            let axis = Axis::ALL.into_iter().find(|a| delta[a.index()] != 0).unwrap_or(Axis::Rotation);
-            return Err(Fault::StepTimer(axis));
-        }
-    };
+    Ok(Running {
+        delta,
+        limit_ms: (expected * 2.0 * 1e3) as u32 + STALL_MARGIN_MS,
+    })
+}
+
+/// Ends a move whose steps the timer has `emitted`: counts them in, waits
+/// the DIR hold time, and checks that every step was taken.
+pub async fn end<B: Board>(
+    hw: &mut Hardware<B>,
+    cfg: &HeadConfig,
+    pos: &mut Position,
+    run: &Running,
+    emitted: [u32; 3],
+) -> Result<(), Fault> {
     count_in(pos, emitted);
     // DIR hold time before the next move may change it.
     hw.delay.delay_ns(units::seconds_to_ns(cfg.driver.dir_hold_s)).await;
     for axis in Axis::ALL {
         let i = axis.index();
-        if emitted[i] != delta[i].unsigned_abs() {
+        if emitted[i] != run.delta[i].unsigned_abs() {
             return Err(Fault::StepTimer(axis));
         }
     }
     Ok(())
 }
 
+/// Moves the axes by signed microstep counts at the given speeds (deg/s),
+/// concurrently; updates `pos` by the steps actually emitted.
+pub async fn move_by<B: Board>(
+    hw: &mut Hardware<B>,
+    cfg: &HeadConfig,
+    pos: &mut Position,
+    delta: [i32; 3],
+    speed_dps: [f32; 3],
+) -> Result<(), Fault> {
+    let run = begin(hw, cfg, pos, delta, speed_dps).await?;
+    let emitted = match select(hw.steps.finished(), hw.delay.delay_ms(run.limit_ms)).await {
+        Either::First(e) => e,
+        Either::Second(()) => return Err(run.stalled(hw, pos)),
+    };
+    end(hw, cfg, pos, &run, emitted).await
+}
+
+/// Where the axes are while a move runs: `pos` plus the steps the timer has
+/// emitted so far in the move's directions.
+pub fn in_flight_steps(pos: &Position, emitted: [u32; 3]) -> [i32; 3] {
+    let dirs = pos.in_flight.unwrap_or([0; 3]);
+    [0, 1, 2].map(|i| pos.steps[i] + dirs[i] as i32 * emitted[i].min(i32::MAX as u32) as i32)
+}
+
 /// Adds the steps of the move in flight to the position.
 fn count_in(pos: &mut Position, emitted: [u32; 3]) {
-    if let Some(dirs) = pos.in_flight.take() {
-        for i in 0..3 {
-            let e = emitted[i].min(i32::MAX as u32) as i32;
-            pos.steps[i] += dirs[i] as i32 * e;
-        }
+    if pos.in_flight.is_some() {
+        pos.steps = in_flight_steps(pos, emitted);
+        pos.in_flight = None;
     }
 }
 

@@ -130,6 +130,10 @@ impl StepTimer for Steps {
         }
         core::mem::take(&mut self.queued)
     }
+    fn emitted(&self) -> [u32; 3] {
+        // The rig runs a move at once, when its end is awaited.
+        [0; 3]
+    }
     fn brake(&mut self, _: [f32; 3]) {}
     fn clear(&mut self) {
         self.queued = [0; 3];

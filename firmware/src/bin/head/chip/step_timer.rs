@@ -137,6 +137,10 @@ impl StepTimer for StepTimer5 {
         emitted
     }
 
+    fn emitted(&self) -> [u32; 3] {
+        Self::with(|s| s.exec.emitted()).unwrap_or([0; 3])
+    }
+
     fn brake(&mut self, brake_ticks: [f32; 3]) {
         // In the critical section the interrupt cannot fire between the
         // executor's new schedule and the compare written for it.
