@@ -4,7 +4,7 @@
 
 use crate::config::HeadConfig;
 use crate::demod::{Design, Estimate, Integrator, Learned, Learner, Reference, MAX_M};
-use crate::hw::{AdcStream, Board, ChopTiming, Hardware, StepTimer};
+use crate::hw::{AdcStream, Board, ChopTiming, Clock, Hardware, StepTimer};
 use crate::units;
 use core::future::{poll_fn, Future};
 use core::pin::pin;
@@ -190,58 +190,70 @@ impl Detector {
         let mut buf = [0u16; MAX_M];
         let buf = &mut buf[..self.samples_per_period()];
         self.prepare(hw, cfg, buf, &mut flags).await?;
-        Ok(self.integrate(hw, cfg, buf, flags, &self.design, None).await)
+        let it = self.accumulate(hw, buf, &mut flags, &self.design, None).await;
+        Ok(self.conclude::<B>(cfg, it, flags).await)
     }
 
-    /// Starts the chop, ranges the gain and settles for a sweep, and returns
-    /// the regression's design of its samples (`periods` each), computed
-    /// once for all of them.
-    pub async fn prepare_sweep<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, periods: u16) -> Result<Design, Fault> {
+    /// The regression's design of a sweep's samples (`periods` each),
+    /// computed once for all of them before the chop starts.
+    pub fn sweep_design(&self, periods: u16) -> Design {
+        Design::new(periods as u32, self.chop_hz)
+    }
+
+    /// Starts the chop, ranges the gain and lets the amplifier settle for a
+    /// sweep, at its start.
+    pub async fn prepare_sweep<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig) -> Result<(), Fault> {
         let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];
         let buf = &mut buf[..self.samples_per_period()];
-        self.prepare(hw, cfg, buf, &mut flags).await?;
-        Ok(Design::new(periods as u32, self.chop_hz))
+        self.prepare(hw, cfg, buf, &mut flags).await
     }
 
     /// Takes one swept sample while the step timer runs a move: the chop
     /// runs on from the previous one (no ranging, no settling), `design`'s
-    /// periods are integrated. Returns its signal and the steps the timer had
-    /// emitted when its first period began and when its last one ended;
-    /// `moving` turns false once the move is over.
+    /// periods are integrated. Returns its signal, and the steps the timer
+    /// had emitted and the time when its last period's codes arrived, read
+    /// before the estimate (the conversions go on meanwhile: the next
+    /// sample's first period begins there). `moving` turns false once the
+    /// move is over.
     pub async fn measure_moving<B: Board>(
         &mut self,
         hw: &mut Hardware<B>,
         cfg: &HeadConfig,
         design: &Design,
         moving: &mut bool,
-    ) -> (Signal, [u32; 3], [u32; 3]) {
+    ) -> (Signal, [u32; 3], u64) {
+        let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];
         let buf = &mut buf[..self.samples_per_period()];
-        let first = hw.steps.emitted();
-        let signal = self.integrate(hw, cfg, buf, SampleFlags::default(), design, Some(moving)).await;
-        (signal, first, hw.steps.emitted())
+        let it = self.accumulate(hw, buf, &mut flags, design, Some(moving)).await;
+        let (emitted, at_us) = (hw.steps.emitted(), hw.clock.now_us());
+        (self.conclude::<B>(cfg, it, flags).await, emitted, at_us)
     }
 
     /// Integrates `design`'s periods (while a move runs, when `moving` is
-    /// given) into a flagged signal.
-    async fn integrate<B: Board>(
-        &self,
+    /// given).
+    async fn accumulate<'r, B: Board>(
+        &'r self,
         hw: &mut Hardware<B>,
-        cfg: &HeadConfig,
         buf: &mut [u16],
-        mut flags: SampleFlags,
+        flags: &mut SampleFlags,
         design: &Design,
         mut moving: Option<&mut bool>,
-    ) -> Signal {
+    ) -> Integrator<'r> {
         let mut it = Integrator::with(&self.reference, design.clone());
         for _ in 0..design.planned() {
             match moving.as_deref_mut() {
-                Some(m) => period_moving(hw, buf, &mut flags, m).await,
-                None => Self::period(hw, buf, &mut flags).await,
+                Some(m) => period_moving(hw, buf, flags, m).await,
+                None => Self::period(hw, buf, flags).await,
             }
             it.push(buf);
         }
+        it
+    }
+
+    /// The estimate of an integration, flagged, as a signal.
+    async fn conclude<B: Board>(&self, cfg: &HeadConfig, it: Integrator<'_>, mut flags: SampleFlags) -> Signal {
         // The two fits of the estimate are the longest computations of a
         // measurement on the chip: the executor runs between them.
         let drift = it.drift();

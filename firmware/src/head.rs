@@ -389,44 +389,61 @@ impl<B: Board> Head<B> {
     }
 
     /// Sweeps from `req.from` to `req.to` while the laser chops
-    /// ([`SweepRequest`]): every `periods_per_sample` periods become one
-    /// [`SweptSample`], handed to `emit` as it is made.
+    /// ([`SweepRequest`], [`crate::sweep`]): every `periods_per_sample`
+    /// periods become one [`SweptSample`], handed to `emit` as it is made.
+    /// A sweep refused (an end or the path unreachable, a speed or length
+    /// out of range, the head busy or not homed) changes nothing.
     pub async fn sweep(&mut self, req: SweepRequest, mut emit: impl FnMut(SweptSample)) -> Reply<SweepReport> {
-        self.apply(Event::Measure)?;
-        let r = self.run_sweep(&req, &mut emit).await;
-        self.rest_laser();
-        self.finish(r)
-    }
-
-    async fn run_sweep(&mut self, req: &SweepRequest, emit: &mut impl FnMut(SweptSample)) -> Reply<SweepReport> {
-        sweep::check(req)?;
+        if let Some(f) = state::transition(self.mode, Event::Measure).refused {
+            return Err(f);
+        }
+        sweep::check(&req)?;
         let (from, to) = (kinematics::inverse(&self.cfg, &req.from)?, kinematics::inverse(&self.cfg, &req.to)?);
         sweep::check_path(&self.cfg, &from, &to)?;
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);
         }
-        // Refused before anything moves.
         let (start, end) = (motion::target_steps(&self.cfg, &from), motion::target_steps(&self.cfg, &to));
-        let speeds = sweep::speeds(&self.cfg, [0, 1, 2].map(|i| end[i] - start[i]), req.speed_dps)?;
+        let limits = sweep::limits(&self.cfg, [0, 1, 2].map(|i| end[i] - start[i]), req.speed_dps)?;
+        self.apply(Event::Measure)?;
+        let r = self.run_sweep(&req, limits, end, &mut emit).await;
+        self.rest_laser();
+        self.finish(r)
+    }
+
+    async fn run_sweep(
+        &mut self,
+        req: &SweepRequest,
+        limits: [motion::Limits; 3],
+        end: [i32; 3],
+        emit: &mut impl FnMut(SweptSample),
+    ) -> Reply<SweepReport> {
         self.detector.stop(&mut self.hw);
         self.goto(&req.from).await?;
-        self.laser(true)?;
-        let design = match self.detector.prepare_sweep(&mut self.hw, &self.cfg, req.periods_per_sample).await {
-            Ok(d) => d,
-            Err(f) => {
-                self.safe_state();
-                return Err(f);
-            }
-        };
+        self.hw
+            .delay
+            .delay_us(units::seconds_to_us(self.detector.settings().settle_s))
+            .await;
+        // Computed and planned before the chop starts: from then on the
+        // ADC's ring (two periods) must be read as it fills.
+        let design = self.detector.sweep_design(req.periods_per_sample);
         let delta = [0, 1, 2].map(|i| end[i] - self.pos.steps[i]);
-        let t0 = self.hw.clock.now_us();
-        let run = match motion::begin(&mut self.hw, &self.cfg, &mut self.pos, delta, speeds).await {
+        let planned = motion::plan(&mut self.hw, &self.cfg, delta, limits).await;
+        let run = match planned {
             Ok(run) => run,
             Err(f) => {
                 self.safe_state();
                 return Err(f);
             }
         };
+        self.laser(true)?;
+        if let Err(f) = self.detector.prepare_sweep(&mut self.hw, &self.cfg).await {
+            self.safe_state();
+            return Err(f);
+        }
+        motion::start(&mut self.hw, &mut self.pos, &run);
+        let t0 = self.hw.clock.now_us();
+        let (mut first, mut start_us) = ([0; 3], t0);
         let mut moving = true;
         let mut samples = 0u32;
         while moving {
@@ -435,17 +452,26 @@ impl<B: Board> Head<B> {
                 self.safe_state();
                 return Err(f);
             }
-            let start_us = self.hw.clock.now_us();
-            let (signal, first, last) = self.detector.measure_moving(&mut self.hw, &self.cfg, &design, &mut moving).await;
-            let now = self.hw.clock.now_us();
+            let (signal, last, end_us) = self.detector.measure_moving(&mut self.hw, &self.cfg, &design, &mut moving).await;
+            if signal.flags.contains(SampleFlags::OVERRUN) {
+                // A lost block breaks the alignment of the ring with the
+                // chop for every sample after it: the sweep stops.
+                motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
+                self.safe_state();
+                return Err(Fault::AdcOverrun);
+            }
+            let (axes_from, axes_to) = sweep::tag(&self.cfg, &self.pos, first, last);
             emit(SweptSample {
                 seq: self.seq,
                 start_us,
-                duration_s: now.saturating_sub(start_us) as f32 * 1e-6,
-                ..sweep::tag(&self.cfg, &self.pos, first, last, signal)
+                duration_s: end_us.saturating_sub(start_us) as f32 * 1e-6,
+                axes_from,
+                axes_to,
+                signal,
             });
             self.seq = self.seq.wrapping_add(1);
             samples += 1;
+            (first, start_us) = (last, end_us);
         }
         let emitted = self.hw.steps.emitted();
         if let Err(f) = motion::end(&mut self.hw, &self.cfg, &mut self.pos, &run, emitted).await {

@@ -27,14 +27,24 @@ impl SweepRequest {
     /// Fewest periods a swept sample integrates: the drift fit of the
     /// demodulator needs a few.
     pub const PERIODS_MIN: u16 = 4;
-    /// Most periods a swept sample integrates (1.1 s at 230 Hz).
-    pub const PERIODS_MAX: u16 = 256;
+    /// Most periods a swept sample integrates (35 ms at 230 Hz): the
+    /// regression's design of its samples is computed in one stretch of the
+    /// serve loop, 65 000 instructions for 8 periods on the chip
+    /// (`chip-bench`), within its budget of 100 000; longer ones cost more
+    /// than it allows (657 000 for 23).
+    pub const PERIODS_MAX: u16 = 8;
+    /// Slowest sweep (deg/s): a sweep over the whole travel ends within
+    /// hours, its stall limit well inside the timers' range.
+    pub const SPEED_MIN_DPS: f32 = 0.01;
 }
 
 /// One sample of a sweep: the signal of its periods, and the stage
-/// positions (and their geometry) at its first period's start and its last
-/// period's end. Its geometry is the middle of the two; its angular extent,
-/// what the fit may weight by, is the distance between them.
+/// positions at its first period's start and its last period's end. Its
+/// position is the middle of the two ([`SweptSample::mid_axes`]); its
+/// angular extent, what the fit may weight by, the distance between them.
+/// The head sends stage angles only: the geometry is the kinematics' pure
+/// function of them, which the host computes (on the chip, three of them
+/// would cost a sample some 120 000 instructions, `chip-bench`).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SweptSample {
@@ -45,11 +55,19 @@ pub struct SweptSample {
     pub duration_s: f32,
     pub axes_from: AxisAngles,
     pub axes_to: AxisAngles,
-    pub from: Geometry,
-    pub to: Geometry,
-    /// The geometry at the middle of the stage positions.
-    pub mid: Geometry,
     pub signal: Signal,
+}
+
+impl SweptSample {
+    /// The stage angles halfway between the sample's start and end.
+    pub fn mid_axes(&self) -> AxisAngles {
+        let (a, b) = (&self.axes_from, &self.axes_to);
+        AxisAngles {
+            omega_deg: 0.5 * (a.omega_deg + b.omega_deg),
+            tau_deg: 0.5 * (a.tau_deg + b.tau_deg),
+            psi_deg: 0.5 * (a.psi_deg + b.psi_deg),
+        }
+    }
 }
 
 /// How a sweep ended.

@@ -66,10 +66,11 @@ fn swept_samples_are_tagged_where_the_stages_were_and_read_what_a_sample_at_rest
     for s in &swept {
         let (mean, n) = true_mean(&log, s);
         assert_eq!(n, s.signal.periods as usize * m, "conversions of {s:?}");
+        let mid = kinematics::forward(&s.mid_axes());
         for (tagged, true_deg) in [
-            (s.mid.theta_i_deg, mean.theta_i_deg),
-            (s.mid.theta_o_deg, mean.theta_o_deg),
-            (s.mid.dphi_deg, mean.dphi_deg),
+            (mid.theta_i_deg, mean.theta_i_deg),
+            (mid.theta_o_deg, mean.theta_o_deg),
+            (mid.dphi_deg, mean.dphi_deg),
         ] {
             worst = worst.max((tagged - true_deg).abs());
         }
@@ -77,21 +78,50 @@ fn swept_samples_are_tagged_where_the_stages_were_and_read_what_a_sample_at_rest
     assert!(worst <= 0.01, "tag error {worst}°");
     // Samples follow each other along the arc, each with its extent.
     for w in swept.windows(2) {
-        assert!(w[1].mid.theta_o_deg >= w[0].mid.theta_o_deg - 1e-4);
+        assert_eq!(w[1].axes_from, w[0].axes_to, "consecutive samples share their boundary");
+        assert!(w[1].mid_axes().psi_deg > w[0].mid_axes().psi_deg);
         assert!(w[1].seq == w[0].seq + 1);
     }
 
     // A few swept samples against a measurement at rest at their middle.
     for s in swept.iter().step_by(swept.len() / 5).skip(1) {
-        let still = clock::run(&world, head.measure(MeasureRequest { at: Some(s.mid) })).unwrap();
+        let mid = kinematics::forward(&s.mid_axes());
+        let still = clock::run(&world, head.measure(MeasureRequest { at: Some(mid) })).unwrap();
         let (a, b) = (s.signal.amplitude_v as f64, still.signal.amplitude_v as f64);
         let sigma = (s.signal.noise_v as f64).hypot(still.signal.noise_v as f64);
-        assert!(
-            (a - b).abs() <= 5.0 * sigma + 0.01 * b,
-            "swept {a} V, at rest {b} V (σ {sigma} V) at {:?}",
-            s.mid
-        );
+        assert!((a - b).abs() <= 3.0 * sigma, "swept {a} V, at rest {b} V (σ {sigma} V) at {mid:?}");
     }
+}
+
+#[test]
+fn a_sweep_of_three_axes_follows_a_straight_line_in_axis_space() {
+    let (mut head, world) = build(&SimConfig::default());
+    clock::run(&world, head.home(HomeRequest::ALL)).unwrap();
+    world.borrow_mut().sample_log = Some(Vec::new());
+    let req = SweepRequest {
+        from: Geometry::new(20.0, 40.0, 30.0),
+        to: Geometry::new(50.0, 65.0, 100.0),
+        speed_dps: 6.0,
+        periods_per_sample: 4,
+    };
+    let mut swept = Vec::new();
+    clock::run(&world, head.sweep(req, |s| swept.push(s))).unwrap();
+    let log = world.borrow_mut().sample_log.take().unwrap();
+    let (a, b) = (swept[0].axes_from, swept.last().unwrap().axes_to);
+    let (a, b) = ([a.omega_deg, a.tau_deg, a.psi_deg], [b.omega_deg, b.tau_deg, b.psi_deg]);
+    let span = [0, 1, 2].map(|i| (b[i] - a[i]) as f64);
+    assert!(span.iter().all(|d| d.abs() > 1.0), "every axis moves: {span:?}");
+    let main = (0..3).max_by(|&i, &j| span[i].abs().total_cmp(&span[j].abs())).unwrap();
+    let t0 = swept[0].start_us as f64 * 1e-6;
+    let mut worst: f64 = 0.0;
+    for (_, m) in log.iter().filter(|(t, _)| *t >= t0) {
+        let f = (m[main] - a[main] as f64) / span[main];
+        for i in 0..3 {
+            worst = worst.max((m[i] - (a[i] as f64 + f * span[i])).abs());
+        }
+    }
+    // A few microsteps (1/1600°) off the line at most, ramps included.
+    assert!(worst < 0.005, "{worst}° off the straight line");
 }
 
 #[test]
@@ -120,5 +150,13 @@ fn sweeps_through_the_blind_zone_or_beyond_the_axes_are_refused_before_moving() 
         ),
     );
     assert_eq!(r, Err(Fault::InvalidValue(gonio_shared::Field::Periods)));
+    let beyond = SweepRequest {
+        to: Geometry::new(87.0, 87.0, 180.0),
+        ..arc(4.0)
+    };
+    let r = clock::run(&world, head.sweep(beyond, |_| panic!("nothing is measured")));
+    assert!(matches!(r, Err(Fault::Unreachable(Unreachable::AxisTravel(_)))), "{r:?}");
     assert_eq!(world.borrow().steps, before);
+    let st = head.status();
+    assert!(!st.laser_on && st.last_fault.is_none(), "a refused sweep changed the head: {st:?}");
 }

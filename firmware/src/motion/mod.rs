@@ -71,8 +71,26 @@ pub fn target_steps(cfg: &HeadConfig, a: &AxisAngles) -> [i32; 3] {
 
 /// The analytical profile of an `n`-step move of an axis at up to `dps`.
 pub fn trapezoid(axis: &AxisConfig, n: u32, dps: f32) -> Trapezoid {
+    ramp(axis, n, Limits::new(dps, axis.max_accel_dps2))
+}
+
+/// The analytical profile of an `n`-step move of an axis within `limits`.
+pub fn ramp(axis: &AxisConfig, n: u32, limits: Limits) -> Trapezoid {
     let per_deg = axis.microsteps_per_rev as f64 / 360.0;
-    Trapezoid::new(n, dps as f64 * per_deg, axis.max_accel_dps2 as f64 * per_deg)
+    Trapezoid::new(n, limits.speed_dps as f64 * per_deg, limits.accel_dps2 as f64 * per_deg)
+}
+
+/// The speed (deg/s) and acceleration (deg/s²) an axis moves with.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Limits {
+    pub speed_dps: f32,
+    pub accel_dps2: f32,
+}
+
+impl Limits {
+    pub const fn new(speed_dps: f32, accel_dps2: f32) -> Self {
+        Limits { speed_dps, accel_dps2 }
+    }
 }
 
 /// Duration (s) of a move of every axis by `delta` microsteps at cruise speed.
@@ -111,7 +129,7 @@ async fn prepare<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, dirs: [Option
     Ok(())
 }
 
-/// A move the step timer runs, from [`begin`] to [`end`].
+/// A move the step timer runs, from [`plan`] to [`end`].
 pub struct Running {
     delta: [i32; 3],
     /// Beyond this (ms) from its start the move counts as stalled.
@@ -129,22 +147,17 @@ impl Running {
     }
 }
 
-/// Plans a move of the axes by signed microstep counts at the given speeds
-/// (deg/s), all axes together, and starts it on the step timer.
-pub async fn begin<B: Board>(
-    hw: &mut Hardware<B>,
-    cfg: &HeadConfig,
-    pos: &mut Position,
-    delta: [i32; 3],
-    speed_dps: [f32; 3],
-) -> Result<Running, Fault> {
+/// Plans a move of the axes by signed microstep counts within per-axis
+/// `limits`, all axes together: sets DIR, enables the drivers and queues the
+/// blocks on the step timer, which [`start`] starts.
+pub async fn plan<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3]) -> Result<Running, Fault> {
     let tick_hz = <B::Steps as StepTimer>::TICK_HZ;
     let dirs = delta.map(|d| if d == 0 { None } else { Some(d > 0) });
     prepare(hw, cfg, dirs).await?;
     hw.steps.clear();
     for axis in Axis::ALL {
         let i = axis.index();
-        let t = trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), speed_dps[i]);
+        let t = ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i]);
         for (j, b) in blocks::TrapezoidBlocks::new(&t, tick_hz).enumerate() {
             if hw.steps.push(axis, b).is_err() {
                 hw.steps.clear();
@@ -159,14 +172,18 @@ pub async fn begin<B: Board>(
     }
     // A move that outlasts its schedule by far means a stalled timer: stop it.
     let expected = (0..3)
-        .map(|i| trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), speed_dps[i]).duration())
+        .map(|i| ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i]).duration())
         .fold(0.0, f64::max);
-    pos.in_flight = Some(delta.map(|d| d.signum() as i8));
-    hw.steps.start();
     Ok(Running {
         delta,
-        limit_ms: (expected * 2.0 * 1e3) as u32 + STALL_MARGIN_MS,
+        limit_ms: (expected * 2.0 * 1e3).min(u32::MAX as f64 / 2.0) as u32 + STALL_MARGIN_MS,
     })
+}
+
+/// Starts a planned move: its steps are in flight from now on.
+pub fn start<B: Board>(hw: &mut Hardware<B>, pos: &mut Position, run: &Running) {
+    pos.in_flight = Some(run.delta.map(|d| d.signum() as i8));
+    hw.steps.start();
 }
 
 /// Ends a move whose steps the timer has `emitted`: counts them in, waits
@@ -199,7 +216,9 @@ pub async fn move_by<B: Board>(
     delta: [i32; 3],
     speed_dps: [f32; 3],
 ) -> Result<(), Fault> {
-    let run = begin(hw, cfg, pos, delta, speed_dps).await?;
+    let limits = [0, 1, 2].map(|i| Limits::new(speed_dps[i], cfg.axes[i].max_accel_dps2));
+    let run = plan(hw, cfg, delta, limits).await?;
+    start(hw, pos, &run);
     let emitted = match select(hw.steps.finished(), hw.delay.delay_ms(run.limit_ms)).await {
         Either::First(e) => e,
         Either::Second(()) => return Err(run.stalled(hw, pos)),

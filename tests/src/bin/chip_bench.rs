@@ -27,6 +27,13 @@
 //!   `move_block_instructions_max`: one block, which the simulated head and
 //!   the duration estimate charge as `BLOCK_PLAN_INSTRUCTIONS` (the run fails
 //!   should the chip pay more).
+//! - `sweep_instructions`: what a sweep pays besides its periods' demodulation:
+//!   its checks and the design of its samples (once), the tag of a sample
+//!   (per sample); `sweep_stretch_instructions_max` (≤ 100 000, the serve
+//!   loop's budget between polls) the longest of them;
+//!   `sweep_sample_end_instructions` (≤ one chop period's cycles at 230 Hz)
+//!   what a sample's end computes (drift fit, estimate, tag) while the next
+//!   period fills the ADC's ring of two.
 //! - `resume_instructions_max` (≤ 1 000 000): a scan continued near its end.
 //! - `await_free_instructions_max` (≤ 100 000): the longest poll of the serve
 //!   loop while it serves the full Belcour grid (all 3 441 points, with a
@@ -119,6 +126,21 @@ fn main() -> Result<()> {
     let scan_points = run["values"]["scan_points"].as_u64().context("points of the served scan")?;
     let resume_points = run["values"]["resume_points"].as_u64().context("points of the resumed scan")?;
     let resume = max("resume")?;
+    // A sweep's longest stretch without a poll of the serve loop: its checks,
+    // the design of its samples, or a sample's tag (the estimate yields on
+    // its own, as a measurement's does).
+    let sweep_tag = max("sweep_tag")?;
+    let sweep_stretch = max("sweep_check")?
+        .max(max("sweep_limits")?)
+        .max(max("design_8_periods")?)
+        .max(max("sweep_drift")?)
+        .max(max("sweep_estimate")?)
+        .max(sweep_tag);
+    // What a sweep computes between a sample's last period and the next
+    // sample's first: it must take less than a chop period, or the ADC's
+    // ring (two periods) overruns.
+    let sweep_sample_end = max("sweep_drift")? + max("sweep_estimate")? + sweep_tag;
+    let chop_period_cycles = (CPU_HZ / 230.0) as u64;
     let figures = json!({
         "emulator": run["emulator"],
         "cpu_hz_assumed": CPU_HZ,
@@ -140,6 +162,16 @@ fn main() -> Result<()> {
             "abc-retro (back)": max("sanity_abc_retro_back")?,
         },
         "inverse_kinematics_instructions_max": max("inverse")?,
+        "sweep_instructions": {
+            "check (once)": max("sweep_check")?,
+            "limits (once)": max("sweep_limits")?,
+            "design of 8-period samples (once)": max("design_8_periods")?,
+            "drift fit (per sample)": max("sweep_drift")?,
+            "estimate (per sample)": max("sweep_estimate")?,
+            "tag (per sample)": sweep_tag,
+            "end of a sample": sweep_sample_end,
+            "demodulation (per period)": max("demod_square")?.max(max("demod_sine")?),
+        },
         "plan_next_instructions_max": max("plan_next")?,
         "move_plan_instructions": max("move_plan")?,
         "move_block_instructions_max": max("move_block")?,
@@ -158,12 +190,16 @@ fn main() -> Result<()> {
             "step_event_instructions_max": 250,
             "resume_instructions_max": 1_000_000,
             "await_free_instructions_max": 100_000,
+            "sweep_stretch_instructions_max": 100_000,
+            "sweep_sample_end_instructions": chop_period_cycles,
             "step_rate_hz_3axes_at_50pct_cpu": 50_000,
         },
         "bars_met": {
             "step_event_instructions_max": step_event <= 250,
             "resume_instructions_max": resume <= 1_000_000,
             "await_free_instructions_max": await_free <= 100_000,
+            "sweep_stretch_instructions_max": sweep_stretch <= 100_000,
+            "sweep_sample_end_instructions": sweep_sample_end <= chop_period_cycles,
             "step_rate_hz_3axes_at_50pct_cpu": step_rate >= 50_000.0,
         },
     });

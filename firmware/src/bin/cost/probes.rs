@@ -19,15 +19,17 @@ use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::TrapezoidBlocks;
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::motion::step_irq::{self, CompareTimer};
-use gonio_firmware::motion::{self, trapezoid};
+use gonio_firmware::motion::{self, trapezoid, Position};
 use gonio_firmware::sanity::geometry::FixedGeometry;
 use gonio_firmware::sanity::model::FixedModel;
+use gonio_firmware::sweep;
 use gonio_firmware::units;
 use gonio_firmware::Head;
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, PlanEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint};
 use gonio_shared::wire::check;
 use gonio_shared::{
-    AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE,
+    AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, SweepRequest, PLAN_CHUNK,
+    PLAN_QUEUE,
 };
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Topic};
@@ -225,6 +227,57 @@ fn plan_next() {
     }
 }
 
+/// What a sweep pays besides demodulating its periods: its checks before it
+/// moves (the path clear of the blind zone and the sample plane, the axes'
+/// speeds: once, in one stretch of the serve loop), the design of its
+/// samples (once) and the tag of every sample (after its estimate).
+/// A path that leaves the sample plane between reachable ends is refused
+/// (`sweep_check` is measured on one that is not).
+#[inline(never)]
+fn sweep_path() {
+    let req = SweepRequest {
+        from: Geometry::new(30.0, 40.0, 0.0),
+        to: Geometry::new(60.0, 75.0, 40.0),
+        speed_dps: 4.0,
+        periods_per_sample: 8,
+    };
+    let (Ok(from), Ok(to)) = (kinematics::inverse(&REFERENCE, &req.from), kinematics::inverse(&REFERENCE, &req.to)) else {
+        mark("sweep_refused", BEGIN);
+        return;
+    };
+    let checked = measure("sweep_check", || {
+        sweep::check(&req).and_then(|()| sweep::check_path(&REFERENCE, &from, &to))
+    });
+    let (start, end) = (motion::target_steps(&REFERENCE, &from), motion::target_steps(&REFERENCE, &to));
+    let delta = [0, 1, 2].map(|i| end[i] - start[i]);
+    let speeds = measure("sweep_limits", || sweep::limits(&REFERENCE, delta, req.speed_dps));
+    if checked.is_err() || speeds.is_err() {
+        mark("sweep_refused", BEGIN);
+        return;
+    }
+    let design = measure("design_8_periods", || Design::new(8, 230.0));
+    // The end of a sample: the estimate of its periods (in two stretches,
+    // as the detector yields between them).
+    let codes = chopped();
+    let r = Reference::new(Kind::Square, M, None);
+    let mut integ = Integrator::with(&r, design);
+    for _ in 0..8 {
+        integ.push(&codes);
+    }
+    let drift = measure("sweep_drift", || integ.drift());
+    black_box(measure("sweep_estimate", || integ.estimate_with(drift)));
+    let pos = Position {
+        steps: start,
+        homed: [true; 3],
+        in_flight: Some(delta.map(|d| d.signum() as i8)),
+    };
+    for k in 0..16u32 {
+        let first = delta.map(|d| d.unsigned_abs() * k / 16);
+        let last = delta.map(|d| d.unsigned_abs() * (k + 1) / 16);
+        black_box(measure("sweep_tag", || sweep::tag(&REFERENCE, &pos, first, last)));
+    }
+}
+
 /// A sharp ABC-Retro model, the costliest kind to evaluate.
 fn abc_retro(back: bool) -> SanityModel {
     SanityModel::AbcRetro {
@@ -273,16 +326,23 @@ fn sanity() {
     }
 }
 
+/// Codes per chop period of the probes.
+const M: usize = 64;
+
+/// One chop period of a chopped signal with an offset and a little ripple.
+fn chopped() -> [u16; M] {
+    let mut codes = [0u16; M];
+    for (k, c) in codes.iter_mut().enumerate() {
+        *c = 1800 + if k < M / 2 { 600 } else { 0 } + (k as u16 * 7) % 5;
+    }
+    codes
+}
+
 /// One chop period of M = 64 codes through the integrator (correlation,
 /// extremes, the drift and mains nuisance fit), per reference kind.
 #[inline(never)]
 fn demod() {
-    const M: usize = 64;
-    let mut codes = [0u16; M];
-    for (k, c) in codes.iter_mut().enumerate() {
-        // A chopped signal with an offset and a little ripple.
-        *c = 1800 + if k < M / 2 { 600 } else { 0 } + (k as u16 * 7) % 5;
-    }
+    let codes = chopped();
     // The regression's design, as a configure computes it: factored up
     // front for a default integration and for the longest that is.
     let design = measure("design_23_periods", || Design::new(23, 230.0));
@@ -462,6 +522,7 @@ fn main() -> ! {
     demod();
     dispatch_frame();
     plan_next();
+    sweep_path();
     scan_and_resume();
     mark("done", BEGIN);
     loop {
