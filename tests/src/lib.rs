@@ -2,7 +2,8 @@
 //! every message type, hardware doubles for driving the firmware core without
 //! the simulator, one scan read back, the host model of the step-timer
 //! interrupt, the chopped signal of the lock-in benchmark, and the
-//! fixed-point models' cases.
+//! fixed-point models' cases, and sweeps on the simulated head with the
+//! true geometry their samples saw.
 
 pub mod chip_costs;
 pub mod chop_signal;
@@ -15,4 +16,5 @@ pub mod scanning;
 pub mod step_log;
 pub mod stops;
 pub mod strategies;
+pub mod sweeping;
 pub mod synthetic;

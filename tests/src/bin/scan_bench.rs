@@ -7,11 +7,22 @@
 //!   bound of any stop-and-go visit of its points from any start
 //!   (`scan_order::lower_bound`), beside the old nearest-neighbour plan's
 //!   figure (`old_plan_s`, replayed here).
+//! - `sweep`: arcs of θo in the plane of incidence measured while moving, on
+//!   the simulated head driven directly, at two speeds, each beside the same
+//!   arc measured stop-and-go on its 3° grid (head times on the simulated
+//!   head's clock, both from the park position): samples, head times, their
+//!   ratio (`arc_time_ratio`), and `tag_error_deg_max`, the largest
+//!   difference between a sample's tag and the true mean geometry of its
+//!   conversions. The sweep scan of a whole grid's coverage
+//!   (`sweep_time_ratio` of issue #20) and the fits are not built yet.
 
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::motion::PARK;
 use gonio_host::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
-use gonio_shared::ScanSpec;
+use gonio_shared::{AngleRange, Geometry, ScanSpec, SweepRequest};
+use gonio_sim::SimConfig;
+use gonio_tests::sweeping::{tag_error_deg_max, SimHead};
+use serde_json::{json, Value};
 use std::time::Instant;
 
 const SETTLE_S: f64 = 0.05;
@@ -41,6 +52,48 @@ fn nearest_neighbour_order(cfg: &HeadConfig, spec: &ScanSpec, from: [i32; 3]) ->
     order
 }
 
+/// In-plane arcs of θo (θi, Δφ, θo from, θo to) on the Belcour incidences.
+const ARCS: [(f32, f32, f32, f32); 3] = [(30.0, 0.0, 42.0, 87.0), (15.0, 180.0, 0.0, 87.0), (60.0, 180.0, 0.0, 57.0)];
+/// Speeds (deg/s of the arm) the arcs are swept at.
+const SPEEDS: [f32; 2] = [5.0, 20.0];
+/// The grid step the stop-and-go arcs are measured on (the Belcour θo step).
+const GRID_STEP_DEG: f32 = 3.0;
+
+/// One arc swept at `speed_dps` and measured stop-and-go on its grid, each
+/// on a fresh simulated head from the park position.
+fn arc(ti: f32, dp: f32, from: f32, to: f32, speed_dps: f32) -> Value {
+    let mut sim = SimHead::homed(&SimConfig::default());
+    let req = SweepRequest {
+        from: Geometry::new(ti, from, dp),
+        to: Geometry::new(ti, to, dp),
+        speed_dps,
+        periods_per_sample: SweepRequest::PERIODS_MAX,
+    };
+    let swept = match sim.sweep(req) {
+        Ok(s) => s,
+        Err(f) => return json!({ "theta_i_deg": ti, "dphi_deg": dp, "theta_o_deg": [from, to], "refused": f.to_string() }),
+    };
+    let mut still = SimHead::homed(&SimConfig::default());
+    let t0 = still.now_s();
+    let grid = AngleRange::new(from, to, GRID_STEP_DEG);
+    let n = grid.count().unwrap_or(0);
+    let measured = (0..n).filter(|&k| still.measure(Geometry::new(ti, grid.at(k), dp)).is_ok()).count();
+    let grid_s = still.now_s() - t0;
+    json!({
+        "theta_i_deg": ti,
+        "dphi_deg": dp,
+        "theta_o_deg": [from, to],
+        "speed_dps": speed_dps,
+        "samples": swept.samples.len(),
+        "sweep_head_s": swept.head_s,
+        "sweep_moving_s": swept.report.duration_s,
+        "grid_points": measured,
+        "grid_head_s": grid_s,
+        "arc_time_ratio": swept.head_s / grid_s,
+        "tag_error_deg_max": tag_error_deg_max(&swept),
+    })
+}
+
 fn main() {
     let cfg = REFERENCE;
     let spec = ScanSpec::belcour();
@@ -57,6 +110,22 @@ fn main() {
         INTEGRATION_S,
     );
     let (bound, moves) = lower_bound(&cfg, &spec, SETTLE_S, INTEGRATION_S).expect("3 316 points are bounded");
+    let arcs: Vec<Value> = ARCS
+        .iter()
+        .flat_map(|&(ti, dp, from, to)| SPEEDS.map(|v| arc(ti, dp, from, to, v)))
+        .collect();
+    let worst = |key: &str| arcs.iter().filter_map(|a| a[key].as_f64()).fold(0.0, f64::max);
+    let sweep = json!({
+        "periods_per_sample": SweepRequest::PERIODS_MAX,
+        "grid_step_deg": GRID_STEP_DEG,
+        "arcs": arcs,
+        "tag_error_deg_max": worst("tag_error_deg_max"),
+        "arc_time_ratio_max": worst("arc_time_ratio"),
+        "fewest_samples_over_grid_points": arcs
+            .iter()
+            .filter_map(|a| Some(a["samples"].as_f64()? / a["grid_points"].as_f64()?))
+            .fold(f64::INFINITY, f64::min),
+    });
     let out = serde_json::json!({
         "points": spec.len(),
         "measured_points": plan.measured,
@@ -72,6 +141,7 @@ fn main() {
         "plan_over_lower_bound": plan.total_s() / bound.total_s(),
         "old_plan_over_lower_bound": old.total_s() / bound.total_s(),
         "host_planning_wall_s": planning_wall_s,
+        "sweep": sweep,
     });
     eprintln!(
         "Belcour grid ({} points, {} measured): lower bound {:.0} s (moves {:.0} s), plan {:.0} s (moves {:.0} s), old plan {:.0} s; plan/bound {:.3} (≤ 1.15), old {:.3}; planned in {:.2} s",
@@ -85,6 +155,10 @@ fn main() {
         plan.total_s() / bound.total_s(),
         old.total_s() / bound.total_s(),
         planning_wall_s
+    );
+    eprintln!(
+        "Arcs swept at {SPEEDS:?} deg/s: tag error ≤ {:.4}° (≤ 0.01), head time ≤ {:.3} of the 3° stop-and-go grid's",
+        sweep["tag_error_deg_max"], sweep["arc_time_ratio_max"]
     );
     println!("{out}");
 }
