@@ -201,12 +201,17 @@ impl Detector {
     }
 
     /// Starts the chop, ranges the gain and lets the amplifier settle for a
-    /// sweep, at its start.
+    /// sweep, at its start. A block lost meanwhile is a fault: the ring
+    /// would be out of step with the chop for the whole sweep.
     pub async fn prepare_sweep<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig) -> Result<(), Fault> {
         let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];
         let buf = &mut buf[..self.samples_per_period()];
-        self.prepare(hw, cfg, buf, &mut flags).await
+        self.prepare(hw, cfg, buf, &mut flags).await?;
+        if flags.contains(SampleFlags::OVERRUN) {
+            return Err(Fault::AdcOverrun);
+        }
+        Ok(())
     }
 
     /// Takes one swept sample while the step timer runs a move: the chop

@@ -22,7 +22,7 @@ use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
-    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, PlanChunk,
+    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Field, Geometry, HeadState, Identity, PlanChunk,
     PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, SweepReport,
     SweepRequest, SweptSample,
 };
@@ -398,7 +398,15 @@ impl<B: Board> Head<B> {
             return Err(f);
         }
         sweep::check(&req)?;
-        let (from, to) = (kinematics::inverse(&self.cfg, &req.from)?, kinematics::inverse(&self.cfg, &req.to)?);
+        if self.detector.settings().chop_hz > SweepRequest::CHOP_MAX_HZ {
+            return Err(Fault::InvalidValue(Field::ChopFrequency));
+        }
+        // Each inverse is some 45 000 instructions on the chip (`chip-bench`):
+        // the executor runs between them.
+        let from = kinematics::inverse(&self.cfg, &req.from)?;
+        embassy_futures::yield_now().await;
+        let to = kinematics::inverse(&self.cfg, &req.to)?;
+        embassy_futures::yield_now().await;
         sweep::check_path(&self.cfg, &from, &to)?;
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);
@@ -419,6 +427,7 @@ impl<B: Board> Head<B> {
         emit: &mut impl FnMut(SweptSample),
     ) -> Reply<SweepReport> {
         self.detector.stop(&mut self.hw);
+        embassy_futures::yield_now().await;
         self.goto(&req.from).await?;
         self.hw
             .delay
@@ -436,7 +445,10 @@ impl<B: Board> Head<B> {
                 return Err(f);
             }
         };
-        self.laser(true)?;
+        if let Err(f) = self.laser(true) {
+            self.safe_state();
+            return Err(f);
+        }
         if let Err(f) = self.detector.prepare_sweep(&mut self.hw, &self.cfg).await {
             self.safe_state();
             return Err(f);

@@ -33,9 +33,17 @@ impl SweepRequest {
     /// (`chip-bench`), within its budget of 100 000; longer ones cost more
     /// than it allows (657 000 for 23).
     pub const PERIODS_MAX: u16 = 8;
-    /// Slowest sweep (deg/s): a sweep over the whole travel ends within
-    /// hours, its stall limit well inside the timers' range.
+    /// Slowest sweep (deg/s).
     pub const SPEED_MIN_DPS: f32 = 0.01;
+    /// Longest sweep (s at cruise): the step timer counts 2³² ticks of
+    /// 1 µs (71 min) per move.
+    pub const DURATION_MAX_S: f32 = 3000.0;
+    /// Fastest chop a sweep runs with: a sample's end (its last period's
+    /// demodulation, drift fit, estimate and tag, some 31 000 instructions,
+    /// `chip-bench`) and the serve loop's other work (up to 100 000 between
+    /// two polls) must fit in one chop period (168 000 cycles at 1 kHz)
+    /// while the next period fills the ADC's ring of two.
+    pub const CHOP_MAX_HZ: f32 = 1000.0;
 }
 
 /// One sample of a sweep: the signal of its periods, and the stage

@@ -53,6 +53,16 @@ impl SimHead {
         })
     }
 
+    /// The geometry the motors truly stand at.
+    pub fn motor_geometry(&self) -> Geometry {
+        let a = self.world.borrow().angles();
+        geometry(&AxisAngles {
+            omega_deg: a[0] as f32,
+            tau_deg: a[1] as f32,
+            psi_deg: a[2] as f32,
+        })
+    }
+
     /// Measures at rest at `g` (after moving there).
     pub fn measure(&mut self, g: Geometry) -> Result<Sample, Fault> {
         clock::run(&self.world, self.head.measure(MeasureRequest { at: Some(g) }))
@@ -106,6 +116,10 @@ fn angle_deg(a: [f64; 3], b: [f64; 3]) -> f64 {
 /// differences of θ and Δφ, which mean nothing near the pole.
 pub fn tag_error_deg(log: &[(f64, [f64; 3])], s: &SweptSample) -> f64 {
     let seen = conversions(log, s);
+    if seen.is_empty() {
+        // A sample no conversion is found for cannot be checked: it fails.
+        return f64::INFINITY;
+    }
     let mut mean = [[0.0; 3]; 2];
     for g in &seen {
         for (m, d) in mean.iter_mut().zip(directions(g)) {

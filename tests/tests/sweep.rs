@@ -4,7 +4,8 @@
 //! really saw, its signal matches a measurement at rest there, and a sweep
 //! of three axes keeps to a straight line in axis space.
 
-use gonio_shared::{Fault, Field, Geometry, SweepRequest, Unreachable};
+use gonio_shared::{DetectionSettings, Fault, Field, Geometry, SweepRequest, Unreachable};
+use gonio_sim::faults::Faults;
 use gonio_sim::SimConfig;
 use gonio_tests::sweeping::{conversions, geometry, tag_error_deg_max, SimHead};
 
@@ -109,4 +110,42 @@ fn sweeps_through_the_blind_zone_or_beyond_the_axes_are_refused_before_moving() 
     assert_eq!(sim.world.borrow().steps, before);
     let st = sim.head.status();
     assert!(!st.laser_on && st.last_fault.is_none(), "a refused sweep changed the head: {st:?}");
+}
+
+#[test]
+fn a_sweep_that_stalls_or_loses_a_block_stops_dark_and_says_where_the_axes_are() {
+    // The sweep's move is the first the laser sees.
+    let stalled = SimConfig {
+        faults: Faults::parse("stall@1").unwrap(),
+        ..SimConfig::default()
+    };
+    let mut sim = SimHead::homed(&stalled);
+    assert!(matches!(sim.sweep(arc(4.0)).err(), Some(Fault::StepTimer(_))));
+    let st = sim.head.status();
+    assert!(!st.laser_on && !st.homed, "after a stall the axes need homing: {st:?}");
+
+    let lost = SimConfig {
+        faults: Faults::parse("overrun@1:1").unwrap(),
+        ..SimConfig::default()
+    };
+    let mut sim = SimHead::homed(&lost);
+    assert_eq!(sim.sweep(arc(4.0)).err(), Some(Fault::AdcOverrun));
+    let st = sim.head.status();
+    assert!(!st.laser_on && st.homed, "a lost block brakes the move, steps counted: {st:?}");
+    // The head knows where the braked axes are: a move from there lands.
+    let g = Geometry::new(30.0, 50.0, 0.0);
+    let at_rest = sim.measure(g).unwrap();
+    assert!((at_rest.reached.theta_o_deg - 50.0).abs() < 1e-3, "{:?}", at_rest.reached);
+    assert_eq!(sim.motor_geometry(), at_rest.reached);
+}
+
+#[test]
+fn a_sweep_refuses_a_chop_too_fast_for_its_samples() {
+    let mut sim = SimHead::homed(&SimConfig::default());
+    let fast = DetectionSettings {
+        chop_hz: SweepRequest::CHOP_MAX_HZ * 2.0,
+        ..DetectionSettings::default()
+    };
+    sim.head.configure_detection(fast).unwrap();
+    assert_eq!(sim.sweep(arc(4.0)).err(), Some(Fault::InvalidValue(Field::ChopFrequency)));
 }

@@ -138,10 +138,12 @@ pub struct Running {
 
 impl Running {
     /// Drops a move that outlasted its limit: the stall fault of its first
-    /// moving axis.
+    /// moving axis. Where the axes stopped is no longer known: they need
+    /// homing again.
     pub fn stalled<B: Board>(&self, hw: &mut Hardware<B>, pos: &mut Position) -> Fault {
         hw.steps.clear();
         pos.in_flight = None;
+        pos.homed = [false; 3];
         let axis = Axis::ALL.into_iter().find(|a| self.delta[a.index()] != 0).unwrap_or(Axis::Rotation);
         Fault::StepTimer(axis)
     }

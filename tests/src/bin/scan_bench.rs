@@ -13,13 +13,16 @@
 //!   head's clock, both from the park position): samples, head times, their
 //!   ratio (`arc_time_ratio`), and `tag_error_deg_max`, the largest
 //!   difference between a sample's tag and the true mean geometry of its
-//!   conversions. The sweep scan of a whole grid's coverage
+//!   conversions. A swept sample integrates fewer periods than a grid point
+//!   (`periods_per_sample`, `grid_periods_per_point`), so it is noisier. A
+//!   refused arc is listed with its reason and counted in `refused_arcs`.
+//!   The sweep scan of a whole grid's coverage
 //!   (`sweep_time_ratio` of issue #20) and the fits are not built yet.
 
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::motion::PARK;
 use gonio_host::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
-use gonio_shared::{AngleRange, Geometry, ScanSpec, SweepRequest};
+use gonio_shared::{AngleRange, DetectionSettings, Geometry, ScanSpec, SweepRequest};
 use gonio_sim::SimConfig;
 use gonio_tests::sweeping::{tag_error_deg_max, SimHead};
 use serde_json::{json, Value};
@@ -117,6 +120,8 @@ fn main() {
     let worst = |key: &str| arcs.iter().filter_map(|a| a[key].as_f64()).fold(0.0, f64::max);
     let sweep = json!({
         "periods_per_sample": SweepRequest::PERIODS_MAX,
+        "grid_periods_per_point": DetectionSettings::default().periods,
+        "refused_arcs": arcs.iter().filter(|a| a.get("refused").is_some()).count(),
         "grid_step_deg": GRID_STEP_DEG,
         "arcs": arcs,
         "tag_error_deg_max": worst("tag_error_deg_max"),
