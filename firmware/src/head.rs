@@ -414,7 +414,7 @@ impl<B: Board> Head<B> {
         let (start, end) = (motion::target_steps(&self.cfg, &from), motion::target_steps(&self.cfg, &to));
         let limits = sweep::limits(&self.cfg, [0, 1, 2].map(|i| end[i] - start[i]), req.speed_dps)?;
         self.apply(Event::Measure)?;
-        let r = self.run_sweep(&req, limits, end, &mut emit).await;
+        let r = self.run_sweep(&req, limits, start, end, &mut emit).await;
         self.rest_laser();
         self.finish(r)
     }
@@ -423,12 +423,16 @@ impl<B: Board> Head<B> {
         &mut self,
         req: &SweepRequest,
         limits: [motion::Limits; 3],
+        start: [i32; 3],
         end: [i32; 3],
         emit: &mut impl FnMut(SweptSample),
     ) -> Reply<SweepReport> {
         self.detector.stop(&mut self.hw);
-        embassy_futures::yield_now().await;
-        self.goto(&req.from).await?;
+        // To the start, whose stage targets are known already.
+        if let Err(f) = motion::move_to(&mut self.hw, &self.cfg, &mut self.pos, start).await {
+            self.safe_state();
+            return Err(f);
+        }
         self.hw
             .delay
             .delay_us(units::seconds_to_us(self.detector.settings().settle_s))
@@ -493,7 +497,7 @@ impl<B: Board> Head<B> {
         Ok(SweepReport {
             samples,
             duration_s: self.hw.clock.now_us().saturating_sub(t0) as f32 * 1e-6,
-            reached: sweep::reached(&self.cfg, &self.pos),
+            reached: kinematics::forward(&self.pos.angles(&self.cfg)),
         })
     }
 

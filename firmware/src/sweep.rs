@@ -6,9 +6,8 @@
 //! start and its last one's end.
 
 use crate::config::HeadConfig;
-use crate::kinematics;
 use crate::motion::{self, Limits, Position};
-use gonio_shared::{AxisAngles, Fault, Field, Geometry, SweepRequest, Unreachable};
+use gonio_shared::{AxisAngles, Fault, Field, SweepRequest, Unreachable};
 
 /// Limits of the axes moving by `delta` microsteps, so that the one with the
 /// longest travel cruises at `speed_dps` and every axis follows the same
@@ -43,13 +42,13 @@ pub fn limits(cfg: &HeadConfig, delta: [i32; 3], speed_dps: f32) -> Result<[Limi
     Ok(out)
 }
 
-/// Checks what a sweep asks before anything moves.
+/// Checks a sweep's sample length (its ends are checked by
+/// [`crate::kinematics::inverse`]).
 pub fn check(req: &SweepRequest) -> Result<(), Fault> {
     if !(SweepRequest::PERIODS_MIN..=SweepRequest::PERIODS_MAX).contains(&req.periods_per_sample) {
         return Err(Fault::InvalidValue(Field::Periods));
     }
-    kinematics::validate(&req.from)?;
-    kinematics::validate(&req.to)
+    Ok(())
 }
 
 /// Refuses a sweep whose path (a straight line in axis space between two
@@ -58,7 +57,7 @@ pub fn check(req: &SweepRequest) -> Result<(), Fault> {
 /// and the view's polar angles stay below 90° while `cos τ·cos ω` and
 /// `cos τ·cos(ω − ψ)` stay positive (`kinematics::forward`), and along the
 /// line τ, ω and ω − ψ change linearly between ends that
-/// [`kinematics::inverse`] puts inside (−90°, 90°) (tested by walking
+/// [`crate::kinematics::inverse`] puts inside (−90°, 90°) (tested by walking
 /// paths). No trigonometry: two comparisons on the chip.
 pub fn check_path(cfg: &HeadConfig, from: &AxisAngles, to: &AxisAngles) -> Result<(), Fault> {
     let (lo, hi) = (from.psi_deg.min(to.psi_deg), from.psi_deg.max(to.psi_deg));
@@ -79,15 +78,12 @@ pub fn tag(cfg: &HeadConfig, pos: &Position, first: [u32; 3], last: [u32; 3]) ->
     )
 }
 
-/// The geometry of a sweep's end, for its report.
-pub fn reached(cfg: &HeadConfig, pos: &Position) -> Geometry {
-    kinematics::forward(&pos.angles(cfg))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::config::REFERENCE;
+    use crate::kinematics;
+    use gonio_shared::Geometry;
     use proptest::prelude::*;
 
     /// The path's worst polar angle and whether it enters the blind zone,
