@@ -10,7 +10,9 @@ use core::future::{poll_fn, Future};
 use core::pin::pin;
 use core::task::Poll;
 use embedded_hal::digital::OutputPin;
-use gonio_shared::{CalibrationReport, DetectionReport, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags, Signal};
+use gonio_shared::{
+    CalibrationReport, DetectionReport, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags, Signal, SweepRequest,
+};
 
 /// Gain up when the largest code would still sit below this fraction of full
 /// scale at ten times the gain; down when codes reach the rails. The band in
@@ -33,6 +35,10 @@ pub struct Detector {
     reference: Reference,
     /// The regression's design for `settings.periods` at `chop_hz`.
     design: Design,
+    /// The design of a sweep's samples ([`Detector::design_sweep`]), kept
+    /// here rather than in the sweep's state, which the serve loop's future
+    /// would otherwise carry (3 KiB) through every await of a scan.
+    swept: Design,
     /// The calibration and the chop timing it was taken at.
     learned: Option<(Learned, ChopTiming)>,
     gain: u8,
@@ -51,6 +57,7 @@ impl Detector {
             chop_hz,
             reference: Reference::new(settings.reference, settings.samples_per_period as usize, None),
             design: Design::new(settings.periods as u32, chop_hz),
+            swept: Design::new(SweepRequest::PERIODS_MAX as u32, chop_hz),
             learned: None,
             gain: 0,
             running: false,
@@ -194,10 +201,10 @@ impl Detector {
         Ok(self.conclude::<B>(cfg, it, flags).await)
     }
 
-    /// The regression's design of a sweep's samples (`periods` each),
-    /// computed once for all of them before the chop starts.
-    pub fn sweep_design(&self, periods: u16) -> Design {
-        Design::new(periods as u32, self.chop_hz)
+    /// Computes the regression's design of a sweep's samples (`periods`
+    /// each), once for all of them, before the chop starts.
+    pub fn design_sweep(&mut self, periods: u16) {
+        self.swept = Design::new(periods as u32, self.chop_hz);
     }
 
     /// Starts the chop, ranges the gain and lets the amplifier settle for a
@@ -215,23 +222,17 @@ impl Detector {
     }
 
     /// Takes one swept sample while the step timer runs a move: the chop
-    /// runs on from the previous one (no ranging, no settling), `design`'s
-    /// periods are integrated. Returns its signal, and the steps the timer
+    /// runs on from the previous one (no ranging, no settling), the periods
+    /// of the sweep's design ([`Detector::design_sweep`]) are integrated. Returns its signal, and the steps the timer
     /// had emitted and the time when its last period's codes arrived, read
     /// before the estimate (the conversions go on meanwhile: the next
     /// sample's first period begins there). `moving` turns false once the
     /// move is over.
-    pub async fn measure_moving<B: Board>(
-        &mut self,
-        hw: &mut Hardware<B>,
-        cfg: &HeadConfig,
-        design: &Design,
-        moving: &mut bool,
-    ) -> (Signal, [u32; 3], u64) {
+    pub async fn measure_moving<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, moving: &mut bool) -> (Signal, [u32; 3], u64) {
         let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];
         let buf = &mut buf[..self.samples_per_period()];
-        let it = self.accumulate(hw, buf, &mut flags, design, Some(moving)).await;
+        let it = self.accumulate(hw, buf, &mut flags, &self.swept, Some(moving)).await;
         let (emitted, at_us) = (hw.steps.emitted(), hw.clock.now_us());
         (self.conclude::<B>(cfg, it, flags).await, emitted, at_us)
     }

@@ -16,15 +16,16 @@ use crate::sanity::geometry::FixedGeometry;
 use crate::sanity::Sanity;
 use crate::scan_run::ScanRun;
 use crate::state::{self, Drivers, Event, Laser, Mode};
+use crate::sweep::Sweeping;
 use crate::{homing, sweep, units};
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
-    Axis, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Field, Geometry, HeadState, Identity, PlanChunk,
-    PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, SweepReport,
-    SweepRequest, SweptSample,
+    Axis, AxisAngles, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Field, Geometry, HeadState, Identity,
+    PlanChunk, PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, SweepReport,
+    SweepRequest, SweepRow, SweptSample, Visit,
 };
 
 /// Who this head is; the board and the serial come from the binary.
@@ -43,6 +44,16 @@ pub struct HeadInfo {
 /// scan has neither run; a black sample needs the dark watch relaxed.
 pub const SUSPECT_RUN: u32 = 8;
 
+/// What one turn of a sweep scan's row did.
+pub(crate) enum SweepTurn {
+    /// The sweep began: the stages move, the chop runs.
+    Begun,
+    /// A sample; more follow.
+    Sample(SweptSample),
+    /// The row's last sample, and how many it made.
+    Last(SweptSample, u32),
+}
+
 /// Runs of suspicious samples in the current scan.
 #[derive(Debug, Default, Clone, Copy)]
 struct SuspectRuns {
@@ -58,6 +69,9 @@ pub struct Head<B: Board> {
     detector: Detector,
     sanity: Option<Sanity>,
     pub(crate) scan: Option<ScanRun>,
+    /// The row a sweep scan is sweeping, between two turns of the serve
+    /// loop; any stop ends it (the row is swept again on continuing).
+    sweeping: Option<Sweeping>,
     laser_on: bool,
     seq: u32,
     /// What the serve loop keeps of the conversation with the host.
@@ -90,6 +104,7 @@ impl<B: Board> Head<B> {
             detector: Detector::new::<B::Adc>(DetectionSettings::default()),
             sanity: None,
             scan: None,
+            sweeping: None,
             laser_on: false,
             seq: 0,
             talk: Conversation::default(),
@@ -117,6 +132,7 @@ impl<B: Board> Head<B> {
     /// Laser off, conversions stopped, drivers disabled, step queues emptied.
     /// Pin errors are ignored here: there is nothing safer left to do.
     pub fn safe_state(&mut self) {
+        self.sweeping = None;
         self.hw.steps.clear();
         self.detector.stop(&mut self.hw);
         let _ = self.hw.laser.set_low();
@@ -185,6 +201,7 @@ impl<B: Board> Head<B> {
         if self.apply(e).is_err() {
             return;
         }
+        self.sweeping = None;
         motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
         let _ = self.apply(Event::Stopped);
     }
@@ -397,10 +414,24 @@ impl<B: Board> Head<B> {
         if let Some(f) = state::transition(self.mode, Event::Measure).refused {
             return Err(f);
         }
-        sweep::check(&req)?;
-        if self.detector.settings().chop_hz > SweepRequest::CHOP_MAX_HZ {
-            return Err(Fault::InvalidValue(Field::ChopFrequency));
+        let (start, end, limits) = self.sweep_path(&req).await?;
+        self.apply(Event::Measure)?;
+        let r = async {
+            let mut sw = self.begin_sweep(req.periods_per_sample, limits, start, end, None).await?;
+            while sw.moving {
+                emit(self.swept_sample(&mut sw).await?);
+            }
+            self.end_sweep(sw).await
         }
+        .await;
+        self.rest_laser();
+        self.finish(r)
+    }
+
+    /// Checks a sweep and works out its stage targets and axis limits;
+    /// changes nothing.
+    async fn sweep_path(&mut self, req: &SweepRequest) -> Reply<([i32; 3], [i32; 3], [motion::Limits; 3])> {
+        self.check_sweep(req.periods_per_sample, req.speed_dps)?;
         // Each inverse is some 45 000 instructions on the chip (`chip-bench`):
         // the executor runs between them.
         let from = kinematics::inverse(&self.cfg, &req.from)?;
@@ -408,95 +439,144 @@ impl<B: Board> Head<B> {
         let to = kinematics::inverse(&self.cfg, &req.to)?;
         embassy_futures::yield_now().await;
         sweep::check_path(&self.cfg, &from, &to)?;
+        self.stage_path(&from, &to, req.speed_dps)
+    }
+
+    /// The stage targets and axis limits of a sweep between stage angles
+    /// `from` and `to` at `speed_dps`, once the head is known to be homed.
+    fn stage_path(&self, from: &AxisAngles, to: &AxisAngles, speed_dps: f32) -> Reply<([i32; 3], [i32; 3], [motion::Limits; 3])> {
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);
         }
-        let (start, end) = (motion::target_steps(&self.cfg, &from), motion::target_steps(&self.cfg, &to));
-        let limits = sweep::limits(&self.cfg, [0, 1, 2].map(|i| end[i] - start[i]), req.speed_dps)?;
-        self.apply(Event::Measure)?;
-        let r = self.run_sweep(&req, limits, start, end, &mut emit).await;
-        self.rest_laser();
-        self.finish(r)
+        let (start, end) = (motion::target_steps(&self.cfg, from), motion::target_steps(&self.cfg, to));
+        let delta = [0, 1, 2].map(|i| end[i] - start[i]);
+        Ok((start, end, sweep::limits(&self.cfg, delta, speed_dps)?))
     }
 
-    async fn run_sweep(
+    /// Checks what a sweep asks of the detector and of its samples.
+    fn check_sweep(&self, periods_per_sample: u16, speed_dps: f32) -> Reply<()> {
+        sweep::check(periods_per_sample, speed_dps)?;
+        if self.detector.settings().chop_hz > SweepRequest::CHOP_MAX_HZ {
+            return Err(Fault::InvalidValue(Field::ChopFrequency));
+        }
+        Ok(())
+    }
+
+    /// One turn of a sweep scan's row at scan position `at`: the first turn
+    /// works out and begins the sweep (the arm alone moves, at the row's
+    /// speed or its limit), every other one takes one sample; the last ends
+    /// the sweep. A row refused (beyond the travel) changes nothing.
+    pub(crate) async fn sweep_turn(&mut self, row: &SweepRow, at: ScanPosition) -> Reply<SweepTurn> {
+        let Some(mut sw) = self.sweeping.take() else {
+            self.check_sweep(row.periods_per_sample, row.speed_dps)?;
+            let (from, to) = sweep::row_ends(&self.cfg, row)?;
+            let speed = row.speed_dps.min(self.cfg.axes[Axis::Arm.index()].max_speed_dps);
+            let (start, end, limits) = self.stage_path(&from, &to, speed)?;
+            self.sweeping = Some(self.begin_sweep(row.periods_per_sample, limits, start, end, Some(at)).await?);
+            return Ok(SweepTurn::Begun);
+        };
+        // Dropped by a stop in the middle of a sample, `sw` ends the sweep.
+        let s = self.swept_sample(&mut sw).await?;
+        if sw.moving {
+            self.sweeping = Some(sw);
+            return Ok(SweepTurn::Sample(s));
+        }
+        let report = self.end_sweep(sw).await?;
+        Ok(SweepTurn::Last(s, report.samples))
+    }
+
+    /// Starts a checked sweep: the move to its start, the settle time, the
+    /// design of its samples and the plan of its move, the laser and the
+    /// chop (ranged), and the move. A failure leaves the head safe.
+    async fn begin_sweep(
         &mut self,
-        req: &SweepRequest,
+        periods_per_sample: u16,
         limits: [motion::Limits; 3],
         start: [i32; 3],
         end: [i32; 3],
-        emit: &mut impl FnMut(SweptSample),
-    ) -> Reply<SweepReport> {
-        self.detector.stop(&mut self.hw);
-        // To the start, whose stage targets are known already.
-        if let Err(f) = motion::move_to(&mut self.hw, &self.cfg, &mut self.pos, start).await {
+        scan: Option<ScanPosition>,
+    ) -> Reply<Sweeping> {
+        let r = async {
+            self.detector.stop(&mut self.hw);
+            // To the start, whose stage targets are known already.
+            motion::move_to(&mut self.hw, &self.cfg, &mut self.pos, start).await?;
+            self.hw
+                .delay
+                .delay_us(units::seconds_to_us(self.detector.settings().settle_s))
+                .await;
+            // Computed and planned before the chop starts: from then on the
+            // ADC's ring (two periods) must be read as it fills.
+            self.detector.design_sweep(periods_per_sample);
+            let delta = [0, 1, 2].map(|i| end[i] - self.pos.steps[i]);
+            let run = motion::plan(&mut self.hw, &self.cfg, delta, limits).await?;
+            self.laser(true)?;
+            self.detector.prepare_sweep(&mut self.hw, &self.cfg).await?;
+            motion::start(&mut self.hw, &mut self.pos, &run);
+            let t0 = self.hw.clock.now_us();
+            Ok(Sweeping {
+                run,
+                scan,
+                t0,
+                first: [0; 3],
+                start_us: t0,
+                moving: true,
+                splitter: kinematics::through_splitter(&self.cfg, &self.pos.angles(&self.cfg)),
+                samples: 0,
+            })
+        }
+        .await;
+        if r.is_err() {
+            self.safe_state();
+        }
+        r
+    }
+
+    /// The next sample of a sweep under way (its last once `sw.moving`
+    /// turns false). A stalled move or a lost ADC block stops the sweep and
+    /// leaves the head safe.
+    async fn swept_sample(&mut self, sw: &mut Sweeping) -> Reply<SweptSample> {
+        if self.hw.clock.now_us().saturating_sub(sw.t0) > sw.run.limit_ms as u64 * 1000 {
+            let f = sw.run.stalled(&mut self.hw, &mut self.pos);
             self.safe_state();
             return Err(f);
         }
-        self.hw
-            .delay
-            .delay_us(units::seconds_to_us(self.detector.settings().settle_s))
-            .await;
-        // Computed and planned before the chop starts: from then on the
-        // ADC's ring (two periods) must be read as it fills.
-        let design = self.detector.sweep_design(req.periods_per_sample);
-        let delta = [0, 1, 2].map(|i| end[i] - self.pos.steps[i]);
-        let planned = motion::plan(&mut self.hw, &self.cfg, delta, limits).await;
-        let run = match planned {
-            Ok(run) => run,
-            Err(f) => {
-                self.safe_state();
-                return Err(f);
-            }
+        let (mut signal, last, end_us) = self.detector.measure_moving(&mut self.hw, &self.cfg, &mut sw.moving).await;
+        if sw.splitter {
+            signal.flags.insert(SampleFlags::THROUGH_SPLITTER);
+        }
+        if signal.flags.contains(SampleFlags::OVERRUN) {
+            // A lost block breaks the alignment of the ring with the
+            // chop for every sample after it: the sweep stops.
+            motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
+            self.safe_state();
+            return Err(Fault::AdcOverrun);
+        }
+        let (axes_from, axes_to) = sweep::tag(&self.cfg, &self.pos, sw.first, last);
+        let s = SweptSample {
+            seq: self.seq,
+            scan: sw.scan,
+            start_us: sw.start_us,
+            duration_s: end_us.saturating_sub(sw.start_us) as f32 * 1e-6,
+            axes_from,
+            axes_to,
+            signal,
         };
-        if let Err(f) = self.laser(true) {
-            self.safe_state();
-            return Err(f);
-        }
-        if let Err(f) = self.detector.prepare_sweep(&mut self.hw, &self.cfg).await {
-            self.safe_state();
-            return Err(f);
-        }
-        motion::start(&mut self.hw, &mut self.pos, &run);
-        let t0 = self.hw.clock.now_us();
-        let (mut first, mut start_us) = ([0; 3], t0);
-        let mut moving = true;
-        let mut samples = 0u32;
-        while moving {
-            if self.hw.clock.now_us().saturating_sub(t0) > run.limit_ms as u64 * 1000 {
-                let f = run.stalled(&mut self.hw, &mut self.pos);
-                self.safe_state();
-                return Err(f);
-            }
-            let (signal, last, end_us) = self.detector.measure_moving(&mut self.hw, &self.cfg, &design, &mut moving).await;
-            if signal.flags.contains(SampleFlags::OVERRUN) {
-                // A lost block breaks the alignment of the ring with the
-                // chop for every sample after it: the sweep stops.
-                motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
-                self.safe_state();
-                return Err(Fault::AdcOverrun);
-            }
-            let (axes_from, axes_to) = sweep::tag(&self.cfg, &self.pos, first, last);
-            emit(SweptSample {
-                seq: self.seq,
-                start_us,
-                duration_s: end_us.saturating_sub(start_us) as f32 * 1e-6,
-                axes_from,
-                axes_to,
-                signal,
-            });
-            self.seq = self.seq.wrapping_add(1);
-            samples += 1;
-            (first, start_us) = (last, end_us);
-        }
+        self.seq = self.seq.wrapping_add(1);
+        sw.samples += 1;
+        (sw.first, sw.start_us) = (last, end_us);
+        Ok(s)
+    }
+
+    /// Ends a sweep whose move is over: its steps counted in and checked.
+    async fn end_sweep(&mut self, sw: Sweeping) -> Reply<SweepReport> {
         let emitted = self.hw.steps.emitted();
-        if let Err(f) = motion::end(&mut self.hw, &self.cfg, &mut self.pos, &run, emitted).await {
+        if let Err(f) = motion::end(&mut self.hw, &self.cfg, &mut self.pos, &sw.run, emitted).await {
             self.safe_state();
             return Err(f);
         }
         Ok(SweepReport {
-            samples,
-            duration_s: self.hw.clock.now_us().saturating_sub(t0) as f32 * 1e-6,
+            samples: sw.samples,
+            duration_s: self.hw.clock.now_us().saturating_sub(sw.t0) as f32 * 1e-6,
             reached: kinematics::forward(&self.pos.angles(&self.cfg)),
         })
     }
@@ -517,6 +597,10 @@ impl<B: Board> Head<B> {
             return Err(f);
         }
         let total = spec.validate()?;
+        if let Some(Visit::Row(row)) = spec.visit(0, 0) {
+            // Every row shares these: refused here, not row by row.
+            self.check_sweep(row.periods_per_sample, row.speed_dps)?;
+        }
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);
         }

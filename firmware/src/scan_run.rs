@@ -4,7 +4,7 @@
 //! loop's watch); this says *what comes next*. Nothing here moves or
 //! measures, so every operation is a few integer steps.
 
-use gonio_shared::{Fault, Field, Geometry, PlanChunk, PlanQueued, Reply, Sample, ScanEvent, ScanSpec, PLAN_QUEUE};
+use gonio_shared::{Fault, Field, PlanChunk, PlanQueued, Reply, ScanEvent, ScanSpec, Visit, PLAN_QUEUE};
 use heapless::Deque;
 
 pub(crate) struct ScanRun {
@@ -19,15 +19,16 @@ pub(crate) struct ScanRun {
     next_order: u32,
     measured: u32,
     skipped: u32,
-    /// The point taken from the plan and not yet done: a stop in the middle
-    /// of it leaves it here, and continuing visits it again.
-    current: Option<(u32, Geometry)>,
+    /// The position taken from the plan and not yet done: a stop in the
+    /// middle of it leaves it here, and continuing visits it again (a row
+    /// from its start: the host keeps a row's samples only once it is done).
+    current: Option<(u32, Visit)>,
 }
 
 /// What the scan does next.
 pub(crate) enum Next {
-    /// Visit point `index` (canonical) at visit position `order`.
-    Visit { index: u32, order: u32, at: Geometry },
+    /// Visit position `order`, canonical index `index`: a point or a row.
+    Visit { index: u32, order: u32, at: Visit },
     /// The plan has run dry before the last point: wait for the host.
     Starved,
     /// Every point is done.
@@ -36,7 +37,7 @@ pub(crate) enum Next {
 
 /// What became of a visited point: its event, and whether the scan goes on.
 pub(crate) enum Recorded {
-    /// Measured or skipped: the scan goes on with its next point.
+    /// Measured or skipped: the scan goes on with its next position.
     GoesOn(ScanEvent),
     /// The visit failed for `reason`: the scan ends with this `Stopped` event.
     Ends(Fault, ScanEvent),
@@ -91,12 +92,13 @@ impl ScanRun {
         })
     }
 
-    /// The point to visit next: the one a stop interrupted, else the next of
-    /// the plan.
+    /// The position to visit next: the one a stop interrupted, else the
+    /// next of the plan.
     pub(crate) fn next(&mut self) -> Next {
         if self.current.is_none() {
             // Indices were checked against the grid when they were queued.
-            self.current = self.plan.pop_front().and_then(|i| self.spec.point(i).map(|g| (i, g)));
+            let order = self.next_order;
+            self.current = self.plan.pop_front().and_then(|i| self.spec.visit(i, order).map(|v| (i, v)));
         }
         match self.current {
             Some((index, at)) => Next::Visit {
@@ -113,15 +115,16 @@ impl ScanRun {
         }
     }
 
-    /// Counts what became of point `index` at visit position `order`: a
-    /// sample goes on, an unreachable or refused geometry is skipped, any
-    /// other fault ends the scan (it resumes at this point).
-    pub(crate) fn record(&mut self, index: u32, order: u32, result: Reply<Sample>) -> Recorded {
+    /// Counts what became of position `index` at visit position `order`: a
+    /// measured one (its `Sample` or `Swept` event) goes on, an unreachable
+    /// or refused geometry is skipped, any other fault ends the scan (it
+    /// resumes at this position).
+    pub(crate) fn record(&mut self, index: u32, order: u32, result: Reply<ScanEvent>) -> Recorded {
         match result {
-            Ok(s) => {
+            Ok(ev) => {
                 self.measured += 1;
                 self.advance();
-                Recorded::GoesOn(ScanEvent::Sample(s))
+                Recorded::GoesOn(ev)
             }
             Err(reason @ (Fault::Unreachable(_) | Fault::InvalidValue(_))) => {
                 self.skipped += 1;

@@ -11,7 +11,7 @@
 //! answered when the operation ends.
 
 use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
-use crate::head::Head;
+use crate::head::{Head, SweepTurn};
 use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
 use crate::scan_run::{Next, Recorded};
@@ -26,7 +26,7 @@ use gonio_shared::icd::{
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::wire::check;
 use gonio_shared::wire::framing::MAX_FRAME;
-use gonio_shared::{Fault, Reply, Status};
+use gonio_shared::{Fault, Reply, ScanEvent, Status, Visit};
 use heapless::{Deque, Vec};
 use postcard_rpc::header::VarSeq;
 use postcard_rpc::standard_icd::{WireError, ERROR_KEY};
@@ -395,21 +395,23 @@ impl<B: Board> Head<B> {
         }
     }
 
-    /// Visits the next point of the running scan, under watch, and publishes
-    /// what happened; holds the scan instead when the host has gone silent.
+    /// Visits the next position of the running scan, under watch, and
+    /// publishes what happened: a point whole, a sweep scan's row one turn
+    /// (one sample) at a time, so requests are served between its samples;
+    /// holds the scan instead when the host has gone silent.
     async fn scan_step<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {
         if self.silence_deadline().is_some_and(|d| sentry.now_us() >= d) {
             self.tripped(Trip::HostSilent).await?;
             return Ok(());
         }
-        // The run is out of the head while its point is visited (the visit
-        // needs the whole head), and goes back unless the visit ended it.
+        // The run is out of the head while its position is visited (the
+        // visit needs the whole head), and goes back unless the visit ended it.
         let Some(mut run) = self.scan.take() else {
             // Nothing to scan (cannot happen: scanning starts with a run).
             let _ = self.apply(Event::Done);
             return Ok(());
         };
-        let (index, order, g) = match run.next() {
+        let (index, order, at) = match run.next() {
             Next::Visit { index, order, at } => (index, order, at),
             Next::Starved => {
                 self.scan = Some(run);
@@ -420,13 +422,43 @@ impl<B: Board> Head<B> {
                 return self.publish::<ScanEventTopic, L>(&ev, link).await;
             }
         };
-        let at = Some(ScanPosition { index, order });
-        let visit = async |h: &mut Self| {
-            // A run of suspicious points ends the scan: the sample that
-            // completed it is not sent, and the scan resumes at it.
-            h.acquire(Some(g), at).await.and_then(|s| h.watch(&s).map(|()| s))
+        let here = ScanPosition { index, order };
+        let result = match at {
+            Visit::Point(g) => {
+                let visit = async |h: &mut Self| {
+                    // A run of suspicious points ends the scan: the sample that
+                    // completed it is not sent, and the scan resumes at it.
+                    h.acquire(Some(g), Some(here))
+                        .await
+                        .and_then(|s| h.watch(&s).map(|()| ScanEvent::Sample(s)))
+                };
+                self.guarded(link, sentry, inbox, true, visit).await
+            }
+            Visit::Row(row) => {
+                let turn = async |h: &mut Self| h.sweep_turn(&row, here).await;
+                match self.guarded(link, sentry, inbox, true, turn).await {
+                    Ok(Ok(SweepTurn::Begun)) => {
+                        self.scan = Some(run);
+                        return Ok(());
+                    }
+                    Ok(Ok(SweepTurn::Sample(s))) => {
+                        self.scan = Some(run);
+                        return self.publish::<ScanEventTopic, L>(&ScanEvent::SweptSample(s), link).await;
+                    }
+                    Ok(Ok(SweepTurn::Last(s, samples))) => {
+                        if let Err(e) = self.publish::<ScanEventTopic, L>(&ScanEvent::SweptSample(s), link).await {
+                            // Held at this row, which is swept again.
+                            self.scan = Some(run);
+                            return Err(e);
+                        }
+                        Ok(Ok(ScanEvent::Swept { index, order, samples }))
+                    }
+                    Ok(Err(f)) => Ok(Err(f)),
+                    Err(trip) => Err(trip),
+                }
+            }
         };
-        let result = match self.guarded(link, sentry, inbox, true, visit).await {
+        let result = match result {
             Ok(result) => result,
             Err(trip) => {
                 // Held or dropped with its event, as any stop does.

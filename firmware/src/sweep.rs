@@ -6,8 +6,50 @@
 //! start and its last one's end.
 
 use crate::config::HeadConfig;
-use crate::motion::{self, Limits, Position};
-use gonio_shared::{AxisAngles, Fault, Field, SweepRequest, Unreachable};
+use crate::kinematics;
+use crate::motion::{self, Limits, Position, Running};
+use gonio_shared::sample::ScanPosition;
+use gonio_shared::{AxisAngles, Fault, Field, SweepRequest, SweepRow, Unreachable};
+use libm::{acos, cos, sin};
+
+const DEG: f64 = core::f64::consts::PI / 180.0;
+/// How far beyond the blind zone a row begins (deg of arm): the arm's
+/// microstep rounding and its backlash keep clear of it.
+const BLIND_MARGIN_DEG: f64 = 0.5;
+
+/// A sweep under way, between two of its samples: its move in flight and
+/// where the next sample begins (the design of its samples is the
+/// detector's). A scan keeps it
+/// across the serve loop's turns (one sample each).
+pub(crate) struct Sweeping {
+    pub(crate) run: Running,
+    /// The sweep scan's row, if it is one.
+    pub(crate) scan: Option<ScanPosition>,
+    /// When the move started (µs).
+    pub(crate) t0: u64,
+    /// Steps emitted and head time where the next sample begins.
+    pub(crate) first: [u32; 3],
+    pub(crate) start_us: u64,
+    /// False once the move is over (its last sample taken).
+    pub(crate) moving: bool,
+    /// The detector sees through the beam splitter all along (a path
+    /// cannot cross the blind zone between it and the open view,
+    /// [`check_path`]).
+    pub(crate) splitter: bool,
+    pub(crate) samples: u32,
+}
+
+/// The fastest a sweep by `delta` microsteps may go: the speed of its
+/// longest-travel axis at which every other axis, in proportion, is still
+/// within its own limit (`f32::INFINITY` for no travel).
+pub fn top_speed(cfg: &HeadConfig, delta: [i32; 3]) -> f32 {
+    let deg = [0, 1, 2].map(|i| delta[i].unsigned_abs() as f32 / cfg.axes[i].steps_per_deg());
+    let longest = deg.iter().copied().fold(0.0, f32::max);
+    (0..3)
+        .filter(|&i| deg[i] > 0.0)
+        .map(|i| cfg.axes[i].max_speed_dps * longest / deg[i])
+        .fold(f32::INFINITY, f32::min)
+}
 
 /// Limits of the axes moving by `delta` microsteps, so that the one with the
 /// longest travel cruises at `speed_dps` and every axis follows the same
@@ -17,7 +59,7 @@ use gonio_shared::{AxisAngles, Fault, Field, SweepRequest, Unreachable};
 /// Refused beyond an axis's speed limit, below [`SweepRequest::SPEED_MIN_DPS`]
 /// or when the sweep would outlast [`SweepRequest::DURATION_MAX_S`].
 pub fn limits(cfg: &HeadConfig, delta: [i32; 3], speed_dps: f32) -> Result<[Limits; 3], Fault> {
-    if !(speed_dps >= SweepRequest::SPEED_MIN_DPS && speed_dps.is_finite()) {
+    if !speed_ok(speed_dps) {
         return Err(Fault::InvalidValue(Field::SweepSpeed));
     }
     let deg = [0, 1, 2].map(|i| delta[i].unsigned_abs() as f32 / cfg.axes[i].steps_per_deg());
@@ -34,7 +76,9 @@ pub fn limits(cfg: &HeadConfig, delta: [i32; 3], speed_dps: f32) -> Result<[Limi
     for i in 0..3 {
         if ratio[i] > 0.0 {
             out[i] = Limits::new(speed_dps * ratio[i], accel * ratio[i]);
-            if out[i].speed_dps > cfg.axes[i].max_speed_dps {
+            // Beyond the limit by more than the rounding of the proportion
+            // (an axis at [`top_speed`] lands on its limit give or take an ulp).
+            if out[i].speed_dps > cfg.axes[i].max_speed_dps * (1.0 + 1e-6) {
                 return Err(Fault::InvalidValue(Field::SweepSpeed));
             }
         }
@@ -42,11 +86,69 @@ pub fn limits(cfg: &HeadConfig, delta: [i32; 3], speed_dps: f32) -> Result<[Limi
     Ok(out)
 }
 
-/// Checks a sweep's sample length (its ends are checked by
-/// [`crate::kinematics::inverse`]).
-pub fn check(req: &SweepRequest) -> Result<(), Fault> {
-    if !(SweepRequest::PERIODS_MIN..=SweepRequest::PERIODS_MAX).contains(&req.periods_per_sample) {
+fn speed_ok(speed_dps: f32) -> bool {
+    speed_dps >= SweepRequest::SPEED_MIN_DPS && speed_dps.is_finite()
+}
+
+/// The stage angles at a sweep scan's row's start and end ([`SweepRow`]),
+/// in the order it runs. The sample's normal `n(ω, τ)` stays put, at θi
+/// from the light (`cos θi = cos τ·cos ω`), turned so that the view circle
+/// of the arm, `D(ψ)`, meets the sample's horizon at azimuth Δφ: there
+/// `D ⟂ n`, so `ψ_H = ω + 90°`, and `cos Δφ = cos ψ_H / sin θi`, the sign of
+/// τ that of `sin Δφ` (`kinematics::forward`). Along the row
+/// `cos θo = cos τ·cos(ω − ψ)`: the row ends where θo reaches its stop on
+/// the way to the horizon, and begins just beyond the blind zone (all of it
+/// in view: `|ω − ψ| < 90°` from there to `ψ_H`). Refused when the arm
+/// would leave its travel or the stop lies short of the blind zone. Some
+/// 25 trigonometric calls in f64 on the chip (`chip-bench`), against 90
+/// for the two inverse kinematics of a [`SweepRequest`].
+pub fn row_ends(cfg: &HeadConfig, row: &SweepRow) -> Result<(AxisAngles, AxisAngles), Fault> {
+    let field = |x: f32, f: Field| {
+        if x.is_finite() && (0.0..90.0).contains(&x) {
+            Ok(x as f64 * DEG)
+        } else {
+            Err(Fault::InvalidValue(f))
+        }
+    };
+    let (ti, stop) = (field(row.theta_i_deg, Field::ThetaI)?, field(row.theta_o_stop_deg, Field::ThetaO)?);
+    if !row.dphi_deg.is_finite() {
+        return Err(Fault::InvalidValue(Field::Dphi));
+    }
+    let dp = row.dphi_deg as f64 * DEG;
+    let psi_h = acos((sin(ti) * cos(dp)).clamp(-1.0, 1.0));
+    let omega = psi_h - 90.0 * DEG;
+    // cos ω = sin ψ_H ≥ cos θi: the quotient is at most 1 but for rounding.
+    let tau_abs = acos((cos(ti) / cos(omega)).min(1.0));
+    let tau = if sin(dp) < 0.0 { -tau_abs } else { tau_abs };
+    // θo never falls below |τ| on the circle: a stop below it is never reached.
+    let reach = cos(stop) / cos(tau);
+    if reach > 1.0 {
+        return Err(Fault::InvalidValue(Field::ThetaO));
+    }
+    let psi_end = omega + acos(reach);
+    let psi_start = cfg.optics.blind_max_deg as f64 * DEG + BLIND_MARGIN_DEG * DEG;
+    if psi_end <= psi_start {
+        return Err(Fault::Unreachable(Unreachable::BlindZone));
+    }
+    let at = |psi: f64| AxisAngles {
+        omega_deg: (omega / DEG) as f32,
+        tau_deg: (tau / DEG) as f32,
+        psi_deg: (psi / DEG) as f32,
+    };
+    let (a, b) = (at(psi_start), at(psi_end));
+    kinematics::check_travel(cfg, &a)?;
+    kinematics::check_travel(cfg, &b)?;
+    Ok(if row.outward { (a, b) } else { (b, a) })
+}
+
+/// Checks a sweep's sample length and speed (its ends are checked by
+/// [`crate::kinematics::inverse`], its speed against the axes by [`limits`]).
+pub fn check(periods_per_sample: u16, speed_dps: f32) -> Result<(), Fault> {
+    if !(SweepRequest::PERIODS_MIN..=SweepRequest::PERIODS_MAX).contains(&periods_per_sample) {
         return Err(Fault::InvalidValue(Field::Periods));
+    }
+    if !speed_ok(speed_dps) {
+        return Err(Fault::InvalidValue(Field::SweepSpeed));
     }
     Ok(())
 }
@@ -124,6 +226,39 @@ mod tests {
                 Ok(()) => prop_assert!(worst < 90.0 && !blind, "accepted: θ up to {worst}°, blind {blind}"),
                 Err(Fault::Unreachable(Unreachable::BlindZone)) => prop_assert!(blind),
                 Err(f) => prop_assert!(false, "{f:?}"),
+            }
+        }
+    }
+
+    proptest! {
+        /// A row keeps its incidence all along, stays in view, begins just
+        /// beyond the blind zone, ends at its θo stop, and its circle meets
+        /// the horizon at its Δφ.
+        #[test]
+        fn a_row_holds_its_incidence_from_the_blind_zone_to_its_stop(
+            ti in 0.0f32..85.0, dp in -180.0f32..180.0, stop in 1.0f32..89.5, outward: bool,
+        ) {
+            let row = SweepRow { theta_i_deg: ti, dphi_deg: dp, theta_o_stop_deg: stop, outward, speed_dps: 10.0, periods_per_sample: 8 };
+            let (a, b) = match row_ends(&REFERENCE, &row) {
+                Ok(ends) => ends,
+                Err(Fault::InvalidValue(Field::ThetaO) | Fault::Unreachable(_)) => return Ok(()),
+                Err(f) => return Err(TestCaseError::fail(format!("{f:?}"))),
+            };
+            let (near, far) = if outward { (a, b) } else { (b, a) };
+            prop_assert_eq!((a.omega_deg, a.tau_deg), (b.omega_deg, b.tau_deg));
+            prop_assert!((near.psi_deg - REFERENCE.optics.blind_max_deg - 0.5).abs() < 1e-3);
+            prop_assert!((kinematics::forward(&far).theta_o_deg - stop).abs() < 0.01, "{:?}", kinematics::forward(&far));
+            let (worst, blind) = walked(&a, &b);
+            prop_assert!(worst < 90.0 && !blind);
+            for k in 0..=20 {
+                let psi = near.psi_deg + (far.psi_deg - near.psi_deg) * k as f32 / 20.0;
+                let g = kinematics::forward(&AxisAngles { psi_deg: psi, ..a });
+                prop_assert!((g.theta_i_deg - ti).abs() < 0.01, "θi {} at ψ {psi}", g.theta_i_deg);
+            }
+            if ti > 1.0 {
+                let horizon = kinematics::forward(&AxisAngles { psi_deg: a.omega_deg + 90.0, ..a });
+                let off = crate::units::wrap_deg((horizon.dphi_deg - dp) as f64).abs();
+                prop_assert!((horizon.theta_o_deg - 90.0).abs() < 0.01 && off < 0.05, "{horizon:?} for Δφ {dp}");
             }
         }
     }

@@ -263,7 +263,7 @@ impl Calibration {
         let monitor: Vec<Row> = rows.iter().filter(|r| r.index.is_none()).cloned().collect();
         let drift = Drift::from_monitor(&monitor, anchor);
         let head = &budget.head;
-        let out = rows
+        let mut out = rows
             .iter()
             .filter(|r| r.index.is_some())
             .map(|r| {
@@ -304,7 +304,8 @@ impl Calibration {
                     shifts,
                 }
             })
-            .collect();
+            .collect::<Vec<_>>();
+        crate::swept::unblur(&mut out);
         (out, drift)
     }
 }

@@ -23,6 +23,7 @@ pub mod scan;
 pub mod scan_dir;
 pub mod scan_order;
 pub mod session;
+pub mod swept;
 pub mod target;
 pub mod uncertainty;
 pub mod usb;

@@ -4,8 +4,9 @@
 //! `samples.csv` is always a whole scan. Columns: `docs/samples-csv.md`.
 
 use crate::scan_dir::ScanDir;
+use crate::swept;
 use anyhow::{Context, Result};
-use gonio_shared::{Sample, SampleFlags};
+use gonio_shared::{Sample, SampleFlags, Signal, SweptSample};
 use serde::{Deserialize, Serialize};
 use std::fs::File;
 use std::path::{Path, PathBuf};
@@ -37,6 +38,10 @@ pub struct Row {
     pub periods: u16,
     pub flags: u16,
     pub flag_names: String,
+    /// A swept sample's angular extent (degrees, [`swept::extent_deg`]);
+    /// empty for a sample at rest (and absent in files of an earlier gonio).
+    #[serde(default)]
+    pub extent_deg: Option<f32>,
 }
 
 impl Row {
@@ -48,32 +53,61 @@ impl Row {
 
 impl From<&Sample> for Row {
     fn from(s: &Sample) -> Self {
-        let names: Vec<String> = s.signal.flags.iter_names().map(|(n, _)| n.to_ascii_lowercase()).collect();
+        let mut row = Row::of_signal(s.seq, s.scan, s.timestamp_us as f64 * 1e-6, &s.signal);
+        (row.target_theta_i_deg, row.target_theta_o_deg, row.target_dphi_deg) =
+            (s.target.theta_i_deg, s.target.theta_o_deg, s.target.dphi_deg);
+        (row.theta_i_deg, row.theta_o_deg, row.dphi_deg) = (s.reached.theta_i_deg, s.reached.theta_o_deg, s.reached.dphi_deg);
+        (row.omega_deg, row.tau_deg, row.psi_deg) = (s.axes.omega_deg, s.axes.tau_deg, s.axes.psi_deg);
+        row
+    }
+}
+
+/// A swept sample's row: it has no target, so its geometry (the middle of
+/// its stage angles, [`swept::geometry`]) stands in both; its time is its
+/// middle, and its extent is filled in.
+impl From<&SweptSample> for Row {
+    fn from(s: &SweptSample) -> Self {
+        let middle_s = s.start_us as f64 * 1e-6 + 0.5 * s.duration_s as f64;
+        let mut row = Row::of_signal(s.seq, s.scan, middle_s, &s.signal);
+        let (g, a) = (swept::geometry(s), s.mid_axes());
+        (row.target_theta_i_deg, row.target_theta_o_deg, row.target_dphi_deg) = (g.theta_i_deg, g.theta_o_deg, g.dphi_deg);
+        (row.theta_i_deg, row.theta_o_deg, row.dphi_deg) = (g.theta_i_deg, g.theta_o_deg, g.dphi_deg);
+        (row.omega_deg, row.tau_deg, row.psi_deg) = (a.omega_deg, a.tau_deg, a.psi_deg);
+        row.extent_deg = Some(swept::extent_deg(s) as f32);
+        row
+    }
+}
+
+impl Row {
+    /// The row of a signal, its geometry and stage angles left at zero.
+    fn of_signal(seq: u32, scan: Option<gonio_shared::sample::ScanPosition>, timestamp_s: f64, signal: &Signal) -> Self {
+        let names: Vec<String> = signal.flags.iter_names().map(|(n, _)| n.to_ascii_lowercase()).collect();
         Row {
-            seq: s.seq,
-            index: s.scan.map(|p| p.index),
-            order: s.scan.map(|p| p.order),
-            timestamp_s: s.timestamp_us as f64 * 1e-6,
-            target_theta_i_deg: s.target.theta_i_deg,
-            target_theta_o_deg: s.target.theta_o_deg,
-            target_dphi_deg: s.target.dphi_deg,
-            theta_i_deg: s.reached.theta_i_deg,
-            theta_o_deg: s.reached.theta_o_deg,
-            dphi_deg: s.reached.dphi_deg,
-            omega_deg: s.axes.omega_deg,
-            tau_deg: s.axes.tau_deg,
-            psi_deg: s.axes.psi_deg,
-            in_phase_v: s.signal.in_phase_v,
-            quadrature_v: s.signal.quadrature_v,
-            amplitude_v: s.signal.amplitude_v,
-            magnitude_v: s.signal.magnitude_v,
-            phase_deg: s.signal.phase_deg,
-            noise_v: s.signal.noise_v,
-            gain_v_per_a: s.signal.gain_v_per_a,
-            gain_index: s.signal.gain_index,
-            periods: s.signal.periods,
-            flags: s.signal.flags.bits(),
+            seq,
+            index: scan.map(|p| p.index),
+            order: scan.map(|p| p.order),
+            timestamp_s,
+            target_theta_i_deg: 0.0,
+            target_theta_o_deg: 0.0,
+            target_dphi_deg: 0.0,
+            theta_i_deg: 0.0,
+            theta_o_deg: 0.0,
+            dphi_deg: 0.0,
+            omega_deg: 0.0,
+            tau_deg: 0.0,
+            psi_deg: 0.0,
+            in_phase_v: signal.in_phase_v,
+            quadrature_v: signal.quadrature_v,
+            amplitude_v: signal.amplitude_v,
+            magnitude_v: signal.magnitude_v,
+            phase_deg: signal.phase_deg,
+            noise_v: signal.noise_v,
+            gain_v_per_a: signal.gain_v_per_a,
+            gain_index: signal.gain_index,
+            periods: signal.periods,
+            flags: signal.flags.bits(),
             flag_names: names.join("|"),
+            extent_deg: None,
         }
     }
 }
@@ -120,7 +154,20 @@ impl SampleWriter {
 
     /// Writes one sample and flushes it to the operating system.
     pub fn push(&mut self, s: &Sample) -> Result<()> {
-        self.csv.serialize(Row::from(s)).context("writing a sample row")?;
+        self.write(&[Row::from(s)])
+    }
+
+    /// Writes a sweep scan's row of samples together and flushes them (a
+    /// crash can still cut it short: resuming sweeps the last stored row
+    /// again, [`drop_last_position`]).
+    pub fn push_swept(&mut self, row: &[SweptSample]) -> Result<()> {
+        self.write(&row.iter().map(Row::from).collect::<Vec<_>>())
+    }
+
+    fn write(&mut self, rows: &[Row]) -> Result<()> {
+        for r in rows {
+            self.csv.serialize(r).context("writing a sample row")?;
+        }
         self.csv.flush().context("flushing samples")
     }
 
@@ -153,6 +200,40 @@ pub fn stored_rows(dir: &Path) -> Result<Vec<Row>> {
         .enumerate()
         .map(|(i, row)| row.with_context(|| format!("{}: row {}", part.display(), i + 2)))
         .collect()
+}
+
+/// Drops the samples of the last visit position an interrupted scan stored
+/// (with a partial last line): a sweep scan's row may have been cut short
+/// by a crash while it was written, and is swept again.
+pub fn drop_last_position(dir: &Path) -> Result<()> {
+    let part = ScanDir::new(dir).samples_part();
+    if !part.exists() {
+        return Ok(());
+    }
+    let text = whole_lines(&part)?;
+    let mut reader = csv::Reader::from_reader(&text[..]);
+    let headers = reader.headers().context("reading the stored samples")?.clone();
+    let mut keep = text.len() as u64;
+    let mut last = None;
+    loop {
+        let at = reader.position().byte();
+        let mut record = csv::StringRecord::new();
+        if !reader.read_record(&mut record).context("reading the stored samples")? {
+            break;
+        }
+        let row: Row = record.deserialize(Some(&headers)).context("reading the stored samples")?;
+        if row.order.is_some() && row.order != last {
+            (keep, last) = (at, row.order);
+        }
+    }
+    if last.is_some() {
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .open(&part)
+            .with_context(|| format!("opening {}", part.display()))?;
+        file.set_len(keep).context("dropping the last stored position")?;
+    }
+    Ok(())
 }
 
 /// Reads a samples file back.

@@ -10,7 +10,7 @@ use gonio_firmware::motion::PARK;
 use gonio_shared::icd::{
     AbortEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, PauseEndpoint, PlanEndpoint, StatusEndpoint,
 };
-use gonio_shared::{Fault, Geometry, HeadState, PlanChunk, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
+use gonio_shared::{Fault, Geometry, HeadState, PlanChunk, ScanAccepted, ScanEvent, ScanSpec, SweptSample, PLAN_CHUNK, PLAN_QUEUE};
 use indicatif::ProgressBar;
 use serde::Serialize;
 use std::collections::BTreeMap;
@@ -22,8 +22,11 @@ const EVENT_TIMEOUT: Duration = Duration::from_secs(180);
 /// What a completed scan did.
 #[derive(Debug, Clone, Serialize)]
 pub struct ScanOutcome {
+    /// Visit positions: points, or a sweep scan's rows.
     pub points: u32,
     pub measured: u32,
+    /// Samples a sweep scan's rows yielded (0 for a scan of points).
+    pub swept_samples: u32,
     pub skipped: u32,
     /// Unreachable points by reason.
     pub skipped_by_reason: BTreeMap<String, u32>,
@@ -37,8 +40,9 @@ pub struct ScanOutcome {
     /// scan started to the scan's last event: real time on a real head,
     /// simulated time on the simulator.
     pub head_time_s: f64,
-    /// No stop-and-go order of the scan's points takes less head time than
-    /// this (s; [`crate::scan_order::lower_bound`]); absent for a resumed scan,
+    /// No stop-and-go order of the scan's points (a sweep scan's grid
+    /// points) takes less head time than this (s;
+    /// [`crate::scan_order::lower_bound`]); absent for a resumed scan,
     /// whose head time covers only its last part, for one with a drift
     /// monitor, whose visits the bound knows nothing of, and for one too
     /// large to bound.
@@ -120,6 +124,7 @@ pub async fn run(
         outcome: ScanOutcome {
             points: spec.len(),
             measured: 0,
+            swept_samples: 0,
             skipped: 0,
             skipped_by_reason: BTreeMap::new(),
             flagged: 0,
@@ -284,6 +289,9 @@ impl ScanDriver<'_> {
             Err(e) => return lost(e, expected),
         };
         let mut pausing = false;
+        // The samples of the row a sweep scan is sweeping, kept once it is
+        // done and whole.
+        let mut row: Vec<SweptSample> = Vec::new();
         let mut beat = Instant::now();
         let mut waiting_since = Instant::now();
         loop {
@@ -331,10 +339,36 @@ impl ScanDriver<'_> {
                     return lost(e, expected);
                 }
             }
+            if let ScanEvent::SweptSample(s) = &ev {
+                let o = s.scan.map_or(u32::MAX, |p| p.order);
+                if o < expected {
+                    outcome.duplicates_dropped += 1;
+                    continue;
+                }
+                // Consecutive samples of the row expected, or a gap: the
+                // row is swept again.
+                if o > expected || row.last().is_some_and(|l| l.seq.wrapping_add(1) != s.seq) {
+                    if let Err(e) = head.request::<AbortEndpoint>(&()).await {
+                        return lost(e, expected);
+                    }
+                    return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                }
+                row.push(*s);
+                waiting_since = Instant::now();
+                continue;
+            }
+            if let ScanEvent::Swept { order, samples, .. } = ev {
+                if order == expected && row.len() != samples as usize {
+                    if let Err(e) = head.request::<AbortEndpoint>(&()).await {
+                        return lost(e, expected);
+                    }
+                    return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                }
+            }
             let order = match &ev {
                 ScanEvent::Sample(s) => s.scan.map(|p| p.order),
-                ScanEvent::Skipped { order, .. } => Some(*order),
-                ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } | ScanEvent::Paused { .. } => None,
+                ScanEvent::Skipped { order, .. } | ScanEvent::Swept { order, .. } => Some(*order),
+                ScanEvent::SweptSample(_) | ScanEvent::Finished { .. } | ScanEvent::Stopped { .. } | ScanEvent::Paused { .. } => None,
             };
             if let Some(o) = order {
                 if o < expected {
@@ -367,6 +401,17 @@ impl ScanDriver<'_> {
                     }
                     clock.saw(s.timestamp_us);
                 }
+                ScanEvent::Swept { .. } => {
+                    out.push_swept(&row)?;
+                    outcome.measured += 1;
+                    outcome.swept_samples += row.len() as u32;
+                    outcome.flagged += row.iter().filter(|s| s.signal.flags.doubtful()).count() as u32;
+                    if let Some(last) = row.last() {
+                        clock.saw(last.start_us + (last.duration_s as f64 * 1e6) as u64);
+                    }
+                    row.clear();
+                }
+                ScanEvent::SweptSample(_) => {}
                 ScanEvent::Skipped { reason, .. } => {
                     outcome.skipped += 1;
                     *outcome.skipped_by_reason.entry(reason.to_string()).or_default() += 1;

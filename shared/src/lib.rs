@@ -33,7 +33,7 @@ pub use models::{ModelSpec, MODELS};
 pub use safety::SafetySettings;
 pub use sample::{Sample, SampleFlags, Signal};
 pub use sanity::{SanityConfig, SanityKind, SanityModel};
-pub use scan::{AngleRange, PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
+pub use scan::{AngleRange, PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec, SweepRow, SweepScan, Visit, PLAN_CHUNK, PLAN_QUEUE};
 pub use status::{HeadState, Status};
 pub use sweep::{SweepReport, SweepRequest, SweptSample};
 

@@ -1,6 +1,10 @@
 //! A scan: a grid of isotropic geometries, expanded point by point on the
 //! head (it never holds the whole grid) and on the host (to check coverage).
 //!
+//! A sweep scan ([`SweepScan`]) measures while moving: its positions are
+//! rows ([`SweepRow`]), one per incidence and Δφ of the grid, each swept by
+//! the arm alone and yielding many swept samples.
+//!
 //! Two orders matter. The *canonical index* enumerates the grid θi-major,
 //! then θo, then Δφ; files and resumption use it. The *visit order* is what
 //! the head follows: a serpentine that reverses the θo sweep on every other
@@ -10,6 +14,7 @@
 use crate::fault::{Fault, Field};
 use crate::geometry::Geometry;
 use crate::sample::Sample;
+use crate::sweep::SweptSample;
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
 
@@ -60,6 +65,49 @@ pub struct ScanSpec {
     /// Visit-order position to start at: 0 for a new scan, the first missing
     /// position to resume an interrupted one.
     pub first_order: u32,
+    /// Measure while moving, row by row ([`SweepRow`]), instead of stopping
+    /// at every point (absent in a scan.json of an earlier gonio).
+    #[serde(default)]
+    pub sweep: Option<SweepScan>,
+}
+
+/// How a sweep scan sweeps its rows.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SweepScan {
+    /// Top speed of the arm (deg/s), at most its limit.
+    pub speed_dps: f32,
+    /// Chop periods per swept sample (`SweepRequest::periods_per_sample`).
+    pub periods_per_sample: u16,
+}
+
+/// One row of a sweep scan: the sample held at incidence `theta_i_deg`, the
+/// arm alone sweeps the view along the great circle through the retro
+/// direction that meets the horizon at azimuth `dphi_deg`, from just outside
+/// the blind zone around the retro direction out to `theta_o_stop_deg`
+/// (`outward`) or back. Moving one axis, the cheapest path the kinematics
+/// offer, keeps θi exact; the rows of every Δφ cover the hemisphere, densest
+/// around the retro direction, where retroreflectors put their light.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SweepRow {
+    pub theta_i_deg: f32,
+    pub dphi_deg: f32,
+    pub theta_o_stop_deg: f32,
+    pub outward: bool,
+    pub speed_dps: f32,
+    pub periods_per_sample: u16,
+}
+
+/// θ at and beyond which a direction lies in or behind the sample's plane.
+const HORIZON_DEG: f32 = 90.0;
+
+/// What one visit position of a scan is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Visit {
+    /// A point, measured at rest.
+    Point(Geometry),
+    /// A row, measured while sweeping.
+    Row(SweepRow),
 }
 
 /// The shape of a validated grid.
@@ -84,6 +132,7 @@ impl ScanSpec {
             theta_o: AngleRange::new(0.0, 90.0, 3.0),
             dphi: AngleRange::new(-180.0, 180.0, 10.0),
             first_order: 0,
+            sweep: None,
         }
     }
 
@@ -96,6 +145,8 @@ impl ScanSpec {
             return bad;
         };
         let n_ti = self.theta_i_deg.len() as u32;
+        // A sweep scan's rows are its positions: one θo "column" each.
+        let n_to = if self.sweep.is_some() { 1 } else { n_to };
         // Bounded so every index fits in u32 with room to spare.
         if (n_ti as u64) * (n_to as u64) * (n_dp as u64) > 10_000_000 {
             return bad;
@@ -103,7 +154,8 @@ impl ScanSpec {
         Ok(Dims { n_ti, n_to, n_dp })
     }
 
-    /// Checks the grid and the start position; returns the number of points.
+    /// Checks the grid and the start position; returns the number of
+    /// positions (points, or a sweep scan's rows).
     pub fn validate(&self) -> Result<u32, Fault> {
         let d = self.dims()?;
         let n = d.n_ti * d.n_to * d.n_dp;
@@ -113,7 +165,7 @@ impl ScanSpec {
         Ok(n)
     }
 
-    /// Number of grid points (0 for an invalid spec).
+    /// Number of positions (0 for an invalid spec).
     pub fn len(&self) -> u32 {
         self.validate().unwrap_or(0)
     }
@@ -135,10 +187,36 @@ impl ScanSpec {
         Some((d, a, rest / c, rest % c))
     }
 
-    /// The geometry of canonical index `index`.
+    /// The geometry of canonical index `index` (`None` in a sweep scan,
+    /// whose positions are rows: [`ScanSpec::visit`]).
     pub fn point(&self, index: u32) -> Option<Geometry> {
+        if self.sweep.is_some() {
+            return None;
+        }
         let (_, a, b, c) = self.locate(index, |d| d.n_dp)?;
         Some(Geometry::new(self.theta_i_deg[a as usize], self.theta_o.at(b), self.dphi.at(c)))
+    }
+
+    /// What canonical index `index` is when visited at position `order`: a
+    /// point, or a sweep scan's row (θi and Δφ of the grid, out to θo's last
+    /// value short of 90°, outward at an even position and back at an odd
+    /// one, so consecutive rows join near the retro direction or near the
+    /// horizon).
+    pub fn visit(&self, index: u32, order: u32) -> Option<Visit> {
+        let Some(how) = self.sweep else {
+            return self.point(index).map(Visit::Point);
+        };
+        let (_, a, _, c) = self.locate(index, |d| d.n_dp)?;
+        let n = self.theta_o.count()?;
+        let stop = (0..n).rev().map(|k| self.theta_o.at(k)).find(|&t| t < HORIZON_DEG)?;
+        Some(Visit::Row(SweepRow {
+            theta_i_deg: self.theta_i_deg[a as usize],
+            dphi_deg: self.dphi.at(c),
+            theta_o_stop_deg: stop,
+            outward: order % 2 == 0,
+            speed_dps: how.speed_dps,
+            periods_per_sample: how.periods_per_sample,
+        }))
     }
 
     /// Canonical index of the point visited at position `order`.
@@ -168,6 +246,11 @@ pub struct ScanAccepted {
 pub enum ScanEvent {
     /// A measured point.
     Sample(Sample),
+    /// A sample of the row a sweep scan is sweeping (its `scan` says which).
+    SweptSample(SweptSample),
+    /// A sweep scan's row is done: `samples` swept samples were sent for it
+    /// (consecutive `seq`), which the host checks before it keeps them.
+    Swept { index: u32, order: u32, samples: u32 },
     /// A point that cannot be reached, and why; nothing moved for it.
     Skipped { index: u32, order: u32, reason: Fault },
     /// Every point from `first_order` on was visited.

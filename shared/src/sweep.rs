@@ -5,7 +5,7 @@
 //! plan).
 
 use crate::geometry::{AxisAngles, Geometry};
-use crate::sample::Signal;
+use crate::sample::{ScanPosition, Signal};
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
 
@@ -58,6 +58,8 @@ impl SweepRequest {
 pub struct SweptSample {
     /// Sequence number over the head's uptime, shared with [`crate::Sample`].
     pub seq: u32,
+    /// The row of a sweep scan it belongs to.
+    pub scan: Option<ScanPosition>,
     /// Head time at its first period's start (µs since boot) and its length (s).
     pub start_us: u64,
     pub duration_s: f32,

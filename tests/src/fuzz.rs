@@ -112,6 +112,16 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         ),
         ("scan", request::<ScanEndpoint>(&scan)),
         (
+            "sweep-scan",
+            request::<ScanEndpoint>(&ScanSpec {
+                sweep: Some(gonio_shared::SweepScan {
+                    speed_dps: 30.0,
+                    periods_per_sample: 4,
+                }),
+                ..scan.clone()
+            }),
+        ),
+        (
             "plan",
             request::<PlanEndpoint>(&gonio_shared::PlanChunk {
                 run: 1,

@@ -4,9 +4,11 @@
 use gonio_host::operator::Operator;
 use gonio_host::samples_csv::{self, Row, SampleWriter};
 use gonio_host::scan::{self, ScanOutcome};
-use gonio_host::session::Session;
-use gonio_shared::ScanSpec;
+use gonio_host::session::{Session, Setup};
+use gonio_host::target::Target;
+use gonio_shared::{DetectionSettings, ScanSpec};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Scans `spec` with a hidden progress bar and no drift monitor; returns the
 /// outcome and the rows stored in `dir`. Panics on any error: for tests.
@@ -17,4 +19,16 @@ pub async fn scan_and_read(session: &mut Session, spec: &ScanSpec, dir: &Path) -
         .unwrap();
     let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
     (outcome, rows)
+}
+
+/// A connected, prepared (homed) session, as `gonio scan` opens it.
+pub async fn session(target: Arc<dyn Target>) -> Session {
+    let setup = Setup {
+        settings: DetectionSettings::default(),
+        calibrate_at: None,
+        calibration_periods: 0,
+    };
+    let mut s = Session::connect(target, setup, Operator::Silent).await.unwrap();
+    s.start().await.unwrap();
+    s
 }

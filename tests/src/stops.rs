@@ -138,6 +138,7 @@ pub fn small_scan() -> ScanSpec {
         dphi: gonio_shared::AngleRange::new(-60.0, 60.0, 30.0),
         theta_i_deg: heapless::Vec::from_slice(&[30.0]).expect("one incidence"),
         first_order: 0,
+        sweep: None,
     }
 }
 

@@ -134,13 +134,31 @@ pub fn scan_spec() -> impl Strategy<Value = ScanSpec> {
         (any_f32(), any_f32(), any_f32()),
         (any_f32(), any_f32(), any_f32()),
         any::<u32>(),
+        proptest::option::of((any_f32(), any::<u16>())),
     )
-        .prop_map(|(ti, (a, b, c), (d, e, f), first_order)| ScanSpec {
+        .prop_map(|(ti, (a, b, c), (d, e, f), first_order, sweep)| ScanSpec {
             theta_i_deg: heapless::Vec::from_slice(&ti).unwrap_or_default(),
             theta_o: AngleRange::new(a, b, c),
             dphi: AngleRange::new(d, e, f),
             first_order,
+            sweep: sweep.map(|(speed_dps, periods_per_sample)| SweepScan {
+                speed_dps,
+                periods_per_sample,
+            }),
         })
+}
+
+/// A swept sample: a sample's fields, a length and a second tag.
+pub fn swept_sample() -> impl Strategy<Value = SweptSample> {
+    (sample(), axis_angles(), any_f32()).prop_map(|(s, axes_to, duration_s)| SweptSample {
+        seq: s.seq,
+        scan: s.scan,
+        start_us: s.timestamp_us,
+        duration_s,
+        axes_from: s.axes,
+        axes_to,
+        signal: s.signal,
+    })
 }
 
 pub fn sanity_config() -> impl Strategy<Value = SanityConfig> {
@@ -245,6 +263,8 @@ pub fn identity() -> impl Strategy<Value = Identity> {
 pub fn scan_event() -> impl Strategy<Value = ScanEvent> {
     prop_oneof![
         sample().prop_map(ScanEvent::Sample),
+        swept_sample().prop_map(ScanEvent::SweptSample),
+        (any::<u32>(), any::<u32>(), any::<u32>()).prop_map(|(index, order, samples)| ScanEvent::Swept { index, order, samples }),
         (any::<u32>(), any::<u32>(), fault()).prop_map(|(index, order, reason)| ScanEvent::Skipped { index, order, reason }),
         (any::<u32>(), any::<u32>(), any::<u32>()).prop_map(|(run, measured, skipped)| ScanEvent::Finished { run, measured, skipped }),
         (any::<u32>(), any::<u32>(), fault()).prop_map(|(run, next_order, reason)| ScanEvent::Stopped { run, next_order, reason }),

@@ -2,6 +2,8 @@
 //! head time they took, and the true geometry each sample saw, from the
 //! motor angles the simulated head logs at every conversion.
 
+use gonio_brdf::frame::angle_between;
+use gonio_brdf::Directions;
 use gonio_firmware::kinematics;
 use gonio_firmware::Head;
 use gonio_shared::icd::{HomeRequest, MeasureRequest};
@@ -94,19 +96,8 @@ pub fn conversions(log: &[(f64, [f64; 3])], s: &SweptSample) -> Vec<Geometry> {
 
 /// Light and view directions of a geometry, in the sample's frame.
 fn directions(g: &Geometry) -> [[f64; 3]; 2] {
-    let (ti, to, dp) = (
-        (g.theta_i_deg as f64).to_radians(),
-        (g.theta_o_deg as f64).to_radians(),
-        (g.dphi_deg as f64).to_radians(),
-    );
-    [[ti.sin(), 0.0, ti.cos()], [to.sin() * dp.cos(), to.sin() * dp.sin(), to.cos()]]
-}
-
-/// Angle (degrees) between two directions, not necessarily unit.
-fn angle_deg(a: [f64; 3], b: [f64; 3]) -> f64 {
-    let dot: f64 = (0..3).map(|i| a[i] * b[i]).sum();
-    let cross = [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
-    cross.iter().map(|c| c * c).sum::<f64>().sqrt().atan2(dot).to_degrees()
+    let d = Directions::from_degrees(g.theta_i_deg as f64, g.theta_o_deg as f64, g.dphi_deg as f64);
+    [d.l, d.v]
 }
 
 /// How far (degrees) a sample's tag (the geometry at the middle of its stage
@@ -129,7 +120,7 @@ pub fn tag_error_deg(log: &[(f64, [f64; 3])], s: &SweptSample) -> f64 {
         }
     }
     let tag = directions(&geometry(&s.mid_axes()));
-    angle_deg(tag[0], mean[0]).max(angle_deg(tag[1], mean[1]))
+    angle_between(tag[0], mean[0]).max(angle_between(tag[1], mean[1])).to_degrees()
 }
 
 /// The largest [`tag_error_deg`] of a sweep's samples.

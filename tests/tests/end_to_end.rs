@@ -8,17 +8,15 @@ use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
 use gonio_host::cli::simulated::Simulated;
 use gonio_host::client::Head;
-use gonio_host::operator::Operator;
 use gonio_host::scan;
 use gonio_host::scan_order::{dwell_s, scan_time, visit_order};
-use gonio_host::session::{Session, Setup};
 use gonio_host::target::{Port, Target};
 use gonio_shared::icd::{
     AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint, StatusEndpoint,
 };
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, HeadState, Reference, SampleFlags, ScanEvent, ScanSpec, PROTOCOL_VERSION};
 use gonio_sim::{serve_pty, SimConfig};
-use gonio_tests::scanning::scan_and_read;
+use gonio_tests::scanning::{scan_and_read, session};
 use std::collections::BTreeSet;
 use std::sync::Arc;
 use std::time::Duration;
@@ -29,6 +27,7 @@ fn small_grid() -> ScanSpec {
         theta_o: AngleRange::new(0.0, 87.0, 3.0),
         dphi: AngleRange::new(0.0, 180.0, 90.0),
         first_order: 0,
+        sweep: None,
     }
 }
 
@@ -37,18 +36,6 @@ async fn homed(target: &dyn Target) -> Head {
     head.request::<DetectionEndpoint>(&DetectionSettings::default()).await.unwrap();
     head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
     head
-}
-
-/// A connected, prepared (homed) session, as `gonio scan` opens it.
-async fn session(target: Arc<dyn Target>) -> Session {
-    let setup = Setup {
-        settings: DetectionSettings::default(),
-        calibrate_at: None,
-        calibration_periods: 0,
-    };
-    let mut s = Session::connect(target, setup, Operator::Silent).await.unwrap();
-    s.start().await.unwrap();
-    s
 }
 
 #[tokio::test]
@@ -220,6 +207,7 @@ async fn an_aborted_scan_stops_darkens_the_laser_and_resumes_where_it_stopped() 
                 break next_order;
             }
             ScanEvent::Sample(_) | ScanEvent::Skipped { .. } => {}
+            ScanEvent::SweptSample(_) | ScanEvent::Swept { .. } => panic!("a scan of points swept"),
             ScanEvent::Finished { .. } => panic!("an aborted scan finished"),
             ScanEvent::Paused { .. } => panic!("an aborted scan was held"),
         }
@@ -324,6 +312,7 @@ async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before
         dphi: AngleRange::new(90.0, 90.0, 1.0),
         theta_i_deg: heapless::Vec::from_slice(&[0.0, 80.0]).unwrap(),
         first_order: 0,
+        sweep: None,
     };
     let [a, b] = [0, 1].map(|i| {
         let axes = kinematics::inverse(&REFERENCE, &spec.point(i).unwrap()).unwrap();

@@ -19,6 +19,7 @@ fn spec() -> ScanSpec {
         dphi: AngleRange::new(-180.0, 180.0, 30.0),
         theta_i_deg: heapless::Vec::from_slice(&[30.0]).unwrap(),
         first_order: 0,
+        sweep: None,
     }
 }
 

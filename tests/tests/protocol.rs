@@ -189,6 +189,23 @@ fn largest_messages_fit_the_frame_buffer() {
     let seq = VarSeq::Seq4(u32::MAX);
     assert!(encode(ScanEventTopic::TOPIC_KEY, VarKeyKind::Key8, seq, &ScanEvent::Sample(s), &mut buf).is_some());
     assert!(encode(MeasureEndpoint::RESP_KEY, VarKeyKind::Key8, seq, &Ok::<_, Fault>(s), &mut buf).is_some());
+    let swept = SweptSample {
+        seq: s.seq,
+        scan: s.scan,
+        start_us: s.timestamp_us,
+        duration_s: 1.0,
+        axes_from: AxisAngles::default(),
+        axes_to: AxisAngles::default(),
+        signal: s.signal,
+    };
+    assert!(encode(
+        ScanEventTopic::TOPIC_KEY,
+        VarKeyKind::Key8,
+        seq,
+        &ScanEvent::SweptSample(swept),
+        &mut buf
+    )
+    .is_some());
     let id = Identity {
         protocol_version: u16::MAX,
         firmware_version: heapless::String::try_from("x".repeat(16).as_str()).unwrap(),
@@ -227,5 +244,9 @@ fn largest_messages_fit_the_frame_buffer() {
     let mut spec = ScanSpec::belcour();
     while spec.theta_i_deg.push(1.0).is_ok() {}
     spec.first_order = u32::MAX;
+    spec.sweep = Some(gonio_shared::SweepScan {
+        speed_dps: 1.0,
+        periods_per_sample: u16::MAX,
+    });
     assert!(encode(ScanEndpoint::REQ_KEY, VarKeyKind::Key8, seq, &spec, &mut buf).is_some());
 }

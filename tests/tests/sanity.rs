@@ -20,6 +20,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
         theta_o: AngleRange::new(0.0, 75.0, 3.0),
         dphi: AngleRange::new(0.0, 180.0, 45.0),
         first_order: 0,
+        sweep: None,
     };
     let dust = [
         Geometry::new(30.0, 45.0, 90.0),

@@ -15,6 +15,7 @@ fn grid() -> impl Strategy<Value = ScanSpec> {
         theta_o: AngleRange::new(0.0, 3.0 * (n_to - 1) as f32, 3.0),
         dphi: AngleRange::new(-180.0, -180.0 + 10.0 * (n_dp - 1) as f32, 10.0),
         first_order: 0,
+        sweep: None,
     })
 }
 
@@ -66,6 +67,7 @@ fn small_grid() -> impl Strategy<Value = ScanSpec> {
         theta_o: AngleRange::new(to0, to0 + to_step * (n_to - 1) as f32, to_step),
         dphi: AngleRange::new(-170.0, -170.0 + dp_step * (n_dp - 1) as f32, dp_step),
         first_order: 0,
+        sweep: None,
     })
 }
 

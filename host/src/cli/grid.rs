@@ -1,7 +1,7 @@
 //! Scan grids on the command line: `--theta-i 15,30,60 --theta-o 0:90:3 --dphi -180:180:10`.
 
 use anyhow::{bail, Context, Result};
-use gonio_shared::{AngleRange, ScanSpec};
+use gonio_shared::{AngleRange, ScanSpec, SweepRequest, SweepScan};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct GridArgs {
@@ -14,6 +14,18 @@ pub struct GridArgs {
     /// Azimuth differences Δφ as START:STOP:STEP (degrees, STOP included).
     #[arg(long, value_name = "RANGE", default_value = "-180:180:10", allow_hyphen_values = true)]
     pub dphi: String,
+    /// Measure while moving: every (θi, Δφ) row swept over the θo span in
+    /// one move, its samples tagged with where the stages were (the θo STEP
+    /// is then unused).
+    #[arg(long)]
+    pub sweep: bool,
+    /// Top speed of a sweep (deg/s of the axis that travels furthest);
+    /// rows whose axes cannot keep up go as fast as they allow.
+    #[arg(long, value_name = "DEG_PER_S", default_value_t = 20.0, requires = "sweep")]
+    pub sweep_speed: f32,
+    /// Chop periods per swept sample (4–8).
+    #[arg(long, value_name = "N", default_value_t = SweepRequest::PERIODS_MAX, requires = "sweep")]
+    pub sweep_periods: u16,
 }
 
 fn number(s: &str, what: &str) -> Result<f32> {
@@ -50,6 +62,10 @@ impl GridArgs {
             theta_o: range(&self.theta_o, "--theta-o")?,
             dphi: range(&self.dphi, "--dphi")?,
             first_order: 0,
+            sweep: self.sweep.then_some(SweepScan {
+                speed_dps: self.sweep_speed,
+                periods_per_sample: self.sweep_periods,
+            }),
         };
         spec.validate().map_err(|f| anyhow::anyhow!("grid refused: {f}"))?;
         Ok(spec)
@@ -66,6 +82,9 @@ mod tests {
             theta_i: "15,30,60".into(),
             theta_o: "0:90:3".into(),
             dphi: "-180:180:10".into(),
+            sweep: false,
+            sweep_speed: 20.0,
+            sweep_periods: 8,
         };
         assert_eq!(g.spec().unwrap(), ScanSpec::belcour());
         assert_eq!(ScanSpec::belcour().len(), 3 * 31 * 37);
@@ -78,6 +97,9 @@ mod tests {
                 theta_i: ti.into(),
                 theta_o: to.into(),
                 dphi: "0:0:1".into(),
+                sweep: false,
+                sweep_speed: 20.0,
+                sweep_periods: 8,
             }
             .spec()
         };

@@ -9,15 +9,15 @@ use super::plan::{PlanTarget, ScanPlan};
 use super::reference;
 use crate::operator::Operator;
 use crate::run_record::RunRecord;
-use crate::samples_csv::{stored_rows, SampleWriter};
+use crate::samples_csv::{drop_last_position, stored_rows, SampleWriter};
 use crate::scan::{self, Monitor, ScanOutcome};
 use crate::scan_dir::ScanDir;
-use crate::scan_order::{dwell_s, lower_bound, scan_time, visit_order};
+use crate::scan_order::{dwell_s, lower_bound, scan_time, sweep_time, visit_order};
 use crate::session::{Session, Setup};
 use anyhow::{bail, Context, Result};
 use gonio_firmware::config::HeadConfig;
 use gonio_firmware::motion::PARK;
-use gonio_shared::{DetectionReport, ScanSpec};
+use gonio_shared::{DetectionReport, ScanSpec, SweepRequest, SweepScan};
 use gonio_sim::SimConfig;
 
 /// Length of the detector calibration (s).
@@ -32,6 +32,11 @@ pub struct DemoArgs {
     /// Seed of the simulated head's noise.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
+    /// Sweep the Belcour grid's rows, measuring while moving (as fast as the
+    /// axes allow, 8 chop periods per sample), instead of stopping at every
+    /// point.
+    #[arg(long)]
+    pub sweep: bool,
     #[command(flatten)]
     pub output: OutputArgs,
 }
@@ -96,7 +101,11 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ..SimConfig::default()
     };
     let truth = sim.material.clone();
-    let (outcome, samples) = demo_scan(sim, &a.out, &a.output).await?;
+    let spec = ScanSpec {
+        sweep: a.sweep.then_some(DEMO_SWEEP),
+        ..ScanSpec::belcour()
+    };
+    let (outcome, samples) = demo_scan(sim, &spec, &a.out, &a.output).await?;
     let json = a.output.json;
     if !json {
         summarise(&outcome, &samples, false)?;
@@ -113,10 +122,17 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ("virtual material".to_string(), truth.describe()),
         (
             "scan".to_string(),
-            format!(
-                "{} points of the Belcour grid: {} measured, {} unreachable, {} flagged",
-                outcome.points, outcome.measured, outcome.skipped, outcome.flagged
-            ),
+            if a.sweep {
+                format!(
+                    "{} rows of the Belcour grid swept: {} swept ({} samples), {} refused, {} flagged",
+                    outcome.points, outcome.measured, outcome.swept_samples, outcome.skipped, outcome.flagged
+                )
+            } else {
+                format!(
+                    "{} points of the Belcour grid: {} measured, {} unreachable, {} flagged",
+                    outcome.points, outcome.measured, outcome.skipped, outcome.flagged
+                )
+            },
         ),
         (
             "calibration".to_string(),
@@ -162,11 +178,18 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
     Ok(())
 }
 
+/// How `gonio demo --sweep` sweeps: as fast as the axes allow (the arm's
+/// 30 deg/s on the reference head), 8 chop periods per sample.
+pub const DEMO_SWEEP: SweepScan = SweepScan {
+    speed_dps: 30.0,
+    periods_per_sample: SweepRequest::PERIODS_MAX,
+};
+
 /// The demo's scan of a simulated head into `dir`: the reference plate,
-/// then the Belcour grid (quiet with `output.json`). Returns the outcome and
-/// the samples file.
-pub async fn demo_scan(sim: SimConfig, dir: &Path, output: &OutputArgs) -> Result<(ScanOutcome, PathBuf)> {
-    let mut plan = ScanPlan::simulated(&sim, &ScanSpec::belcour(), &DetectorArgs::demo().checked()?);
+/// then `spec` (quiet with `output.json`). Returns the outcome and the
+/// samples file.
+pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &OutputArgs) -> Result<(ScanOutcome, PathBuf)> {
+    let mut plan = ScanPlan::simulated(&sim, spec, &DetectorArgs::demo().checked()?);
     plan.reference_plate = true;
     scan_to_dir(&plan, dir, output, None).await
 }
@@ -178,7 +201,8 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
             // The head may come back on another port.
             plan.target = PlanTarget::Port { path: p.clone() };
         }
-        let (outcome, samples) = scan_to_dir(&plan, dir, &a.output, Some(resume_from(dir)?)).await?;
+        let first = resume_from(dir, &plan.spec)?;
+        let (outcome, samples) = scan_to_dir(&plan, dir, &a.output, Some(first)).await?;
         return summarise(&outcome, &samples, a.output.json);
     }
     let (spec, det) = (a.grid.spec()?, &a.detector.checked()?);
@@ -203,10 +227,15 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
     summarise(&outcome, &samples, a.output.json)
 }
 
-/// The first visit position an interrupted scan has not stored.
-fn resume_from(dir: &Path) -> Result<u32> {
+/// The first visit position an interrupted scan of `spec` has not stored.
+/// A sweep scan's last stored row may have been cut short while it was
+/// written: it is dropped, and swept again.
+fn resume_from(dir: &Path, spec: &ScanSpec) -> Result<u32> {
     if ScanDir::new(dir).samples().exists() {
         bail!("{} holds a complete scan; nothing to resume", dir.display());
+    }
+    if spec.sweep.is_some() {
+        drop_last_position(dir)?;
     }
     Ok(stored_rows(dir)?.iter().filter_map(|r| r.order).map(|o| o + 1).max().unwrap_or(0))
 }
@@ -267,13 +296,22 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     let config = *session.head().config();
     let estimate = estimate_s(&config, spec, &detection);
     if !json {
-        eprintln!(
-            "{} points; estimated duration {} (moves, {:.0} ms settle and {:.0} ms integration per point)",
-            spec.len(),
-            hms(estimate),
-            detection.settings.settle_s * 1e3,
-            detection.integration_s * 1e3
-        );
+        if spec.sweep.is_some() {
+            eprintln!(
+                "{} rows to sweep; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
+                spec.len(),
+                hms(estimate),
+                detection.settings.settle_s * 1e3,
+            );
+        } else {
+            eprintln!(
+                "{} points; estimated duration {} (moves, {:.0} ms settle and {:.0} ms integration per point)",
+                spec.len(),
+                hms(estimate),
+                detection.settings.settle_s * 1e3,
+                detection.integration_s * 1e3
+            );
+        }
     }
     let mut writer = match resume {
         Some(first) => {
@@ -284,7 +322,8 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         }
         None => SampleWriter::create(dir)?,
     };
-    let pb = Operator::for_json(json).bar(spec.len() as u64, "scanning", "points");
+    let unit = if spec.sweep.is_some() { "rows" } else { "points" };
+    let pb = Operator::for_json(json).bar(spec.len() as u64, "scanning", unit);
     let mut outcome = scan::run(&mut session, spec, &mut writer, &pb, plan.monitor.as_ref())
         .await
         .with_context(|| {
@@ -304,7 +343,9 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     }
     if resume.is_some() {
         // Counts of the whole scan, not only of this session.
-        outcome.measured = crate::samples_csv::read(&samples)?.iter().filter(|r| r.index.is_some()).count() as u32;
+        let rows = crate::samples_csv::read(&samples)?;
+        outcome.measured = rows.iter().filter_map(|r| r.order).collect::<std::collections::BTreeSet<_>>().len() as u32;
+        outcome.swept_samples = rows.iter().filter(|r| r.extent_deg.is_some()).count() as u32;
         outcome.skipped = outcome.points - outcome.measured;
     }
     let mut record = RunRecord::new(&id, plan.material(), spec, &detection, session.calibration, outcome.clone());
@@ -315,24 +356,34 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
 }
 
 /// The plan replayed from the park position under the head's reported axis
-/// limits, from the scan's first position on: moves, settle and acquisition (s).
+/// limits, from the scan's first position on: moves, settle and acquisition,
+/// or a sweep scan's moves, settling, ranging and sweeps (s).
 fn estimate_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
     let (settle, acquire) = dwell_s(det);
     let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
+    if spec.sweep.is_some() {
+        let ranging = acquire - det.integration_s as f64;
+        return sweep_time(cfg, spec, rest, PARK, settle, ranging).total_s();
+    }
     scan_time(cfg, spec, rest, PARK, settle, acquire).total_s()
 }
 
 /// The least head time any stop-and-go order of the whole scan could take
-/// (s); `None` for a scan too large to bound.
+/// (s), for a sweep scan of its grid's points; `None` for a scan too large
+/// to bound.
 fn lower_bound_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> Option<f64> {
     let (settle, acquire) = dwell_s(det);
-    lower_bound(cfg, spec, settle, acquire).map(|(t, _)| t.total_s())
+    let grid = ScanSpec {
+        sweep: None,
+        ..spec.clone()
+    };
+    lower_bound(cfg, &grid, settle, acquire).map(|(t, _)| t.total_s())
 }
 
 /// Head time against the lower bound, in words.
 fn against_bound(head_time_s: f64, bound_s: f64) -> String {
     format!(
-        "{} of head time; no stop-and-go order of these points takes less than {} (× {:.3})",
+        "{} of head time; no stop-and-go order of the grid's points takes less than {} (× {:.3})",
         hms(head_time_s),
         hms(bound_s),
         head_time_s / bound_s

@@ -3,6 +3,7 @@
 //! domain restriction, fixed parameters, fitting in `f_r` or `f_r·cosθo`,
 //! standard errors, and cross-validation by held-out incidence angles.
 
+mod area;
 pub mod data;
 pub mod file;
 mod global;
@@ -29,6 +30,11 @@ pub enum Weighting {
     Sigma,
     /// `1/|y|`: relative errors, for data spanning decades.
     Relative,
+    /// `√Ω`: each sample counted for the solid angle it stands for among
+    /// those of its incidence ([`area::solid_angles`]), so scans that sample
+    /// the hemisphere differently (a grid, a sweep scan's rows) fit the same
+    /// integral.
+    Area,
 }
 
 /// What to fit and how.
@@ -158,10 +164,15 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
     let data = data.in_units(spec.units)?;
     let y: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
     let floor = 1e-3 * y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let solid = match spec.weighting {
+        Weighting::Area => area::solid_angles(&data.observations),
+        _ => Vec::new(),
+    };
     let mut weight = Vec::with_capacity(y.len());
     for (k, o) in data.observations.iter().enumerate() {
         weight.push(match spec.weighting {
             Weighting::Uniform => 1.0,
+            Weighting::Area => solid[k].sqrt(),
             Weighting::Relative => 1.0 / y[k].abs().max(floor).max(f64::MIN_POSITIVE),
             Weighting::Sigma => match o.sigma {
                 Some(s) if s > 0.0 && s.is_finite() => 1.0 / s,

@@ -4,8 +4,9 @@
 use gonio_firmware::config::HeadConfig;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::plan_s;
-use gonio_firmware::motion::{move_blocks, move_time, target_steps};
-use gonio_shared::{DetectionReport, ScanSpec};
+use gonio_firmware::motion::{move_blocks, move_time, ramp, target_steps};
+use gonio_firmware::sweep;
+use gonio_shared::{DetectionReport, ScanSpec, Visit};
 
 /// The step timer's tick rate on the reference board (chip/step_timer.rs).
 const STEP_TICK_HZ: u32 = 1_000_000;
@@ -65,6 +66,48 @@ pub fn scan_time(
             }
             Err(_) => t.skipped += 1,
         }
+    }
+    t
+}
+
+/// Duration of a sweep scan's rows in the order `visit` yields them, from
+/// stage position `from`, as the head runs them (`Head::sweep_turn`): the
+/// move to a row's start, `settle_s`, `prepare_s` to range the detector,
+/// then the arm's sweep at the row's speed. Rows that cannot be swept are skipped
+/// without moving. `integration_s` holds the sweeps.
+pub fn sweep_time(
+    cfg: &HeadConfig,
+    spec: &ScanSpec,
+    visit: impl Iterator<Item = u32>,
+    from: [i32; 3],
+    settle_s: f64,
+    prepare_s: f64,
+) -> ScanTime {
+    let mut t = ScanTime::default();
+    let mut at = from;
+    for (order, i) in (spec.first_order..).zip(visit) {
+        let Some(Visit::Row(row)) = spec.visit(i, order) else {
+            continue;
+        };
+        let Ok((a, b)) = sweep::row_ends(cfg, &row) else {
+            t.skipped += 1;
+            continue;
+        };
+        let (start, end) = (target_steps(cfg, &a), target_steps(cfg, &b));
+        let (to_start, across) = ([0, 1, 2].map(|k| start[k] - at[k]), [0, 1, 2].map(|k| end[k] - start[k]));
+        let speed = row.speed_dps.min(cfg.axes[2].max_speed_dps);
+        let Ok(limits) = sweep::limits(cfg, across, speed) else {
+            t.skipped += 1;
+            continue;
+        };
+        t.moves_s += move_time(cfg, to_start);
+        t.planning_s += plan_s(move_blocks(cfg, to_start, STEP_TICK_HZ));
+        t.settle_s += settle_s + prepare_s;
+        t.integration_s += (0..3)
+            .map(|k| ramp(&cfg.axes[k], across[k].unsigned_abs(), limits[k]).duration())
+            .fold(0.0, f64::max);
+        t.measured += 1;
+        at = end;
     }
     t
 }

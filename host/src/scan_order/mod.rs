@@ -23,7 +23,7 @@ mod duration;
 mod tour;
 
 pub use bound::{lower_bound, MoveBound, BOUND_CAPACITY};
-pub use duration::{dwell_s, scan_time, ScanTime};
+pub use duration::{dwell_s, scan_time, sweep_time, ScanTime};
 
 use gonio_firmware::config::HeadConfig;
 use gonio_firmware::kinematics;
@@ -51,9 +51,13 @@ pub fn move_s(cfg: &HeadConfig, from: [i32; 3], to: [i32; 3]) -> f64 {
 }
 
 /// The visit order of a whole scan (canonical indices), from stage position
-/// `from` (microsteps).
+/// `from` (microsteps). A sweep scan's rows follow the serpentine, each
+/// starting where the previous one ended (`ScanSpec::visit`).
 pub fn visit_order(cfg: &HeadConfig, spec: &ScanSpec, from: [i32; 3]) -> impl Iterator<Item = u32> {
     let n = spec.len();
+    if spec.sweep.is_some() {
+        return (0..n).filter_map(|o| spec.index_at_order(o)).collect::<Vec<_>>().into_iter();
+    }
     let blocks = spec.theta_i_deg.len() as u32;
     let per_block = n / blocks.max(1);
     let mut order = Vec::with_capacity(n as usize);

@@ -28,8 +28,9 @@
 //!   the duration estimate charge as `BLOCK_PLAN_INSTRUCTIONS` (the run fails
 //!   should the chip pay more).
 //! - `sweep_instructions`: what a sweep pays besides its periods' demodulation:
-//!   its checks and the design of its samples (once), the tag of a sample
-//!   (per sample); `sweep_stretch_instructions_max` (≤ 100 000, the serve
+//!   its checks and the design of its samples (once), a sweep scan's row's
+//!   ends, targets and limits (once a row), the tag of a sample (per
+//!   sample); `sweep_stretch_instructions_max` (≤ 100 000, the serve
 //!   loop's budget between polls) the longest of them;
 //!   `sweep_sample_end_instructions` what a sample's end computes (its last
 //!   period's demodulation, drift fit, estimate, tag) while the next period
@@ -137,6 +138,7 @@ fn main() -> Result<()> {
     let sweep_tag = max("sweep_tag")?;
     let sweep_stretch = max("sweep_check")?
         .max(max("sweep_limits")?)
+        .max(max("sweep_row")?)
         .max(max("design_8_periods")?)
         .max(max("sweep_drift")?)
         .max(max("sweep_estimate")?)
@@ -174,6 +176,7 @@ fn main() -> Result<()> {
         "sweep_instructions": {
             "check (once)": max("sweep_check")?,
             "limits (once)": max("sweep_limits")?,
+            "scan row's ends, targets and limits (once per row)": max("sweep_row")?,
             "design of 8-period samples (once)": max("design_8_periods")?,
             "drift fit (per sample)": max("sweep_drift")?,
             "estimate (per sample)": max("sweep_estimate")?,

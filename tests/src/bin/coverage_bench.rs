@@ -61,7 +61,12 @@ fn main() -> anyhow::Result<()> {
             material: Specimen::Model(truth.clone()),
             ..SimConfig::default()
         };
-        rt.block_on(demo_scan(sim, dir.path(), &OutputArgs { force: false, json: true }))?;
+        rt.block_on(demo_scan(
+            sim,
+            &gonio_shared::ScanSpec::belcour(),
+            dir.path(),
+            &OutputArgs { force: false, json: true },
+        ))?;
         let c = calibrate::calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
         let (mut scan, mut scan_near) = (Tally::default(), Tally::default());
         for r in c.rows.iter().filter(|r| r.usable) {

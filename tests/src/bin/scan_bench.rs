@@ -16,16 +16,40 @@
 //!   conversions. A swept sample integrates fewer periods than a grid point
 //!   (`periods_per_sample`, `grid_periods_per_point`), so it is noisier. A
 //!   refused arc is listed with its reason and counted in `refused_arcs`.
-//!   The sweep scan of a whole grid's coverage
-//!   (`sweep_time_ratio` of issue #20) and the fits are not built yet.
+//! - `sweep_scan`: the Belcour coverage scanned both ways through the host on
+//!   the simulated head (`scan::run`, as `gonio scan` does): stop-and-go at
+//!   its 3 441 points, and swept row by row (`gonio demo --sweep`'s
+//!   settings); `sweep_time_ratio` is the sweep scan's head time over the
+//!   grid scan's, beside the samples each stored.
+//! - `fit_agreement`: for the default simulated material (glass beads) and
+//!   a narrow-lobe one (the retroreflective tape, retro-phong with n = 500),
+//!   the grid and the sweep scan each measured as `gonio demo` does (the
+//!   reference plate, the scan, the calibration), retro-phong fitted to
+//!   each, and every parameter's difference over its two standard errors
+//!   combined (`z`); `params_within_2sigma` when every |z| ≤ 2. Beside them
+//!   the fit of the grid at twice its density both ways (`fine_grid`): where
+//!   the two disagree, which one finer sampling sides with. Both fits weigh
+//!   every sample by the solid angle it stands for (`Weighting::Area`), on
+//!   the domain both scans see (beyond the blind zone around the retro
+//!   direction), from calibrated data whose swept samples are corrected for
+//!   their extent (`swept::unblur`).
 
+use anyhow::Result;
+use gonio_brdf::{Material, ModelId, Specimen};
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::motion::PARK;
+use gonio_host::cli::calibrate::{calibrate, CalibrateArgs};
+use gonio_host::cli::scan::{demo_scan, OutputArgs, DEMO_SWEEP};
+use gonio_host::cli::simulated::Simulated;
+use gonio_host::fit::{fit, Fit, FitSpec, Weighting};
+use gonio_host::scan::ScanOutcome;
 use gonio_host::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, ScanSpec, SweepRequest};
 use gonio_sim::SimConfig;
+use gonio_tests::scanning::{scan_and_read, session};
 use gonio_tests::sweeping::{tag_error_deg_max, SimHead};
 use serde_json::{json, Value};
+use std::sync::Arc;
 use std::time::Instant;
 
 const SETTLE_S: f64 = 0.05;
@@ -97,6 +121,123 @@ fn arc(ti: f32, dp: f32, from: f32, to: f32, speed_dps: f32) -> Value {
     })
 }
 
+/// `spec` scanned through the host on a fresh simulated head: its outcome.
+fn scan_through_host(spec: &ScanSpec) -> ScanOutcome {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_time()
+        .build()
+        .expect("a runtime");
+    rt.block_on(async {
+        let mut s = session(Arc::new(Simulated(SimConfig::default()))).await;
+        let dir = tempfile::tempdir().expect("a temporary directory");
+        let (outcome, _) = scan_and_read(&mut s, spec, dir.path()).await;
+        s.close().await;
+        outcome
+    })
+}
+
+/// The Belcour coverage stop-and-go and swept, each through the host.
+fn sweep_scan() -> Value {
+    let grid = ScanSpec::belcour();
+    let swept = ScanSpec {
+        sweep: Some(DEMO_SWEEP),
+        ..ScanSpec::belcour()
+    };
+    let t0 = Instant::now();
+    let g = scan_through_host(&grid);
+    let grid_wall_s = t0.elapsed().as_secs_f64();
+    let t0 = Instant::now();
+    let s = scan_through_host(&swept);
+    let sweep_wall_s = t0.elapsed().as_secs_f64();
+    json!({
+        "speed_dps": DEMO_SWEEP.speed_dps,
+        "periods_per_sample": DEMO_SWEEP.periods_per_sample,
+        "grid_points": g.points,
+        "grid_measured": g.measured,
+        "grid_head_s": g.head_time_s,
+        "rows": s.points,
+        "rows_swept": s.measured,
+        "rows_refused": s.skipped_by_reason,
+        "sweep_samples": s.swept_samples,
+        "sweep_head_s": s.head_time_s,
+        "sweep_time_ratio": s.head_time_s / g.head_time_s,
+        "samples_over_grid_measured": s.swept_samples as f64 / g.measured as f64,
+        "grid_wall_s": grid_wall_s,
+        "sweep_wall_s": sweep_wall_s,
+    })
+}
+
+/// Retro-phong fitted to `spec` measured on a simulated head of `material`
+/// as `gonio demo` measures: the samples it fitted, and the fit.
+fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<(usize, Fit)> {
+    let sim = SimConfig {
+        material: material.clone(),
+        ..SimConfig::default()
+    };
+    let dir = tempfile::tempdir()?;
+    let rt = tokio::runtime::Builder::new_current_thread().enable_time().build()?;
+    let quiet = OutputArgs { force: false, json: true };
+    rt.block_on(demo_scan(sim, spec, dir.path(), &quiet))?;
+    let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
+    // The domain both scans see: beyond the blind zone around the retro
+    // direction, which the grid reaches at its one retro point per
+    // incidence (through the beam splitter) and a sweep scan's rows do not.
+    let blind = (SimConfig::default().machine.optics.blind_max_deg as f64).to_radians();
+    let data = gonio_host::formats::load(&calibrated.csv)?.filter(|o| {
+        let d = o.directions();
+        gonio_brdf::frame::angle_between(d.l, d.v) > blind
+    });
+    let f = fit(
+        &data,
+        &FitSpec {
+            units: data.units,
+            weighting: Weighting::Area,
+            ..FitSpec::new(ModelId::RetroPhong)
+        },
+    )?;
+    Ok((data.observations.len(), f))
+}
+
+/// The grid's and the sweep scan's retro-phong fits of `material`, compared
+/// parameter by parameter.
+fn fit_agreement(material: &Specimen) -> Result<Value> {
+    let swept = ScanSpec {
+        sweep: Some(DEMO_SWEEP),
+        ..ScanSpec::belcour()
+    };
+    let (n_grid, grid) = fitted(material, &ScanSpec::belcour())?;
+    let (n_sweep, sweep) = fitted(material, &swept)?;
+    // The grid at twice its density both ways: where the two scans
+    // disagree, which one the finer sampling sides with.
+    let fine = ScanSpec {
+        theta_o: AngleRange::new(0.0, 90.0, 1.5),
+        dphi: AngleRange::new(-180.0, 180.0, 5.0),
+        ..ScanSpec::belcour()
+    };
+    let (n_fine, fine) = fitted(material, &fine)?;
+    let names = ModelId::RetroPhong.param_names();
+    let params: Vec<Value> = (0..names.len())
+        .map(|i| {
+            let (a, b) = (grid.material.params[i], sweep.material.params[i]);
+            let (sa, sb) = (grid.stderr[i], sweep.stderr[i]);
+            let z = sa.zip(sb).map(|(sa, sb)| (b - a) / sa.hypot(sb));
+            json!({ "name": names[i], "grid": a, "grid_stderr": sa, "sweep": b, "sweep_stderr": sb, "z": z,
+                    "fine_grid": fine.material.params[i], "fine_grid_stderr": fine.stderr[i] })
+        })
+        .collect();
+    let within = params.iter().all(|p| p["z"].as_f64().is_some_and(|z| z.abs() <= 2.0));
+    Ok(json!({
+        "material": material.describe(),
+        "grid_samples": n_grid,
+        "sweep_samples": n_sweep,
+        "fine_grid_samples": n_fine,
+        "grid_rmse": grid.metrics.rmse,
+        "sweep_rmse": sweep.metrics.rmse,
+        "params": params,
+        "params_within_2sigma": within,
+    }))
+}
+
 fn main() {
     let cfg = REFERENCE;
     let spec = ScanSpec::belcour();
@@ -131,6 +272,10 @@ fn main() {
             .filter_map(|a| Some(a["samples"].as_f64()? / a["grid_points"].as_f64()?))
             .fold(f64::INFINITY, f64::min),
     });
+    let agreements: Vec<Value> = [SimConfig::default().material, Specimen::Model(Material::tape())]
+        .iter()
+        .map(|m| fit_agreement(m).unwrap_or_else(|e| json!({ "material": m.describe(), "error": format!("{e:#}") })))
+        .collect();
     let out = serde_json::json!({
         "points": spec.len(),
         "measured_points": plan.measured,
@@ -147,6 +292,8 @@ fn main() {
         "old_plan_over_lower_bound": old.total_s() / bound.total_s(),
         "host_planning_wall_s": planning_wall_s,
         "sweep": sweep,
+        "sweep_scan": sweep_scan(),
+        "fit_agreement": agreements,
     });
     eprintln!(
         "Belcour grid ({} points, {} measured): lower bound {:.0} s (moves {:.0} s), plan {:.0} s (moves {:.0} s), old plan {:.0} s; plan/bound {:.3} (≤ 1.15), old {:.3}; planned in {:.2} s",
@@ -164,6 +311,14 @@ fn main() {
     eprintln!(
         "Arcs swept at {SPEEDS:?} deg/s: tag error ≤ {:.4}° (≤ 0.01), head time ≤ {:.3} of the 3° stop-and-go grid's",
         sweep["tag_error_deg_max"], sweep["arc_time_ratio_max"]
+    );
+    eprintln!(
+        "Belcour coverage through the host: grid {:.0} s, swept {:.0} s ({} samples from {} rows): sweep_time_ratio {:.3} (≤ 0.25)",
+        out["sweep_scan"]["grid_head_s"],
+        out["sweep_scan"]["sweep_head_s"],
+        out["sweep_scan"]["sweep_samples"],
+        out["sweep_scan"]["rows_swept"],
+        out["sweep_scan"]["sweep_time_ratio"]
     );
     println!("{out}");
 }

@@ -268,8 +268,9 @@ struct Arena([core::mem::MaybeUninit<u8>; ARENA]);
 
 static mut SERVE_ARENA: Arena = Arena([core::mem::MaybeUninit::uninit(); ARENA]);
 
-/// [`run`], with the future kept in a static arena as the chip keeps it.
-pub fn run_in_arena<F: Future>(name: &'static str, f: F, stop: impl FnMut() -> bool) -> Option<F::Output> {
+/// [`run`], with the future `make` makes kept in a static arena as the chip
+/// keeps it.
+pub fn run_in_arena<F: Future>(name: &'static str, make: impl FnOnce() -> F, stop: impl FnMut() -> bool) -> Option<F::Output> {
     if core::mem::size_of::<F>() > ARENA || core::mem::align_of::<F>() > 8 {
         super::mark("arena_refused", 0);
         return None;
@@ -280,11 +281,23 @@ pub fn run_in_arena<F: Future>(name: &'static str, f: F, stop: impl FnMut() -> b
     // anything it borrows goes away.
     unsafe {
         let slot = (&raw mut SERVE_ARENA).cast::<F>();
-        slot.write(f);
+        place(slot, make);
         let out = run(name, Pinned::new_unchecked(&mut *slot), stop);
         slot.drop_in_place();
         out
     }
+}
+
+/// Writes the future `make` makes to `slot` from a frame of its own,
+/// popped before the future is polled: on its way to the arena the future
+/// (some 20 KiB) passes through the stack once, not beneath every poll.
+///
+/// # Safety
+/// `slot` is valid for writes of an `F` and aligned.
+#[inline(never)]
+unsafe fn place<F>(slot: *mut F, make: impl FnOnce() -> F) {
+    // SAFETY: the caller's promise.
+    unsafe { slot.write(make()) }
 }
 
 /// Polls `f` until it is ready or `stop` (called between polls) says so;

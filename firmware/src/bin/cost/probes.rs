@@ -28,8 +28,8 @@ use gonio_firmware::Head;
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, PlanEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint};
 use gonio_shared::wire::check;
 use gonio_shared::{
-    AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, SweepRequest, PLAN_CHUNK,
-    PLAN_QUEUE,
+    AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, SweepRequest, SweepRow,
+    PLAN_CHUNK, PLAN_QUEUE,
 };
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Topic};
@@ -213,6 +213,7 @@ fn plan_next() {
         theta_o: AngleRange::new(0.0, 89.0, 89.0 / 63.0),
         dphi: AngleRange::new(-180.0, 180.0, 360.0 / 63.0),
         first_order: 0,
+        sweep: None,
     };
     for spec in [ScanSpec::belcour(), big] {
         let mut queue: heapless::Deque<u32, PLAN_QUEUE> = heapless::Deque::new();
@@ -246,7 +247,7 @@ fn sweep_path() {
         return;
     };
     let checked = measure("sweep_check", || {
-        sweep::check(&req).and_then(|()| sweep::check_path(&REFERENCE, &from, &to))
+        sweep::check(req.periods_per_sample, req.speed_dps).and_then(|()| sweep::check_path(&REFERENCE, &from, &to))
     });
     let (start, end) = (motion::target_steps(&REFERENCE, &from), motion::target_steps(&REFERENCE, &to));
     let delta = [0, 1, 2].map(|i| end[i] - start[i]);
@@ -254,6 +255,24 @@ fn sweep_path() {
     if checked.is_err() || speeds.is_err() {
         mark("sweep_refused", BEGIN);
         return;
+    }
+    // A sweep scan's row in place of the inverse kinematics: its ends, their
+    // stage targets and the arm's limits, in the first turn of the row.
+    for (ti, dp) in [(15.0, -180.0), (30.0, 90.0), (60.0, 10.0), (60.0, -120.0)] {
+        let row = SweepRow {
+            theta_i_deg: ti,
+            dphi_deg: dp,
+            theta_o_stop_deg: 87.0,
+            outward: true,
+            speed_dps: 30.0,
+            periods_per_sample: 8,
+        };
+        let _ = black_box(measure("sweep_row", || {
+            sweep::row_ends(&REFERENCE, &row).and_then(|(a, b)| {
+                let (s, e) = (motion::target_steps(&REFERENCE, &a), motion::target_steps(&REFERENCE, &b));
+                sweep::limits(&REFERENCE, [0, 1, 2].map(|i| e[i] - s[i]), row.speed_dps)
+            })
+        }));
     }
     let design = measure("design_8_periods", || Design::new(8, 230.0));
     // The end of a sample: the estimate of its periods (in two stretches,
@@ -433,29 +452,42 @@ fn serve(head: &mut Head<board::Rigged>, spec: &ScanSpec, started: bool, mut fed
     drop(inbox);
     board::HOST.closed.set(false);
     let mut done = spec.first_order;
-    let mut link = board::Script;
-    let mut sentry = board::Calm;
+    let (mut link, mut sentry) = (board::Script, board::Calm);
+    let (link, sentry) = (&mut link, &mut sentry);
     let mut idle = 0;
-    board::run_in_arena("await_free", head.serve(&mut link, &mut sentry), || {
-        let before = done;
-        if look(&mut done) {
-            board::HOST.closed.set(true);
-        }
-        // A head that neither measures nor finishes has stopped the scan
-        // for a reason the figures would hide: end the image there.
-        idle = if done == before { idle + 1 } else { 0 };
-        if idle > 100_000 {
-            mark("serve_stalled", BEGIN);
-        }
-        if !board::HOST.closed.get() && fed < spec.len() && fed - done <= (PLAN_QUEUE - PLAN_CHUNK) as u32 {
-            let mut inbox = board::HOST.inbox.borrow_mut();
-            if inbox.push_back(chunk(spec, fed)).is_ok() {
-                fed = (fed + PLAN_CHUNK as u32).min(spec.len());
+    board::run_in_arena(
+        "await_free",
+        move || head.serve(link, sentry),
+        || {
+            let before = done;
+            if look(&mut done) {
+                board::HOST.closed.set(true);
             }
-        }
-        false
-    });
+            // A head that neither measures nor finishes has stopped the scan
+            // for a reason the figures would hide: end the image there.
+            idle = if done == before { idle + 1 } else { 0 };
+            if idle > 100_000 {
+                mark("serve_stalled", BEGIN);
+            }
+            if !board::HOST.closed.get() && fed < spec.len() && fed - done <= (PLAN_QUEUE - PLAN_CHUNK) as u32 {
+                let mut inbox = board::HOST.inbox.borrow_mut();
+                if inbox.push_back(chunk(spec, fed)).is_ok() {
+                    fed = (fed + PLAN_CHUNK as u32).min(spec.len());
+                }
+            }
+            false
+        },
+    );
     report(points, done - spec.first_order);
+}
+
+/// The head the scan probes serve, in a static as the chip's task arena
+/// holds it, made in a frame of its own: the head passes through
+/// the stack on its way there, and that frame is gone before the scan runs.
+#[inline(never)]
+fn probe_head(info: HeadInfo) -> &'static mut Head<board::Rigged> {
+    static HEAD: StaticCell<Head<board::Rigged>> = StaticCell::new();
+    HEAD.init(Head::new(REFERENCE, board::hardware(), info))
 }
 
 /// A Belcour scan served, with a sanity model loaded (the costliest
@@ -470,9 +502,7 @@ fn scan_and_resume() {
         simulated: true,
         protocol_version: gonio_shared::PROTOCOL_VERSION,
     };
-    // In a static, as the chip's task arena holds it: 13 KiB.
-    static HEAD: StaticCell<Head<board::Rigged>> = StaticCell::new();
-    let head = HEAD.init(Head::new(REFERENCE, board::hardware(), info));
+    let head = probe_head(info);
     let sanity = SanityConfig {
         model: abc_retro(true),
         current_a_per_sr_inv: 1.0e-7,
