@@ -453,6 +453,12 @@ impl<B: Board> Head<B> {
         Ok((start, end, sweep::limits(&self.cfg, delta, speed_dps)?))
     }
 
+    /// Whether a sweep scan's row is under way (its arm moving, its chop
+    /// running).
+    pub(crate) fn sweeping(&self) -> bool {
+        self.sweeping.is_some()
+    }
+
     /// Checks what a sweep asks of the detector and of its samples.
     fn check_sweep(&self, periods_per_sample: u16, speed_dps: f32) -> Reply<()> {
         sweep::check(periods_per_sample, speed_dps)?;
@@ -477,6 +483,23 @@ impl<B: Board> Head<B> {
         };
         // Dropped by a stop in the middle of a sample, `sw` ends the sweep.
         let s = self.swept_sample(&mut sw).await?;
+        if s.signal.flags.doubtful() {
+            self.samples_flagged = self.samples_flagged.wrapping_add(1);
+        }
+        // The watch of a scan's points, over its samples: a run of
+        // saturated ones (8, some 8° of a row at 30 deg/s) ends the scan,
+        // and so does a row all of whose samples are below the noise (a
+        // dead laser, a blocked beam: a swept sample integrates a third of a
+        // point's periods, and a dark floor a few degrees long is no
+        // fault); the arm is braked, the sample that completed it not sent.
+        sw.lit |= !s.signal.flags.contains(SampleFlags::BELOW_NOISE);
+        let watched = self.watch(s.signal.flags.difference(SampleFlags::BELOW_NOISE));
+        let row_dark = !sw.moving && !sw.lit;
+        if let Err(f) = watched.and(if row_dark { Err(Fault::NoSignal) } else { Ok(()) }) {
+            motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
+            self.safe_state();
+            return Err(f);
+        }
         if sw.moving {
             self.sweeping = Some(sw);
             return Ok(SweepTurn::Sample(s));
@@ -521,6 +544,7 @@ impl<B: Board> Head<B> {
                 start_us: t0,
                 moving: true,
                 splitter: kinematics::through_splitter(&self.cfg, &self.pos.angles(&self.cfg)),
+                lit: false,
                 samples: 0,
             })
         }
@@ -720,15 +744,15 @@ impl<B: Board> Head<B> {
 
     /// Counts runs of saturated and of dark samples in a scan; a run of
     /// [`SUSPECT_RUN`] stops it.
-    pub(crate) fn watch(&mut self, s: &Sample) -> Result<(), Fault> {
+    pub(crate) fn watch(&mut self, flags: SampleFlags) -> Result<(), Fault> {
         let run = |n: &mut u32, hit: bool| {
             *n = if hit { *n + 1 } else { 0 };
             *n >= SUSPECT_RUN
         };
-        if run(&mut self.suspect.saturated, s.signal.flags.contains(SampleFlags::SATURATED)) {
+        if run(&mut self.suspect.saturated, flags.contains(SampleFlags::SATURATED)) {
             return Err(Fault::Saturated);
         }
-        if run(&mut self.suspect.dark, s.signal.flags.contains(SampleFlags::BELOW_NOISE)) {
+        if run(&mut self.suspect.dark, flags.contains(SampleFlags::BELOW_NOISE)) {
             return Err(Fault::NoSignal);
         }
         Ok(())

@@ -132,14 +132,23 @@ impl<B: Board> Head<B> {
         let mut inbox = Inbox::new();
         // An event of a session that ended is not for this one.
         self.talk.pending_event = None;
+        let mut served_frame = false;
         loop {
             sentry.alive();
             self.estop_open = sentry.estop_open();
-            let r = if let Some(f) = inbox.held.pop_front() {
+            // While a row is swept, its next sample comes after at most one
+            // request: the ADC's ring (two chop periods) fills meanwhile,
+            // and a burst of requests must not overrun it.
+            let frames_first = !(self.sweeping() && served_frame);
+            let held = if frames_first { inbox.held.pop_front() } else { None };
+            served_frame = false;
+            let r = if let Some(f) = held {
+                served_frame = true;
                 self.handle(&f, link, sentry, &mut inbox).await
             } else if self.mode == Mode::Scanning {
-                match link.try_recv(&mut inbox.rx) {
+                match frames_first.then(|| link.try_recv(&mut inbox.rx)).flatten() {
                     Some(Ok(n)) => {
+                        served_frame = true;
                         self.heard_host(sentry);
                         let f = inbox.frame(n);
                         self.handle(&f, link, sentry, &mut inbox).await
@@ -430,7 +439,7 @@ impl<B: Board> Head<B> {
                     // completed it is not sent, and the scan resumes at it.
                     h.acquire(Some(g), Some(here))
                         .await
-                        .and_then(|s| h.watch(&s).map(|()| ScanEvent::Sample(s)))
+                        .and_then(|s| h.watch(s.signal.flags).map(|()| ScanEvent::Sample(s)))
                 };
                 self.guarded(link, sentry, inbox, true, visit).await
             }

@@ -36,6 +36,8 @@ pub(crate) struct Sweeping {
     /// cannot cross the blind zone between it and the open view,
     /// [`check_path`]).
     pub(crate) splitter: bool,
+    /// Some sample so far rose above the noise.
+    pub(crate) lit: bool,
     pub(crate) samples: u32,
 }
 

@@ -131,13 +131,31 @@ impl SampleWriter {
     }
 
     /// Appends to the samples of an interrupted scan. A last line cut short
-    /// by a crash is dropped (its point is measured again).
+    /// by a crash is dropped (its point is measured again); a file of an
+    /// earlier gonio, whose columns end before `extent_deg`, is first
+    /// written again in today's (its rows would not read back beside the
+    /// new ones otherwise).
     pub fn append(dir: &Path) -> Result<Self> {
         let part = ScanDir::new(dir).samples_part();
         if !part.exists() {
             return Self::create(dir);
         }
-        let whole = whole_lines(&part)?.len();
+        let text = whole_lines(&part)?;
+        let header = text.split(|&b| b == b'\n').next().unwrap_or_default();
+        if !text.is_empty() && !header.trim_ascii_end().ends_with(b"extent_deg") {
+            // Beside the file, then over it: a crash meanwhile loses nothing.
+            let rows = stored_rows(dir)?;
+            let new = part.with_extension("part.new");
+            let mut w = csv::Writer::from_path(&new).with_context(|| format!("creating {}", new.display()))?;
+            for r in &rows {
+                w.serialize(r).context("writing a sample row")?;
+            }
+            w.flush()?;
+            w.get_ref().sync_all().context("syncing samples")?;
+            std::fs::rename(&new, &part).with_context(|| format!("renaming to {}", part.display()))?;
+            return Self::append(dir);
+        }
+        let whole = text.len();
         let file = std::fs::OpenOptions::new()
             .write(true)
             .open(&part)
@@ -243,4 +261,100 @@ pub fn read(path: &Path) -> Result<Vec<Row>> {
         .enumerate()
         .map(|(i, row)| row.with_context(|| format!("{}: row {}", path.display(), i + 2)))
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use gonio_shared::sample::ScanPosition;
+    use gonio_shared::{AxisAngles, Signal};
+
+    fn swept(seq: u32, order: u32) -> SweptSample {
+        let at = |psi: f32| AxisAngles {
+            omega_deg: 20.0,
+            tau_deg: 5.0,
+            psi_deg: psi,
+        };
+        SweptSample {
+            seq,
+            scan: Some(ScanPosition { index: order, order }),
+            start_us: seq as u64 * 35_000,
+            duration_s: 0.035,
+            axes_from: at(10.0 + seq as f32),
+            axes_to: at(11.0 + seq as f32),
+            signal: Signal {
+                in_phase_v: 0.1,
+                quadrature_v: 0.0,
+                amplitude_v: 0.1,
+                magnitude_v: 0.1,
+                phase_deg: 0.0,
+                noise_v: 1e-4,
+                gain_v_per_a: 1e6,
+                gain_index: 1,
+                periods: 8,
+                flags: SampleFlags::empty(),
+            },
+        }
+    }
+
+    /// A scan an earlier gonio began (no `extent_deg` column) resumes into
+    /// a file that reads back whole.
+    #[test]
+    fn a_file_of_an_earlier_gonio_is_appended_to_in_todays_columns() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut w = SampleWriter::create(dir.path()).unwrap();
+        w.push_swept(&[swept(0, 0), swept(1, 1)]).unwrap();
+        drop(w);
+        let part = ScanDir::new(dir.path()).samples_part();
+        let text = String::from_utf8(std::fs::read(&part).unwrap()).unwrap();
+        let old: String = text.lines().map(|l| l.rsplit_once(',').unwrap().0.to_string() + "\n").collect();
+        std::fs::write(&part, old).unwrap();
+        let mut w = SampleWriter::append(dir.path()).unwrap();
+        w.push_swept(&[swept(2, 2)]).unwrap();
+        drop(w);
+        let rows = stored_rows(dir.path()).unwrap();
+        assert_eq!(rows.iter().map(|r| r.seq).collect::<Vec<_>>(), [0, 1, 2]);
+        assert_eq!(
+            rows.iter().map(|r| r.extent_deg.is_some()).collect::<Vec<_>>(),
+            [false, false, true]
+        );
+    }
+
+    /// An interrupted sweep scan resumes at its last stored row, whose
+    /// samples (and a line a crash cut short) are dropped: the row is swept
+    /// again whole; the header stays, or is written again for a first row.
+    #[test]
+    fn resuming_a_sweep_scan_drops_its_last_stored_row() {
+        let dir = tempfile::tempdir().unwrap();
+        let mut w = SampleWriter::create(dir.path()).unwrap();
+        w.push_swept(&[swept(0, 0), swept(1, 0)]).unwrap();
+        w.push_swept(&[swept(2, 1), swept(3, 1), swept(4, 1)]).unwrap();
+        drop(w);
+        let part = ScanDir::new(dir.path()).samples_part();
+        let mut text = std::fs::read(&part).unwrap();
+        text.extend_from_slice(b"5,2,2,0.1");
+        std::fs::write(&part, text).unwrap();
+
+        drop_last_position(dir.path()).unwrap();
+        let kept = stored_rows(dir.path()).unwrap();
+        assert_eq!(
+            kept.iter().map(|r| (r.seq, r.order)).collect::<Vec<_>>(),
+            [(0, Some(0)), (1, Some(0))]
+        );
+        assert!(kept.iter().all(|r| r.extent_deg.is_some_and(|e| (e - 1.0).abs() < 0.01)));
+
+        let mut w = SampleWriter::append(dir.path()).unwrap();
+        w.push_swept(&[swept(5, 1), swept(6, 1)]).unwrap();
+        drop(w);
+        assert_eq!(stored_rows(dir.path()).unwrap().len(), 4);
+
+        // Dropped row by row down to nothing: appending starts over.
+        drop_last_position(dir.path()).unwrap();
+        drop_last_position(dir.path()).unwrap();
+        assert!(stored_rows(dir.path()).unwrap().is_empty());
+        let mut w = SampleWriter::append(dir.path()).unwrap();
+        w.push_swept(&[swept(7, 0)]).unwrap();
+        drop(w);
+        assert_eq!(stored_rows(dir.path()).unwrap().len(), 1);
+    }
 }

@@ -317,10 +317,7 @@ impl ScanDriver<'_> {
                             continue;
                         }
                         HeadState::Scanning { .. } => {
-                            if let Err(e) = head.request::<AbortEndpoint>(&()).await {
-                                return lost(e, expected);
-                            }
-                            return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                            return gap(head, expected).await;
                         }
                         HeadState::Idle if expected >= outcome.points => return Ok(Stretch::Finished),
                         HeadState::Paused { .. } if pausing => return Ok(Stretch::Paused(expected)),
@@ -345,13 +342,14 @@ impl ScanDriver<'_> {
                     outcome.duplicates_dropped += 1;
                     continue;
                 }
+                if row.last().is_some_and(|l| l.seq == s.seq) {
+                    outcome.duplicates_dropped += 1;
+                    continue;
+                }
                 // Consecutive samples of the row expected, or a gap: the
                 // row is swept again.
                 if o > expected || row.last().is_some_and(|l| l.seq.wrapping_add(1) != s.seq) {
-                    if let Err(e) = head.request::<AbortEndpoint>(&()).await {
-                        return lost(e, expected);
-                    }
-                    return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                    return gap(head, expected).await;
                 }
                 row.push(*s);
                 waiting_since = Instant::now();
@@ -359,10 +357,7 @@ impl ScanDriver<'_> {
             }
             if let ScanEvent::Swept { order, samples, .. } = ev {
                 if order == expected && row.len() != samples as usize {
-                    if let Err(e) = head.request::<AbortEndpoint>(&()).await {
-                        return lost(e, expected);
-                    }
-                    return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                    return gap(head, expected).await;
                 }
             }
             let order = match &ev {
@@ -377,10 +372,7 @@ impl ScanDriver<'_> {
                     continue;
                 }
                 if o > expected {
-                    if let Err(e) = head.request::<AbortEndpoint>(&()).await {
-                        return lost(e, expected);
-                    }
-                    return Ok(Stretch::Interrupted(expected, Interruption::Gap));
+                    return gap(head, expected).await;
                 }
                 expected += 1;
                 waiting_since = Instant::now();
@@ -445,6 +437,16 @@ impl ScanDriver<'_> {
                 pausing = true;
             }
         }
+    }
+}
+
+/// Events were lost or came out of order at position `expected`: the
+/// head's scan is aborted, and the next stretch continues from there.
+async fn gap(head: &Head, expected: u32) -> Result<Stretch> {
+    match head.request::<AbortEndpoint>(&()).await {
+        Ok(_) => Ok(Stretch::Interrupted(expected, Interruption::Gap)),
+        Err(e) if is_link_loss(&e) => Ok(Stretch::Interrupted(expected, Interruption::LinkLost(format!("{e:#}")))),
+        Err(e) => Err(e),
     }
 }
 

@@ -75,7 +75,7 @@ pub struct ScanSpec {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct SweepScan {
-    /// Top speed of the arm (deg/s), at most its limit.
+    /// Top speed of the arm (deg/s); a row goes at most at the arm's limit.
     pub speed_dps: f32,
     /// Chop periods per swept sample (`SweepRequest::periods_per_sample`).
     pub periods_per_sample: u16,
@@ -145,13 +145,20 @@ impl ScanSpec {
             return bad;
         };
         let n_ti = self.theta_i_deg.len() as u32;
-        // A sweep scan's rows are its positions: one θo "column" each.
-        let n_to = if self.sweep.is_some() { 1 } else { n_to };
-        // Bounded so every index fits in u32 with room to spare.
+        // Bounded so every index fits in u32 with room to spare (a sweep
+        // scan's θo span too: it is looked through for the row's stop).
         if (n_ti as u64) * (n_to as u64) * (n_dp as u64) > 10_000_000 {
             return bad;
         }
-        Ok(Dims { n_ti, n_to, n_dp })
+        if self.sweep.is_none() {
+            return Ok(Dims { n_ti, n_to, n_dp });
+        }
+        // A sweep scan's rows are its positions, one θo "column" each, and
+        // a row needs a θo short of the horizon to run to.
+        if self.row_stop().is_none() {
+            return bad;
+        }
+        Ok(Dims { n_ti, n_to: 1, n_dp })
     }
 
     /// Checks the grid and the start position; returns the number of
@@ -207,8 +214,7 @@ impl ScanSpec {
             return self.point(index).map(Visit::Point);
         };
         let (_, a, _, c) = self.locate(index, |d| d.n_dp)?;
-        let n = self.theta_o.count()?;
-        let stop = (0..n).rev().map(|k| self.theta_o.at(k)).find(|&t| t < HORIZON_DEG)?;
+        let stop = self.row_stop()?;
         Some(Visit::Row(SweepRow {
             theta_i_deg: self.theta_i_deg[a as usize],
             dphi_deg: self.dphi.at(c),
@@ -217,6 +223,23 @@ impl ScanSpec {
             speed_dps: how.speed_dps,
             periods_per_sample: how.periods_per_sample,
         }))
+    }
+
+    /// θo's last value short of the horizon, where a sweep scan's rows end
+    /// (`None` when even its first is not): found in a few steps, not by
+    /// looking through the span (up to 10⁷ values).
+    fn row_stop(&self) -> Option<f32> {
+        let (r, n) = (&self.theta_o, self.theta_o.count()?);
+        // (A NaN start is refused by `count`.)
+        if r.start_deg >= HORIZON_DEG {
+            return None;
+        }
+        // The estimate, then a step either way for the rounding.
+        let guess = (((HORIZON_DEG - r.start_deg) / r.step_deg) as u32).min(n - 1);
+        (guess.saturating_sub(1)..=guess.saturating_add(1).min(n - 1))
+            .rev()
+            .map(|k| r.at(k))
+            .find(|&t| t < HORIZON_DEG)
     }
 
     /// Canonical index of the point visited at position `order`.

@@ -95,6 +95,21 @@ pub enum Activity {
     /// A measurement where the head stands (laser on).
     Measurement,
     Scan,
+    /// A sweep scan (its rows swept by the arm, the laser on).
+    SweepScan,
+}
+
+/// A sweep scan of two rows, for stops in the middle of a row.
+pub fn small_sweep_scan() -> ScanSpec {
+    ScanSpec {
+        dphi: gonio_shared::AngleRange::new(-30.0, 30.0, 60.0),
+        theta_o: gonio_shared::AngleRange::new(0.0, 80.0, 1.0),
+        sweep: Some(gonio_shared::SweepScan {
+            speed_dps: 10.0,
+            periods_per_sample: 8,
+        }),
+        ..small_scan()
+    }
 }
 
 /// Where an axis's motion was when the trigger came.
@@ -173,6 +188,7 @@ fn request(a: Activity) -> Vec<Vec<u8>> {
         Activity::Homing => vec![send::<HomeEndpoint>(&HomeRequest::ALL)],
         Activity::Measurement => vec![send::<MeasureEndpoint>(&MeasureRequest { at: None })],
         Activity::Scan => scan_frames(&small_scan()),
+        Activity::SweepScan => scan_frames(&small_sweep_scan()),
     }
 }
 
@@ -209,7 +225,7 @@ pub fn duration_s(head: &mut FrameHead, a: Activity) -> f64 {
     let t0 = head.now() + 0.001;
     let sent = head.serve_timed(start(a, t0, 0.0), t0 + 3600.0);
     let end = match a {
-        Activity::Scan => scan_events(&sent)
+        Activity::Scan | Activity::SweepScan => scan_events(&sent)
             .iter()
             .find(|(e, _)| matches!(e, ScanEvent::Finished { .. }))
             .map(|(_, s)| s.t_s),

@@ -12,7 +12,7 @@ use gonio_shared::icd::{ContinueEndpoint, MeasureEndpoint, MeasureRequest, MoveE
 use gonio_shared::{Fault, Geometry, HeadState, SafetySettings, ScanEvent};
 use gonio_sim::{Cue, FrameHead, SimConfig};
 use gonio_tests::frames::{replies, scan_events, scan_frames, send};
-use gonio_tests::stops::{accel_steps, decel_s_max, ready, small_scan, speed_jump, trial, Activity, Trigger};
+use gonio_tests::stops::{accel_steps, decel_s_max, ready, small_scan, small_sweep_scan, speed_jump, trial, Activity, Trigger};
 use std::cell::Cell;
 use std::convert::Infallible;
 use std::rc::Rc;
@@ -99,6 +99,102 @@ fn a_brake_at_any_moment_of_a_move_slows_at_the_limit_without_skipping_a_step() 
     let before = times.iter().filter(|&&t| t <= braked_s).count() as f64;
     let after = emitted[2] as f64 - before;
     assert!((after - v * v / (2.0 * a)).abs() <= 2.0, "{after} steps after the brake");
+}
+
+/// Every stop in the middle of a sweep scan's row (the arm sweeping, the
+/// chop running, between two of the serve loop's turns or within one)
+/// darkens the laser at once and brakes the arm from its speed without
+/// losing a step; continuing sweeps the row again from its start, whole.
+#[test]
+fn a_stop_mid_row_darkens_the_laser_brakes_the_arm_and_the_row_is_swept_again() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    // When each row is swept, from an undisturbed run: the trials stop it
+    // 40 % into a row's samples.
+    let t0 = head.now();
+    let sent = head.serve_timed(
+        scan_frames(&small_sweep_scan()).into_iter().map(|f| (t0, Cue::Frame(f))),
+        t0 + 600.0,
+    );
+    let events = scan_events(&sent);
+    let whole = events.last().map(|(_, s)| s.t_s - t0).expect("the scan ended");
+    let mut rows: Vec<(f64, f64)> = Vec::new();
+    for (e, sent) in &events {
+        if let ScanEvent::SweptSample(s) = e {
+            let row = s.scan.expect("a row's sample").order as usize;
+            if rows.len() <= row {
+                rows.push((sent.t_s, sent.t_s));
+            }
+            rows[row].1 = sent.t_s;
+        }
+    }
+    assert_eq!(rows.len(), 2);
+    // (The trial's clock starts a millisecond after `ready`.)
+    let mid_rows = rows.iter().map(|(a, b)| a + 0.4 * (b - a) - t0 - 0.001);
+    let taus: Vec<f64> = mid_rows.collect();
+    for trigger in Trigger::ALL {
+        for &tau in &taus {
+            ready(&mut head);
+            let s = trial(&mut head, Activity::SweepScan, trigger, tau);
+            let what = format!("{} at {tau:.2} s of {whole:.2} s", trigger.name());
+            assert!(s.laser_was_on, "{what}: the laser was off");
+            assert!(s.laser_off_ms < 1.0, "{what}: dark after {} ms", s.laser_off_ms);
+            assert!(s.phases.iter().any(|(axis, _)| *axis == 2), "{what}: the arm was not moving");
+            assert_eq!(s.position_error_steps, 0, "{what}");
+            assert!(s.homed, "{what}: unhomed");
+            assert!(s.stop_s <= decel_s_max() + 0.01, "{what}: stopped after {} s", s.stop_s);
+            assert!(s.speed_jump <= 1.05, "{what}: speed jump {}", s.speed_jump);
+            assert!(!s.status.laser_on, "{what}");
+        }
+    }
+    // Paused mid-row and continued: the row is swept again, and every row
+    // ends whole (as many samples as its `Swept` says, consecutive).
+    ready(&mut head);
+    let t = head.now();
+    let scan = scan_frames(&small_sweep_scan()).into_iter().map(|f| (t, Cue::Frame(f)));
+    let sent = head.serve_timed(
+        scan.chain([
+            (t + 0.35 * whole, Cue::Frame(send::<PauseEndpoint>(&()))),
+            (t + 0.35 * whole + 2.0, Cue::Frame(send::<ContinueEndpoint>(&()))),
+        ]),
+        t + 3.0 * whole + 10.0,
+    );
+    let events = scan_events(&sent);
+    assert!(
+        matches!(
+            events.last(),
+            Some((
+                ScanEvent::Finished {
+                    measured: 2,
+                    skipped: 0,
+                    ..
+                },
+                _
+            ))
+        ),
+        "{:?}",
+        events.last()
+    );
+    let mut run: Vec<u32> = Vec::new();
+    let mut rows = Vec::new();
+    for (e, _) in &events {
+        match e {
+            ScanEvent::SweptSample(s) => {
+                if run.last().is_some_and(|l| l + 1 != s.seq) {
+                    run.clear();
+                }
+                run.push(s.seq);
+            }
+            ScanEvent::Swept { order, samples, .. } => {
+                assert_eq!(run.len(), *samples as usize, "row {order}");
+                rows.push(*order);
+                run.clear();
+            }
+            ScanEvent::Paused { .. } => run.clear(),
+            _ => {}
+        }
+    }
+    assert_eq!(rows, [0, 1]);
 }
 
 fn far_move() -> Geometry {

@@ -19,9 +19,9 @@ pub struct GridArgs {
     /// is then unused).
     #[arg(long)]
     pub sweep: bool,
-    /// Top speed of a sweep (deg/s of the axis that travels furthest);
-    /// rows whose axes cannot keep up go as fast as they allow.
-    #[arg(long, value_name = "DEG_PER_S", default_value_t = 20.0, requires = "sweep")]
+    /// Top speed of the arm in a sweep (deg/s), at most its limit (30 deg/s
+    /// on the reference head): a sample spans this times its periods.
+    #[arg(long, value_name = "DEG_PER_S", default_value_t = 30.0, requires = "sweep")]
     pub sweep_speed: f32,
     /// Chop periods per swept sample (4–8).
     #[arg(long, value_name = "N", default_value_t = SweepRequest::PERIODS_MAX, requires = "sweep")]
@@ -83,7 +83,7 @@ mod tests {
             theta_o: "0:90:3".into(),
             dphi: "-180:180:10".into(),
             sweep: false,
-            sweep_speed: 20.0,
+            sweep_speed: 30.0,
             sweep_periods: 8,
         };
         assert_eq!(g.spec().unwrap(), ScanSpec::belcour());
@@ -98,7 +98,7 @@ mod tests {
                 theta_o: to.into(),
                 dphi: "0:0:1".into(),
                 sweep: false,
-                sweep_speed: 20.0,
+                sweep_speed: 30.0,
                 sweep_periods: 8,
             }
             .spec()

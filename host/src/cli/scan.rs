@@ -229,15 +229,18 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
 
 /// The first visit position an interrupted scan of `spec` has not stored.
 /// A sweep scan's last stored row may have been cut short while it was
-/// written: it is dropped, and swept again.
+/// written: it is swept again (and its stored samples dropped once the head
+/// is found, [`scan_to_dir`]).
 fn resume_from(dir: &Path, spec: &ScanSpec) -> Result<u32> {
     if ScanDir::new(dir).samples().exists() {
         bail!("{} holds a complete scan; nothing to resume", dir.display());
     }
-    if spec.sweep.is_some() {
-        drop_last_position(dir)?;
-    }
-    Ok(stored_rows(dir)?.iter().filter_map(|r| r.order).map(|o| o + 1).max().unwrap_or(0))
+    let last = stored_rows(dir)?.iter().filter_map(|r| r.order).max();
+    Ok(match (last, spec.sweep) {
+        (Some(o), Some(_)) => o,
+        (Some(o), None) => o + 1,
+        (None, _) => 0,
+    })
 }
 
 /// Refuses to mix a new scan into a directory that holds one.
@@ -317,6 +320,10 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         Some(first) => {
             if !json {
                 eprintln!("resuming at position {first} of {}", spec.len());
+            }
+            if spec.sweep.is_some() {
+                // The row resuming sweeps again (`resume_from`).
+                drop_last_position(dir)?;
             }
             SampleWriter::append(dir)?
         }

@@ -26,7 +26,11 @@
 //!   the grid and the sweep scan each measured as `gonio demo` does (the
 //!   reference plate, the scan, the calibration), retro-phong fitted to
 //!   each, and every parameter's difference over its two standard errors
-//!   combined (`z`); `params_within_2sigma` when every |z| ≤ 2. Beside them
+//!   combined (`z`: each fit's standard errors as `gonio fit` reports them,
+//!   the samples' scatter and the inputs every sample shares, the plate and
+//!   the stage zeros; `z_scatter`: the scatter alone, as if both scans
+//!   shared those inputs' errors exactly); `params_within_2sigma` when every
+//!   |z| ≤ 2 (`params_within_2sigma_of_scatter` for `z_scatter`). Beside them
 //!   the fit of the grid at twice its density both ways (`fine_grid`): where
 //!   the two disagree, which one finer sampling sides with. Both fits weigh
 //!   every sample by the solid angle it stands for (`Weighting::Area`), on
@@ -168,8 +172,14 @@ fn sweep_scan() -> Value {
 }
 
 /// Retro-phong fitted to `spec` measured on a simulated head of `material`
-/// as `gonio demo` measures: the samples it fitted, and the fit.
-fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<(usize, Fit)> {
+/// as `gonio demo` measures, on the domain a grid and a sweep scan both see
+/// (beyond the blind zone around the retro direction: the grid reaches its
+/// one retro point per incidence through the beam splitter, a sweep scan's
+/// rows do not), every sample weighed by the solid angle it stands for: the
+/// samples it fitted, the fit, and the standard errors of the samples' own
+/// scatter alone (without the inputs every sample of the head shares, the
+/// plate, the scale, the stage zeros).
+fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<(usize, Fit, Vec<Option<f64>>)> {
     let sim = SimConfig {
         material: material.clone(),
         ..SimConfig::default()
@@ -179,53 +189,55 @@ fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<(usize, Fit)> {
     let quiet = OutputArgs { force: false, json: true };
     rt.block_on(demo_scan(sim, spec, dir.path(), &quiet))?;
     let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
-    // The domain both scans see: beyond the blind zone around the retro
-    // direction, which the grid reaches at its one retro point per
-    // incidence (through the beam splitter) and a sweep scan's rows do not.
     let blind = (SimConfig::default().machine.optics.blind_max_deg as f64).to_radians();
-    let data = gonio_host::formats::load(&calibrated.csv)?.filter(|o| {
+    let mut data = gonio_host::formats::load(&calibrated.csv)?.filter(|o| {
         let d = o.directions();
         gonio_brdf::frame::angle_between(d.l, d.v) > blind
     });
-    let f = fit(
-        &data,
-        &FitSpec {
-            units: data.units,
-            weighting: Weighting::Area,
-            ..FitSpec::new(ModelId::RetroPhong)
-        },
-    )?;
-    Ok((data.observations.len(), f))
+    let spec = FitSpec {
+        units: data.units,
+        weighting: Weighting::Area,
+        ..FitSpec::new(ModelId::RetroPhong)
+    };
+    let f = fit(&data, &spec)?;
+    for o in &mut data.observations {
+        o.shared = Default::default();
+    }
+    let scatter = fit(&data, &spec)?.stderr;
+    Ok((data.observations.len(), f, scatter))
 }
 
 /// The grid's and the sweep scan's retro-phong fits of `material`, compared
-/// parameter by parameter.
+/// parameter by parameter, beside the grid's at twice its density.
 fn fit_agreement(material: &Specimen) -> Result<Value> {
     let swept = ScanSpec {
         sweep: Some(DEMO_SWEEP),
         ..ScanSpec::belcour()
     };
-    let (n_grid, grid) = fitted(material, &ScanSpec::belcour())?;
-    let (n_sweep, sweep) = fitted(material, &swept)?;
-    // The grid at twice its density both ways: where the two scans
-    // disagree, which one the finer sampling sides with.
+    let (n_grid, grid, grid_scatter) = fitted(material, &ScanSpec::belcour())?;
+    let (n_sweep, sweep, sweep_scatter) = fitted(material, &swept)?;
     let fine = ScanSpec {
         theta_o: AngleRange::new(0.0, 90.0, 1.5),
         dphi: AngleRange::new(-180.0, 180.0, 5.0),
         ..ScanSpec::belcour()
     };
-    let (n_fine, fine) = fitted(material, &fine)?;
+    let (n_fine, fine, _) = fitted(material, &fine)?;
     let names = ModelId::RetroPhong.param_names();
+    let z = |d: f64, a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| d / a.hypot(b));
     let params: Vec<Value> = (0..names.len())
         .map(|i| {
             let (a, b) = (grid.material.params[i], sweep.material.params[i]);
-            let (sa, sb) = (grid.stderr[i], sweep.stderr[i]);
-            let z = sa.zip(sb).map(|(sa, sb)| (b - a) / sa.hypot(sb));
-            json!({ "name": names[i], "grid": a, "grid_stderr": sa, "sweep": b, "sweep_stderr": sb, "z": z,
-                    "fine_grid": fine.material.params[i], "fine_grid_stderr": fine.stderr[i] })
+            json!({
+                "name": names[i],
+                "grid": a, "grid_stderr": grid.stderr[i],
+                "sweep": b, "sweep_stderr": sweep.stderr[i],
+                "z": z(b - a, grid.stderr[i], sweep.stderr[i]),
+                "z_scatter": z(b - a, grid_scatter[i], sweep_scatter[i]),
+                "fine_grid": fine.material.params[i], "fine_grid_stderr": fine.stderr[i],
+            })
         })
         .collect();
-    let within = params.iter().all(|p| p["z"].as_f64().is_some_and(|z| z.abs() <= 2.0));
+    let within = |key: &str| params.iter().all(|p| p[key].as_f64().is_some_and(|z| z.abs() <= 2.0));
     Ok(json!({
         "material": material.describe(),
         "grid_samples": n_grid,
@@ -234,7 +246,8 @@ fn fit_agreement(material: &Specimen) -> Result<Value> {
         "grid_rmse": grid.metrics.rmse,
         "sweep_rmse": sweep.metrics.rmse,
         "params": params,
-        "params_within_2sigma": within,
+        "params_within_2sigma": within("z"),
+        "params_within_2sigma_of_scatter": within("z_scatter"),
     }))
 }
 
