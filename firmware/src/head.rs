@@ -476,8 +476,7 @@ impl<B: Board> Head<B> {
         let Some(mut sw) = self.sweeping.take() else {
             self.check_sweep(row.periods_per_sample, row.speed_dps)?;
             let (from, to) = sweep::row_ends(&self.cfg, row)?;
-            let speed = row.speed_dps.min(self.cfg.axes[Axis::Arm.index()].max_speed_dps);
-            let (start, end, limits) = self.stage_path(&from, &to, speed)?;
+            let (start, end, limits) = self.stage_path(&from, &to, sweep::row_speed(&self.cfg, row))?;
             self.sweeping = Some(self.begin_sweep(row.periods_per_sample, limits, start, end, Some(at)).await?);
             return Ok(SweepTurn::Begun);
         };
@@ -496,9 +495,7 @@ impl<B: Board> Head<B> {
         let watched = self.watch(s.signal.flags.difference(SampleFlags::BELOW_NOISE));
         let row_dark = !sw.moving && !sw.lit;
         if let Err(f) = watched.and(if row_dark { Err(Fault::NoSignal) } else { Ok(()) }) {
-            motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
-            self.safe_state();
-            return Err(f);
+            return Err(self.abandon_sweep(f).await);
         }
         if sw.moving {
             self.sweeping = Some(sw);
@@ -571,9 +568,7 @@ impl<B: Board> Head<B> {
         if signal.flags.contains(SampleFlags::OVERRUN) {
             // A lost block breaks the alignment of the ring with the
             // chop for every sample after it: the sweep stops.
-            motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
-            self.safe_state();
-            return Err(Fault::AdcOverrun);
+            return Err(self.abandon_sweep(Fault::AdcOverrun).await);
         }
         let (axes_from, axes_to) = sweep::tag(&self.cfg, &self.pos, sw.first, last);
         let s = SweptSample {
@@ -589,6 +584,14 @@ impl<B: Board> Head<B> {
         sw.samples += 1;
         (sw.first, sw.start_us) = (last, end_us);
         Ok(s)
+    }
+
+    /// Gives a sweep up for `f` in the middle of its move: the arm braked
+    /// from its speed (its steps counted in), the head made safe.
+    async fn abandon_sweep(&mut self, f: Fault) -> Fault {
+        motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
+        self.safe_state();
+        f
     }
 
     /// Ends a sweep whose move is over: its steps counted in and checked.

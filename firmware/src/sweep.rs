@@ -9,7 +9,7 @@ use crate::config::HeadConfig;
 use crate::kinematics;
 use crate::motion::{self, Limits, Position, Running};
 use gonio_shared::sample::ScanPosition;
-use gonio_shared::{AxisAngles, Fault, Field, SweepRequest, SweepRow, Unreachable};
+use gonio_shared::{Axis, AxisAngles, Fault, Field, SweepRequest, SweepRow, Unreachable};
 use libm::{acos, cos, sin};
 
 const DEG: f64 = core::f64::consts::PI / 180.0;
@@ -41,18 +41,6 @@ pub(crate) struct Sweeping {
     pub(crate) samples: u32,
 }
 
-/// The fastest a sweep by `delta` microsteps may go: the speed of its
-/// longest-travel axis at which every other axis, in proportion, is still
-/// within its own limit (`f32::INFINITY` for no travel).
-pub fn top_speed(cfg: &HeadConfig, delta: [i32; 3]) -> f32 {
-    let deg = [0, 1, 2].map(|i| delta[i].unsigned_abs() as f32 / cfg.axes[i].steps_per_deg());
-    let longest = deg.iter().copied().fold(0.0, f32::max);
-    (0..3)
-        .filter(|&i| deg[i] > 0.0)
-        .map(|i| cfg.axes[i].max_speed_dps * longest / deg[i])
-        .fold(f32::INFINITY, f32::min)
-}
-
 /// Limits of the axes moving by `delta` microsteps, so that the one with the
 /// longest travel cruises at `speed_dps` and every axis follows the same
 /// profile scaled to its travel (speeds and accelerations in proportion, the
@@ -78,9 +66,7 @@ pub fn limits(cfg: &HeadConfig, delta: [i32; 3], speed_dps: f32) -> Result<[Limi
     for i in 0..3 {
         if ratio[i] > 0.0 {
             out[i] = Limits::new(speed_dps * ratio[i], accel * ratio[i]);
-            // Beyond the limit by more than the rounding of the proportion
-            // (an axis at [`top_speed`] lands on its limit give or take an ulp).
-            if out[i].speed_dps > cfg.axes[i].max_speed_dps * (1.0 + 1e-6) {
+            if out[i].speed_dps > cfg.axes[i].max_speed_dps {
                 return Err(Fault::InvalidValue(Field::SweepSpeed));
             }
         }
@@ -141,6 +127,12 @@ pub fn row_ends(cfg: &HeadConfig, row: &SweepRow) -> Result<(AxisAngles, AxisAng
     kinematics::check_travel(cfg, &a)?;
     kinematics::check_travel(cfg, &b)?;
     Ok(if row.outward { (a, b) } else { (b, a) })
+}
+
+/// The speed a sweep scan's row runs at: its own, at most the arm's limit
+/// (the arm alone moves).
+pub fn row_speed(cfg: &HeadConfig, row: &SweepRow) -> f32 {
+    row.speed_dps.min(cfg.axes[Axis::Arm.index()].max_speed_dps)
 }
 
 /// Checks a sweep's sample length and speed (its ends are checked by

@@ -247,13 +247,6 @@ impl ScanDriver<'_> {
         let head = self.session.head();
         let (out, pb, outcome, clock, plan) = (&mut *self.out, self.pb, &mut self.outcome, &mut self.clock, &self.order);
         let mut expected = spec.first_order;
-        let lost = |e: anyhow::Error, at: u32| -> Result<Stretch> {
-            if is_link_loss(&e) {
-                Ok(Stretch::Interrupted(at, Interruption::LinkLost(format!("{e:#}"))))
-            } else {
-                Err(e)
-            }
-        };
         // A scan the head holds where this stretch begins (paused for the
         // monitor, or after host silence or a lost link) is continued
         // without replanning; otherwise it starts (or replaces the held one).
@@ -440,13 +433,22 @@ impl ScanDriver<'_> {
     }
 }
 
+/// A request of the stretch failed at position `at`: a lost link is an
+/// interruption to recover from, any other error ends the scan.
+fn lost(e: anyhow::Error, at: u32) -> Result<Stretch> {
+    if is_link_loss(&e) {
+        Ok(Stretch::Interrupted(at, Interruption::LinkLost(format!("{e:#}"))))
+    } else {
+        Err(e)
+    }
+}
+
 /// Events were lost or came out of order at position `expected`: the
 /// head's scan is aborted, and the next stretch continues from there.
 async fn gap(head: &Head, expected: u32) -> Result<Stretch> {
     match head.request::<AbortEndpoint>(&()).await {
         Ok(_) => Ok(Stretch::Interrupted(expected, Interruption::Gap)),
-        Err(e) if is_link_loss(&e) => Ok(Stretch::Interrupted(expected, Interruption::LinkLost(format!("{e:#}")))),
-        Err(e) => Err(e),
+        Err(e) => lost(e, expected),
     }
 }
 

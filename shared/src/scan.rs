@@ -146,7 +146,7 @@ impl ScanSpec {
         };
         let n_ti = self.theta_i_deg.len() as u32;
         // Bounded so every index fits in u32 with room to spare (a sweep
-        // scan's θo span too: it is looked through for the row's stop).
+        // scan's with its θo span counted too: one bound for every scan).
         if (n_ti as u64) * (n_to as u64) * (n_dp as u64) > 10_000_000 {
             return bad;
         }

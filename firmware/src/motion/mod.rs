@@ -100,6 +100,14 @@ pub fn move_time(cfg: &HeadConfig, delta: [i32; 3]) -> f64 {
         .fold(0.0, f64::max)
 }
 
+/// Duration (s) of a move of every axis by `delta` microsteps within
+/// per-axis `limits`: the longest axis's profile.
+pub fn profile_s(cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3]) -> f64 {
+    (0..3)
+        .map(|i| ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i]).duration())
+        .fold(0.0, f64::max)
+}
+
 /// Blocks the move of every axis by `delta` microsteps at cruise speed takes
 /// on a `tick_hz` step timer (what the chip plans before it starts).
 pub fn move_blocks(cfg: &HeadConfig, delta: [i32; 3], tick_hz: u32) -> usize {
@@ -173,9 +181,7 @@ pub async fn plan<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, delta: [i32;
         }
     }
     // A move that outlasts its schedule by far means a stalled timer: stop it.
-    let expected = (0..3)
-        .map(|i| ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i]).duration())
-        .fold(0.0, f64::max);
+    let expected = profile_s(cfg, delta, limits);
     Ok(Running {
         delta,
         limit_ms: (expected * 2.0 * 1e3).min(u32::MAX as f64 / 2.0) as u32 + STALL_MARGIN_MS,

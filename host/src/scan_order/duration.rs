@@ -4,7 +4,7 @@
 use gonio_firmware::config::HeadConfig;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::plan_s;
-use gonio_firmware::motion::{move_blocks, move_time, ramp, target_steps};
+use gonio_firmware::motion::{move_blocks, move_time, profile_s, target_steps};
 use gonio_firmware::sweep;
 use gonio_shared::{DetectionReport, ScanSpec, Visit};
 
@@ -24,6 +24,13 @@ pub struct ScanTime {
 }
 
 impl ScanTime {
+    /// Counts a move of the axes by `delta` microsteps at cruise speed and
+    /// the chip's planning of it.
+    fn add_move(&mut self, cfg: &HeadConfig, delta: [i32; 3]) {
+        self.moves_s += move_time(cfg, delta);
+        self.planning_s += plan_s(move_blocks(cfg, delta, STEP_TICK_HZ));
+    }
+
     pub fn total_s(&self) -> f64 {
         self.moves_s + self.planning_s + self.settle_s + self.integration_s
     }
@@ -56,9 +63,7 @@ pub fn scan_time(
         match kinematics::inverse(cfg, &g) {
             Ok(axes) => {
                 let target = target_steps(cfg, &axes);
-                let delta = [0, 1, 2].map(|i| target[i] - at[i]);
-                t.moves_s += move_time(cfg, delta);
-                t.planning_s += plan_s(move_blocks(cfg, delta, STEP_TICK_HZ));
+                t.add_move(cfg, [0, 1, 2].map(|i| target[i] - at[i]));
                 at = target;
                 t.settle_s += settle_s;
                 t.integration_s += integration_s;
@@ -95,17 +100,13 @@ pub fn sweep_time(
         };
         let (start, end) = (target_steps(cfg, &a), target_steps(cfg, &b));
         let (to_start, across) = ([0, 1, 2].map(|k| start[k] - at[k]), [0, 1, 2].map(|k| end[k] - start[k]));
-        let speed = row.speed_dps.min(cfg.axes[2].max_speed_dps);
-        let Ok(limits) = sweep::limits(cfg, across, speed) else {
+        let Ok(limits) = sweep::limits(cfg, across, sweep::row_speed(cfg, &row)) else {
             t.skipped += 1;
             continue;
         };
-        t.moves_s += move_time(cfg, to_start);
-        t.planning_s += plan_s(move_blocks(cfg, to_start, STEP_TICK_HZ));
+        t.add_move(cfg, to_start);
         t.settle_s += settle_s + prepare_s;
-        t.integration_s += (0..3)
-            .map(|k| ramp(&cfg.axes[k], across[k].unsigned_abs(), limits[k]).duration())
-            .fold(0.0, f64::max);
+        t.integration_s += profile_s(cfg, across, limits);
         t.measured += 1;
         at = end;
     }
