@@ -42,6 +42,9 @@ pub struct Detector {
     /// The calibration and the chop timing it was taken at.
     learned: Option<(Learned, ChopTiming)>,
     gain: u8,
+    /// The gain changed during a sweep: the next swept sample first
+    /// discards the periods the amplifier needs.
+    resettle: bool,
     running: bool,
 }
 
@@ -60,6 +63,7 @@ impl Detector {
             swept: Design::new(SweepRequest::PERIODS_MAX as u32, chop_hz),
             learned: None,
             gain: 0,
+            resettle: false,
             running: false,
         }
     }
@@ -106,6 +110,7 @@ impl Detector {
     pub fn stop<B: Board>(&mut self, hw: &mut Hardware<B>) {
         hw.adc.stop();
         self.running = false;
+        self.resettle = false;
     }
 
     fn set_gain<B: Board>(&mut self, hw: &mut Hardware<B>, g: u8) -> Result<(), Fault> {
@@ -145,26 +150,33 @@ impl Detector {
         buf: &mut [u16],
         flags: &mut SampleFlags,
     ) -> Result<(), Fault> {
-        let full = Self::full_scale::<B>();
         let n_gains = cfg.detector.gains_v_per_a.len() as u8;
         for _ in 0..2 * n_gains {
             Self::settle(hw, cfg, buf, flags).await;
             Self::period(hw, buf, flags).await;
             let (min, max) = buf.iter().fold((u16::MAX, 0), |(lo, hi), &c| (lo.min(c), hi.max(c)));
-            if max >= full || min == 0 {
-                if self.gain == 0 {
-                    return Ok(());
-                }
-                let g = self.gain - 1;
-                self.set_gain(hw, g)?;
-            } else if (max as f32) * 10.0 < RAISE_BELOW * full as f32 && self.gain + 1 < n_gains {
-                let g = self.gain + 1;
-                self.set_gain(hw, g)?;
-            } else {
-                return Ok(());
+            match self.next_gain::<B>(cfg, min, max) {
+                Some(g) => self.set_gain(hw, g)?,
+                None => return Ok(()),
             }
         }
         Ok(())
+    }
+
+    /// The gain one step from the current one that codes from `min` to
+    /// `max` ask for: lower when they reach the rails, higher when ten times
+    /// them would stay below [`RAISE_BELOW`] of full scale; `None` when the
+    /// gain is right or at its end.
+    fn next_gain<B: Board>(&self, cfg: &HeadConfig, min: u16, max: u16) -> Option<u8> {
+        let full = Self::full_scale::<B>();
+        let n_gains = cfg.detector.gains_v_per_a.len() as u8;
+        if max >= full || min == 0 {
+            self.gain.checked_sub(1)
+        } else if (max as f32) * 10.0 < RAISE_BELOW * full as f32 && self.gain + 1 < n_gains {
+            Some(self.gain + 1)
+        } else {
+            None
+        }
     }
 
     /// Starts the chop if needed, ranges the gain and lets the amplifier settle.
@@ -198,7 +210,7 @@ impl Detector {
         let buf = &mut buf[..self.samples_per_period()];
         self.prepare(hw, cfg, buf, &mut flags).await?;
         let it = self.accumulate(hw, buf, &mut flags, &self.design, None).await;
-        Ok(self.conclude::<B>(cfg, it, flags).await)
+        Ok(self.conclude::<B>(cfg, it, flags).await.0)
     }
 
     /// Computes the regression's design of a sweep's samples (`periods`
@@ -228,13 +240,51 @@ impl Detector {
     /// before the estimate (the conversions go on meanwhile: the next
     /// sample's first period begins there). `moving` turns false once the
     /// move is over.
-    pub async fn measure_moving<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, moving: &mut bool) -> (Signal, [u32; 3], u64) {
+    ///
+    /// A sweep ranges as it goes: a sample whose codes reached the rails, or
+    /// that would fit ten times over, steps the gain for the next one
+    /// ([`Detector::next_gain`]), which first discards the periods the
+    /// amplifier needs ([`Detector::resettle_moving`]). A lobe's peak
+    /// crossed at a gain set where the row began saturates one or two
+    /// samples, not the whole peak.
+    pub async fn measure_moving<B: Board>(
+        &mut self,
+        hw: &mut Hardware<B>,
+        cfg: &HeadConfig,
+        moving: &mut bool,
+    ) -> Result<(Signal, [u32; 3], u64), Fault> {
         let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];
         let buf = &mut buf[..self.samples_per_period()];
         let it = self.accumulate(hw, buf, &mut flags, &self.swept, Some(moving)).await;
         let (emitted, at_us) = (hw.steps.emitted(), hw.clock.now_us());
-        (self.conclude::<B>(cfg, it, flags).await, emitted, at_us)
+        let (signal, (min, max)) = self.conclude::<B>(cfg, it, flags).await;
+        if let Some(g) = self.next_gain::<B>(cfg, min, max) {
+            self.set_gain(hw, g)?;
+            self.resettle = true;
+        }
+        Ok((signal, emitted, at_us))
+    }
+
+    /// Discards the periods the amplifier needs after a sweep's gain
+    /// changed, if it did: the steps the timer had emitted and the time
+    /// when they are over, where the next sample begins.
+    pub async fn resettle_moving<B: Board>(
+        &mut self,
+        hw: &mut Hardware<B>,
+        cfg: &HeadConfig,
+        moving: &mut bool,
+    ) -> Option<([u32; 3], u64)> {
+        if !core::mem::take(&mut self.resettle) {
+            return None;
+        }
+        let mut flags = SampleFlags::default();
+        let mut buf = [0u16; MAX_M];
+        let buf = &mut buf[..self.samples_per_period()];
+        for _ in 0..cfg.detector.settle_periods {
+            period_moving(hw, buf, &mut flags, moving).await;
+        }
+        Some((hw.steps.emitted(), hw.clock.now_us()))
     }
 
     /// Integrates `design`'s periods (while a move runs, when `moving` is
@@ -258,15 +308,16 @@ impl Detector {
         it
     }
 
-    /// The estimate of an integration, flagged, as a signal.
-    async fn conclude<B: Board>(&self, cfg: &HeadConfig, it: Integrator<'_>, mut flags: SampleFlags) -> Signal {
+    /// The estimate of an integration, flagged, as a signal, and the
+    /// lowest and highest codes it saw.
+    async fn conclude<B: Board>(&self, cfg: &HeadConfig, it: Integrator<'_>, mut flags: SampleFlags) -> (Signal, (u16, u16)) {
         // The two fits of the estimate are the longest computations of a
         // measurement on the chip: the executor runs between them.
         let drift = it.drift();
         embassy_futures::yield_now().await;
         let e = it.estimate_with(drift);
         self.flag(&e, Self::full_scale::<B>(), &mut flags);
-        self.signal::<B>(cfg, &e, flags)
+        (self.signal::<B>(cfg, &e, flags), (e.min, e.max))
     }
 
     fn flag(&self, e: &Estimate, full: u16, flags: &mut SampleFlags) {

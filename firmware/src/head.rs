@@ -24,8 +24,8 @@ use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
     Axis, AxisAngles, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Field, Geometry, HeadState, Identity,
-    PlanChunk, PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, SweepReport,
-    SweepRequest, SweepRow, SweptSample, Visit,
+    PlanChunk, PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, SweepLobe,
+    SweepReport, SweepRequest, SweepRow, SweptSample, Visit,
 };
 
 /// Who this head is; the board and the serial come from the binary.
@@ -417,7 +417,7 @@ impl<B: Board> Head<B> {
         let (start, end, limits) = self.sweep_path(&req).await?;
         self.apply(Event::Measure)?;
         let r = async {
-            let mut sw = self.begin_sweep(req.periods_per_sample, limits, start, end, None).await?;
+            let mut sw = self.begin_sweep(req.periods_per_sample, (limits, &[]), start, end, None).await?;
             while sw.moving {
                 emit(self.swept_sample(&mut sw).await?);
             }
@@ -431,7 +431,7 @@ impl<B: Board> Head<B> {
     /// Checks a sweep and works out its stage targets and axis limits;
     /// changes nothing.
     async fn sweep_path(&mut self, req: &SweepRequest) -> Reply<([i32; 3], [i32; 3], [motion::Limits; 3])> {
-        self.check_sweep(req.periods_per_sample, req.speed_dps)?;
+        self.check_sweep(req.periods_per_sample, req.speed_dps, None)?;
         // Each inverse is some 45 000 instructions on the chip (`chip-bench`):
         // the executor runs between them.
         let from = kinematics::inverse(&self.cfg, &req.from)?;
@@ -460,8 +460,8 @@ impl<B: Board> Head<B> {
     }
 
     /// Checks what a sweep asks of the detector and of its samples.
-    fn check_sweep(&self, periods_per_sample: u16, speed_dps: f32) -> Reply<()> {
-        sweep::check(periods_per_sample, speed_dps)?;
+    fn check_sweep(&self, periods_per_sample: u16, speed_dps: f32, lobe: Option<&SweepLobe>) -> Reply<()> {
+        sweep::check(periods_per_sample, speed_dps, lobe)?;
         if self.detector.settings().chop_hz > SweepRequest::CHOP_MAX_HZ {
             return Err(Fault::InvalidValue(Field::ChopFrequency));
         }
@@ -474,10 +474,16 @@ impl<B: Board> Head<B> {
     /// the sweep. A row refused (beyond the travel) changes nothing.
     pub(crate) async fn sweep_turn(&mut self, row: &SweepRow, at: ScanPosition) -> Reply<SweepTurn> {
         let Some(mut sw) = self.sweeping.take() else {
-            self.check_sweep(row.periods_per_sample, row.speed_dps)?;
+            self.check_sweep(row.periods_per_sample, row.speed_dps, row.lobe.as_ref())?;
             let (from, to) = sweep::row_ends(&self.cfg, row)?;
-            let (start, end, limits) = self.stage_path(&from, &to, sweep::row_speed(&self.cfg, row))?;
-            self.sweeping = Some(self.begin_sweep(row.periods_per_sample, limits, start, end, Some(at)).await?);
+            let speed = sweep::row_speed(&self.cfg, row);
+            let (start, end, limits) = self.stage_path(&from, &to, speed)?;
+            let sample_s = row.periods_per_sample as f32 / self.detector.settings().chop_hz;
+            let levels = sweep::row_levels(row, &from, &to, speed, sample_s);
+            self.sweeping = Some(
+                self.begin_sweep(row.periods_per_sample, (limits, &levels), start, end, Some(at))
+                    .await?,
+            );
             return Ok(SweepTurn::Begun);
         };
         // Dropped by a stop in the middle of a sample, `sw` ends the sweep.
@@ -506,12 +512,13 @@ impl<B: Board> Head<B> {
     }
 
     /// Starts a checked sweep: the move to its start, the settle time, the
-    /// design of its samples and the plan of its move, the laser and the
-    /// chop (ranged), and the move. A failure leaves the head safe.
+    /// design of its samples and the plan of its move (within `limits`, in
+    /// its stretches), the laser and the chop (ranged), and the move. A
+    /// failure leaves the head safe.
     async fn begin_sweep(
         &mut self,
         periods_per_sample: u16,
-        limits: [motion::Limits; 3],
+        (limits, levels): ([motion::Limits; 3], &[motion::Level]),
         start: [i32; 3],
         end: [i32; 3],
         scan: Option<ScanPosition>,
@@ -528,7 +535,7 @@ impl<B: Board> Head<B> {
             // ADC's ring (two periods) must be read as it fills.
             self.detector.design_sweep(periods_per_sample);
             let delta = [0, 1, 2].map(|i| end[i] - self.pos.steps[i]);
-            let run = motion::plan(&mut self.hw, &self.cfg, delta, limits).await?;
+            let run = motion::plan(&mut self.hw, &self.cfg, delta, limits, levels).await?;
             self.laser(true)?;
             self.detector.prepare_sweep(&mut self.hw, &self.cfg).await?;
             motion::start(&mut self.hw, &mut self.pos, &run);
@@ -561,7 +568,13 @@ impl<B: Board> Head<B> {
             self.safe_state();
             return Err(f);
         }
-        let (mut signal, last, end_us) = self.detector.measure_moving(&mut self.hw, &self.cfg, &mut sw.moving).await;
+        if let Some(start) = self.detector.resettle_moving(&mut self.hw, &self.cfg, &mut sw.moving).await {
+            (sw.first, sw.start_us) = start;
+        }
+        let (mut signal, last, end_us) = match self.detector.measure_moving(&mut self.hw, &self.cfg, &mut sw.moving).await {
+            Ok(m) => m,
+            Err(f) => return Err(self.abandon_sweep(f).await),
+        };
         if sw.splitter {
             signal.flags.insert(SampleFlags::THROUGH_SPLITTER);
         }
@@ -626,7 +639,7 @@ impl<B: Board> Head<B> {
         let total = spec.validate()?;
         if let Some(Visit::Row(row)) = spec.visit(0, 0) {
             // Every row shares these: refused here, not row by row.
-            self.check_sweep(row.periods_per_sample, row.speed_dps)?;
+            self.check_sweep(row.periods_per_sample, row.speed_dps, row.lobe.as_ref())?;
         }
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);

@@ -7,9 +7,9 @@
 
 use crate::config::HeadConfig;
 use crate::kinematics;
-use crate::motion::{self, Limits, Position, Running};
+use crate::motion::{self, Level, Levels, Limits, Position, Running};
 use gonio_shared::sample::ScanPosition;
-use gonio_shared::{Axis, AxisAngles, Fault, Field, SweepRequest, SweepRow, Unreachable};
+use gonio_shared::{Axis, AxisAngles, Fault, Field, SweepLobe, SweepRequest, SweepRow, Unreachable};
 use libm::{acos, cos, sin};
 
 const DEG: f64 = core::f64::consts::PI / 180.0;
@@ -135,14 +135,84 @@ pub fn row_speed(cfg: &HeadConfig, row: &SweepRow) -> f32 {
     row.speed_dps.min(cfg.axes[Axis::Arm.index()].max_speed_dps)
 }
 
-/// Checks a sweep's sample length and speed (its ends are checked by
+/// The stretches of a sweep scan's row from `from` to `to` (its ends,
+/// [`row_ends`]) at `speed_dps`, with samples of `sample_s`: slower within
+/// [`SweepLobe::ZONE_WIDTHS`] lobe widths of the retro and of the mirror
+/// direction, so that a sample there spans at most the lobe's
+/// `extent_fraction` of its width; none without a lobe or where the row's
+/// own speed is slow enough. The arm alone moves, so a fraction of the way is
+/// one of ψ. The retro direction is ψ = 0. The mirror direction `m`:
+/// `D(ψ)·m = 2cosθi·(n·D(ψ)) − cos ψ = A cos ψ + B sin ψ = R cos(ψ − ψm)`
+/// with `A = cos 2θi`, `B = 2 cosθi·cosτ·sinω` (`n·D(ψ) = cosτ·cos(ω − ψ)`,
+/// `cosθi = cosτ·cosω`): its zone is `|ψ − ψm| < acos(cos(3w)/R)` where
+/// the row comes that close. Ten trigonometric calls in f64.
+pub fn row_levels(row: &SweepRow, from: &AxisAngles, to: &AxisAngles, speed_dps: f32, sample_s: f32) -> Levels {
+    let mut out = Levels::new();
+    let Some(lobe) = row.lobe else {
+        return out;
+    };
+    let scale = lobe.extent_fraction * lobe.width_deg / (sample_s * speed_dps);
+    if !(scale < 1.0 && scale > 0.0) {
+        return out;
+    }
+    let half = (SweepLobe::ZONE_WIDTHS * lobe.width_deg) as f64 * DEG;
+    let (ti, omega, tau) = (row.theta_i_deg as f64 * DEG, from.omega_deg as f64 * DEG, from.tau_deg as f64 * DEG);
+    let (a, b) = (cos(2.0 * ti), 2.0 * cos(ti) * cos(tau) * sin(omega));
+    let r = libm::hypot(a, b);
+    let mut zones: heapless::Vec<(f64, f64), 2> = heapless::Vec::new();
+    let _ = zones.push((-half, half));
+    if r > cos(half) {
+        let (mid, h) = (libm::atan2(b, a), acos(cos(half) / r));
+        let _ = zones.push((mid - h, mid + h));
+    }
+    // Each zone as a stretch of the way (0 at `from`, 1 at `to`), in order.
+    let (p0, p1) = (from.psi_deg as f64 * DEG, to.psi_deg as f64 * DEG);
+    let way = |psi: f64| ((psi - p0) / (p1 - p0)).clamp(0.0, 1.0) as f32;
+    let mut stretches: heapless::Vec<(f32, f32), 2> = zones
+        .iter()
+        .map(|&(lo, hi)| {
+            let (x, y) = (way(lo), way(hi));
+            (x.min(y), x.max(y))
+        })
+        .collect();
+    stretches.sort_unstable_by(|x, y| x.0.total_cmp(&y.0));
+    let mut at = 0.0f32;
+    for (lo, hi) in stretches {
+        if hi <= at || hi <= lo {
+            continue;
+        }
+        match out.last_mut() {
+            // Overlapping zones make one slow stretch.
+            Some(last) if lo <= at => last.until = hi,
+            _ => {
+                if lo > at {
+                    let _ = out.push(Level { until: lo, scale: 1.0 });
+                }
+                let _ = out.push(Level { until: hi, scale });
+            }
+        }
+        at = hi;
+    }
+    if out.is_empty() {
+        return out;
+    }
+    if at < 1.0 {
+        let _ = out.push(Level { until: 1.0, scale: 1.0 });
+    }
+    out
+}
+
+/// Checks a sweep's sample length, speed and lobe (its ends are checked by
 /// [`crate::kinematics::inverse`], its speed against the axes by [`limits`]).
-pub fn check(periods_per_sample: u16, speed_dps: f32) -> Result<(), Fault> {
+pub fn check(periods_per_sample: u16, speed_dps: f32, lobe: Option<&SweepLobe>) -> Result<(), Fault> {
     if !(SweepRequest::PERIODS_MIN..=SweepRequest::PERIODS_MAX).contains(&periods_per_sample) {
         return Err(Fault::InvalidValue(Field::Periods));
     }
     if !speed_ok(speed_dps) {
         return Err(Fault::InvalidValue(Field::SweepSpeed));
+    }
+    if lobe.is_some_and(|l| !l.valid()) {
+        return Err(Fault::InvalidValue(Field::SweepLobe));
     }
     Ok(())
 }
@@ -232,7 +302,7 @@ mod tests {
         fn a_row_holds_its_incidence_from_the_blind_zone_to_its_stop(
             ti in 0.0f32..85.0, dp in -180.0f32..180.0, stop in 1.0f32..89.5, outward: bool,
         ) {
-            let row = SweepRow { theta_i_deg: ti, dphi_deg: dp, theta_o_stop_deg: stop, outward, speed_dps: 10.0, periods_per_sample: 8 };
+            let row = SweepRow { theta_i_deg: ti, dphi_deg: dp, theta_o_stop_deg: stop, outward, speed_dps: 10.0, periods_per_sample: 8, lobe: None };
             let (a, b) = match row_ends(&REFERENCE, &row) {
                 Ok(ends) => ends,
                 Err(Fault::InvalidValue(Field::ThetaO) | Fault::Unreachable(_)) => return Ok(()),
@@ -257,11 +327,49 @@ mod tests {
         }
     }
 
+    proptest! {
+        /// A row runs slow exactly within three lobe widths of the retro and
+        /// of the mirror direction, as the forward kinematics place them
+        /// (not the formula `row_levels` uses), and at its own speed
+        /// elsewhere.
+        #[test]
+        fn a_row_slows_down_within_three_widths_of_either_peak(
+            ti in 5.0f32..75.0, dp in -180.0f32..180.0, width in 0.3f32..6.0, outward: bool,
+        ) {
+            let lobe = SweepLobe { width_deg: width, extent_fraction: 0.25 };
+            let row = SweepRow {
+                theta_i_deg: ti, dphi_deg: dp, theta_o_stop_deg: 87.0, outward, speed_dps: 30.0, periods_per_sample: 8,
+                lobe: Some(lobe),
+            };
+            let Ok((a, b)) = row_ends(&REFERENCE, &row) else {
+                return Ok(());
+            };
+            let sample_s = 8.0 / 230.0;
+            let levels = row_levels(&row, &a, &b, 30.0, sample_s);
+            let slow = 0.25 * width / (sample_s * 30.0);
+            prop_assert!(levels.windows(2).all(|w| w[0].until < w[1].until));
+            let zone = SweepLobe::ZONE_WIDTHS * width;
+            for k in 0..=400 {
+                let x = k as f32 / 400.0;
+                let g = kinematics::forward(&AxisAngles { psi_deg: a.psi_deg + (b.psi_deg - a.psi_deg) * x, ..a });
+                let (i, o, d) = (g.theta_i_deg as f64 * DEG, g.theta_o_deg as f64 * DEG, g.dphi_deg as f64 * DEG);
+                let angle = |sign: f64| acos((cos(i) * cos(o) + sign * sin(i) * sin(o) * cos(d)).clamp(-1.0, 1.0)) / DEG;
+                let near = angle(1.0).min(angle(-1.0)) as f32;
+                let scale = levels.iter().find(|l| x <= l.until).map_or(1.0, |l| l.scale);
+                if near < zone - 0.05 {
+                    prop_assert!((scale - slow.min(1.0)).abs() < 1e-6, "{near}° from a peak at {x}: scale {scale} {levels:?}");
+                } else if near > zone + 0.05 {
+                    prop_assert!(scale == 1.0, "{near}° from the peaks at {x}: scale {scale} {levels:?}");
+                }
+            }
+        }
+    }
+
     #[test]
     fn every_axis_follows_the_same_profile_scaled_to_its_travel() {
         let delta = [1600, -800, 0];
         let l = limits(&REFERENCE, delta, 4.0).unwrap();
-        let t = [0, 1].map(|i| motion::ramp(&REFERENCE.axes[i], delta[i].unsigned_abs(), l[i]));
+        let t = [0, 1].map(|i| motion::ramp(&REFERENCE.axes[i], delta[i].unsigned_abs(), l[i], &[]));
         // Same duration, same fraction of the travel at every instant.
         assert!(
             (t[0].duration() - t[1].duration()).abs() < 1e-3,

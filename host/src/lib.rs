@@ -14,6 +14,7 @@ pub mod coefficients;
 pub mod fit;
 pub mod formats;
 pub mod link;
+pub mod lobe;
 pub mod operator;
 pub mod plot;
 pub mod report;

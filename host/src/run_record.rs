@@ -5,7 +5,7 @@ use crate::scan::ScanOutcome;
 use crate::scan_dir::ScanDir;
 use anyhow::{Context, Result};
 use gonio_brdf::Specimen;
-use gonio_shared::{CalibrationReport, DetectionReport, Identity, ScanSpec};
+use gonio_shared::{CalibrationReport, DetectionReport, Identity, ScanSpec, SweepScan};
 use serde::Serialize;
 use std::path::Path;
 
@@ -29,7 +29,12 @@ pub struct Grid {
     pub theta_i_deg: Vec<f32>,
     pub theta_o_deg: [f32; 3],
     pub dphi_deg: [f32; 3],
+    /// Visit positions: points, or a sweep scan's rows.
     pub points: u32,
+    /// How a sweep scan swept its rows (speed, sample length, the lobe it
+    /// slowed down for); absent for a grid scan.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sweep: Option<SweepScan>,
 }
 
 impl From<&ScanSpec> for Grid {
@@ -39,6 +44,7 @@ impl From<&ScanSpec> for Grid {
             theta_o_deg: [s.theta_o.start_deg, s.theta_o.stop_deg, s.theta_o.step_deg],
             dphi_deg: [s.dphi.start_deg, s.dphi.stop_deg, s.dphi.step_deg],
             points: s.len(),
+            sweep: s.sweep,
         }
     }
 }

@@ -81,6 +81,51 @@ fn user_mistakes_are_errors_not_panics() {
     }
 }
 
+/// A sweep scan slows down for the narrowest lobe of a fitted model, and says
+/// so in run.json; a model without lobes, a missing file or a width out of
+/// range are errors.
+#[test]
+fn a_sweep_scan_takes_its_lobe_width_from_a_fit_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let fit = |name: &str, model: &str, params: &str| {
+        let path = dir.path().join(name);
+        let text = format!("{{\"model\": \"{model}\", \"parametrization\": \"view\", \"params\": {{{params}}}}}");
+        std::fs::write(&path, text).unwrap();
+        path.to_str().unwrap().to_string()
+    };
+    let tape = fit(
+        "tape.json",
+        "retro-phong",
+        "\"kd\": 0.05, \"n\": 1000, \"k1\": 0.4, \"k2\": 0.05, \"k3\": 0.02, \"k4\": 3",
+    );
+    let flat = fit("flat.json", "lambert", "\"kd\": 0.5");
+    let out = dir.path().join("scan");
+    let out = out.to_str().unwrap();
+    let row = ["--theta-i", "30", "--theta-o", "0:60:3", "--dphi", "180:180:10", "--sweep"];
+    let scan = |extra: &[&str]| gonio(&[&["scan", "--sim", "--out", out, "--force", "--json"], &row[..], extra].concat());
+    let o = scan(&["--sweep-lobe-from", &tape]);
+    assert!(o.status.success(), "{}", text(&o));
+    let run: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(Path::new(out).join("run.json")).unwrap()).unwrap();
+    let lobe = &run["grid"]["sweep"]["lobe"];
+    let want = (-0.5f64 / 1000.0).exp().acos().to_degrees();
+    let width = lobe["width_deg"].as_f64().unwrap();
+    assert!((width - want).abs() < 0.02 * want, "{width}° against {want}°");
+    assert_eq!(lobe["extent_fraction"].as_f64(), Some(0.25));
+    for (extra, says) in [
+        (vec!["--sweep-lobe-from", flat.as_str()], "no retro or mirror lobe"),
+        (vec!["--sweep-lobe-from", "/nonexistent/fit.json"], "cannot read"),
+        (vec!["--sweep-lobe", "0.01"], "the width must lie in"),
+        (vec!["--sweep-lobe", "2", "--sweep-extent", "1.5"], "the extent in (0, 1]"),
+    ] {
+        let o = scan(&extra);
+        assert!(!o.status.success(), "{extra:?}");
+        let msg = text(&o);
+        assert!(msg.contains(says) && !msg.contains("panicked"), "{extra:?}: {msg}");
+    }
+    let o = gonio(&["scan", "--sim", "--out", out, "--sweep-lobe", "2"]);
+    assert!(!o.status.success() && text(&o).contains("--sweep"), "{}", text(&o));
+}
+
 fn csv_indices(path: &Path) -> Vec<u32> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();

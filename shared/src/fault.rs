@@ -55,6 +55,7 @@ pub enum Field {
     HostTimeout,
     IdleTime,
     SweepSpeed,
+    SweepLobe,
 }
 
 impl Field {
@@ -74,6 +75,7 @@ impl Field {
             Field::HostTimeout => "host timeout",
             Field::IdleTime => "idle time",
             Field::SweepSpeed => "sweep speed",
+            Field::SweepLobe => "sweep lobe",
         }
     }
 }

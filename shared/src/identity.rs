@@ -6,7 +6,7 @@ use serde::{Deserialize, Serialize};
 /// Bumped on every change of a message type. Keys are schema-hashed too, so an
 /// old head answers new requests with `UnknownKey`; the identify endpoint keeps
 /// its types stable so the host can always tell *why*.
-pub const PROTOCOL_VERSION: u16 = 9;
+pub const PROTOCOL_VERSION: u16 = 10;
 
 /// USB identity of the head (pid.codes test range until a PID is assigned).
 pub const USB_VID: u16 = 0x1209;

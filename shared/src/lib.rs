@@ -35,7 +35,7 @@ pub use sample::{Sample, SampleFlags, Signal};
 pub use sanity::{SanityConfig, SanityKind, SanityModel};
 pub use scan::{AngleRange, PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec, SweepRow, SweepScan, Visit, PLAN_CHUNK, PLAN_QUEUE};
 pub use status::{HeadState, Status};
-pub use sweep::{SweepReport, SweepRequest, SweptSample};
+pub use sweep::{SweepLobe, SweepReport, SweepRequest, SweptSample};
 
 /// Every fallible command answers with this: the result or the reason it was
 /// refused. A refused command has no side effect (nothing moved, laser unchanged).

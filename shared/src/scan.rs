@@ -14,7 +14,7 @@
 use crate::fault::{Fault, Field};
 use crate::geometry::Geometry;
 use crate::sample::Sample;
-use crate::sweep::SweptSample;
+use crate::sweep::{SweepLobe, SweptSample};
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
 
@@ -79,6 +79,11 @@ pub struct SweepScan {
     pub speed_dps: f32,
     /// Chop periods per swept sample (`SweepRequest::periods_per_sample`).
     pub periods_per_sample: u16,
+    /// Slower across the material's narrow lobes ([`SweepLobe`]); absent,
+    /// every row at `speed_dps` from end to end (and in a scan.json of an
+    /// earlier gonio).
+    #[serde(default)]
+    pub lobe: Option<SweepLobe>,
 }
 
 /// One row of a sweep scan: the sample held at incidence `theta_i_deg`, the
@@ -96,6 +101,7 @@ pub struct SweepRow {
     pub outward: bool,
     pub speed_dps: f32,
     pub periods_per_sample: u16,
+    pub lobe: Option<SweepLobe>,
 }
 
 /// θ at and beyond which a direction lies in or behind the sample's plane.
@@ -222,6 +228,7 @@ impl ScanSpec {
             outward: order % 2 == 0,
             speed_dps: how.speed_dps,
             periods_per_sample: how.periods_per_sample,
+            lobe: how.lobe,
         }))
     }
 

@@ -46,6 +46,41 @@ impl SweepRequest {
     pub const CHOP_MAX_HZ: f32 = 1000.0;
 }
 
+/// How narrow the material's lobes are (from the model being fitted or a
+/// pre-scan) and how much of that one swept sample may span: a sweep scan's
+/// row runs slower within [`SweepLobe::ZONE_WIDTHS`] widths of the retro
+/// and of the mirror direction, so that a sample there spans at most
+/// `extent_fraction` of the width, and at its own speed elsewhere, where
+/// the lobes have fallen to the floor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct SweepLobe {
+    /// Width (deg) of the narrower lobe, retro or mirror: the angle from its
+    /// peak at which it has fallen to e^(−1/2) of its height above the floor
+    /// (σ of a Gaussian, `acos(e^(−1/(2n)))` ≈ `1/√n` rad of a cosine lobe
+    /// to the power n).
+    pub width_deg: f32,
+    /// Largest angle a sample near a peak spans, over the width (0–1].
+    pub extent_fraction: f32,
+}
+
+impl SweepLobe {
+    /// How far either side of a peak (in widths) a row runs slow: a
+    /// Gaussian lobe there is down to e^(−4.5), 1.1 % of its height.
+    pub const ZONE_WIDTHS: f32 = 3.0;
+    /// Narrowest width accepted (deg): the arm's microstep, 0.0025°, is far
+    /// below it.
+    pub const WIDTH_MIN_DEG: f32 = 0.05;
+
+    /// Whether the widths and the fraction are in range.
+    pub fn valid(&self) -> bool {
+        self.width_deg.is_finite()
+            && (Self::WIDTH_MIN_DEG..=90.0).contains(&self.width_deg)
+            && self.extent_fraction > 0.0
+            && self.extent_fraction <= 1.0
+    }
+}
+
 /// One sample of a sweep: the signal of its periods, and the stage
 /// positions at its first period's start and its last period's end. Its
 /// position is the middle of the two ([`SweptSample::mid_axes`]); its

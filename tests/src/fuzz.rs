@@ -117,6 +117,10 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
                 sweep: Some(gonio_shared::SweepScan {
                     speed_dps: 30.0,
                     periods_per_sample: 4,
+                    lobe: Some(gonio_shared::SweepLobe {
+                        width_deg: 2.0,
+                        extent_fraction: 0.25,
+                    }),
                 }),
                 ..scan.clone()
             }),

@@ -107,6 +107,7 @@ pub fn small_sweep_scan() -> ScanSpec {
         sweep: Some(gonio_shared::SweepScan {
             speed_dps: 10.0,
             periods_per_sample: 8,
+            lobe: None,
         }),
         ..small_scan()
     }

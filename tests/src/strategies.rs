@@ -134,16 +134,20 @@ pub fn scan_spec() -> impl Strategy<Value = ScanSpec> {
         (any_f32(), any_f32(), any_f32()),
         (any_f32(), any_f32(), any_f32()),
         any::<u32>(),
-        proptest::option::of((any_f32(), any::<u16>())),
+        proptest::option::of((any_f32(), any::<u16>(), proptest::option::of((any_f32(), any_f32())))),
     )
         .prop_map(|(ti, (a, b, c), (d, e, f), first_order, sweep)| ScanSpec {
             theta_i_deg: heapless::Vec::from_slice(&ti).unwrap_or_default(),
             theta_o: AngleRange::new(a, b, c),
             dphi: AngleRange::new(d, e, f),
             first_order,
-            sweep: sweep.map(|(speed_dps, periods_per_sample)| SweepScan {
+            sweep: sweep.map(|(speed_dps, periods_per_sample, lobe)| SweepScan {
                 speed_dps,
                 periods_per_sample,
+                lobe: lobe.map(|(width_deg, extent_fraction)| SweepLobe {
+                    width_deg,
+                    extent_fraction,
+                }),
             }),
         })
 }

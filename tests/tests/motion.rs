@@ -9,7 +9,7 @@ use embedded_hal_mock::eh1::digital::{Mock as PinMock, State, Transaction as Pin
 use futures::executor::block_on;
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::hw::{Board, Hardware, QueueFull, StepBlock, StepTimer};
-use gonio_firmware::motion::blocks::trapezoid_blocks;
+use gonio_firmware::motion::blocks::profile_blocks;
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::motion::{move_by, trapezoid, Position};
 use gonio_firmware::units;
@@ -197,7 +197,7 @@ proptest! {
         let t = trapezoid(c, n, speed * c.max_speed_dps);
         let scope = Scope::default();
         let mut exec = executor(&scope, 3);
-        prop_assert!(trapezoid_blocks(&t, 1_000_000, |b| exec.push(Axis::ALL[axis], b).is_ok()));
+        prop_assert!(profile_blocks(&t, 1_000_000, |b| exec.push(Axis::ALL[axis], b).is_ok()));
         run(&mut exec, &scope, 0, 1, 0);
         let rises = scope.rises("step", axis);
         prop_assert_eq!(rises.len(), n as usize);

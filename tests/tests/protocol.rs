@@ -247,6 +247,10 @@ fn largest_messages_fit_the_frame_buffer() {
     spec.sweep = Some(gonio_shared::SweepScan {
         speed_dps: 1.0,
         periods_per_sample: u16::MAX,
+        lobe: Some(gonio_shared::SweepLobe {
+            width_deg: f32::MAX,
+            extent_fraction: f32::MAX,
+        }),
     });
     assert!(encode(ScanEndpoint::REQ_KEY, VarKeyKind::Key8, seq, &spec, &mut buf).is_some());
 }

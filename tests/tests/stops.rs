@@ -5,7 +5,7 @@
 
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::hw::StepBlock;
-use gonio_firmware::motion::blocks::{self, trapezoid_blocks};
+use gonio_firmware::motion::blocks::{self, profile_blocks};
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::{motion, units};
 use gonio_shared::icd::{ContinueEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, StatusEndpoint};
@@ -48,7 +48,7 @@ fn braked_move(n: u32, brake_at: usize) -> (Vec<f64>, f64, u32, [u32; 3]) {
     let mut exec = Executor::new(pins, 3);
     let t = motion::trapezoid(axis, n, axis.max_speed_dps);
     let mut blocks: Vec<StepBlock> = Vec::new();
-    assert!(trapezoid_blocks(&t, 1_000_000, |b| {
+    assert!(profile_blocks(&t, 1_000_000, |b| {
         blocks.push(b);
         true
     }));

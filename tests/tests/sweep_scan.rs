@@ -5,12 +5,13 @@
 //! duplicated and reordered frames and a pulled cable are recovered by
 //! sweeping the row again.
 
+use gonio_brdf::{Material, Specimen};
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::sweep;
 use gonio_host::cli::simulated::Simulated;
 use gonio_host::samples_csv::Row;
 use gonio_host::scan::ScanOutcome;
-use gonio_shared::{AngleRange, ScanSpec, SweepRow, SweepScan, Visit};
+use gonio_shared::{AngleRange, SampleFlags, ScanSpec, SweepLobe, SweepRow, SweepScan, Visit};
 use gonio_sim::faults::Faults;
 use gonio_sim::SimConfig;
 use gonio_tests::scanning::{scan_and_read, session};
@@ -27,6 +28,7 @@ fn rows() -> ScanSpec {
         sweep: Some(SweepScan {
             speed_dps: 20.0,
             periods_per_sample: 8,
+            lobe: None,
         }),
     }
 }
@@ -46,10 +48,10 @@ fn row(spec: &ScanSpec, o: u32) -> SweepRow {
     }
 }
 
-async fn scan(sim: SimConfig) -> (ScanOutcome, BTreeMap<u32, Vec<Row>>) {
+async fn scan(sim: SimConfig, spec: &ScanSpec) -> (ScanOutcome, BTreeMap<u32, Vec<Row>>) {
     let mut session = session(Arc::new(Simulated(sim))).await;
     let dir = tempfile::tempdir().unwrap();
-    let (outcome, stored) = scan_and_read(&mut session, &rows(), dir.path()).await;
+    let (outcome, stored) = scan_and_read(&mut session, spec, dir.path()).await;
     session.close().await;
     let mut by_row: BTreeMap<u32, Vec<Row>> = BTreeMap::new();
     for r in stored {
@@ -87,7 +89,7 @@ fn check_whole(spec: &ScanSpec, by_row: &BTreeMap<u32, Vec<Row>>) {
 #[tokio::test]
 async fn a_sweep_scan_stores_every_row_it_can_sweep_once_and_whole() {
     let spec = rows();
-    let (outcome, by_row) = scan(SimConfig::default()).await;
+    let (outcome, by_row) = scan(SimConfig::default(), &spec).await;
     let rows: Vec<u32> = by_row.keys().copied().collect();
     let expected = sweepable(&spec);
     assert!(expected.len() >= 3, "{expected:?}");
@@ -107,7 +109,7 @@ async fn lost_duplicated_and_reordered_frames_and_a_pulled_cable_cost_a_row_swep
         ..SimConfig::default()
     };
     let spec = rows();
-    let (outcome, by_row) = scan(sim).await;
+    let (outcome, by_row) = scan(sim, &spec).await;
     assert_eq!(by_row.keys().copied().collect::<Vec<_>>(), sweepable(&spec));
     check_whole(&spec, &by_row);
     let recovered: u32 = outcome.recoveries.values().sum();
@@ -117,4 +119,76 @@ async fn lost_duplicated_and_reordered_frames_and_a_pulled_cable_cost_a_row_swep
         "{:?}",
         outcome.recoveries
     );
+}
+
+#[tokio::test]
+async fn a_row_slows_down_across_a_narrow_lobe_so_its_samples_span_a_fraction_of_it() {
+    // A lobe 1° wide, a sample at most a quarter of it: 7.2°/s within 3°
+    // of the mirror direction (on the Δφ = 180° row at θo = 30°), 20°/s
+    // elsewhere (0.70° a sample).
+    let lobe = SweepLobe {
+        width_deg: 1.0,
+        extent_fraction: 0.25,
+    };
+    let mut spec = rows();
+    spec.sweep = spec.sweep.map(|s| SweepScan { lobe: Some(lobe), ..s });
+    let (_, by_row) = scan(SimConfig::default(), &spec).await;
+    check_whole(&spec, &by_row);
+    let (mut slow, mut fast) = (0, 0);
+    for samples in by_row.values() {
+        let (ends_lo, ends_hi) = samples
+            .iter()
+            .fold((f32::MAX, f32::MIN), |(lo, hi), s| (lo.min(s.psi_deg), hi.max(s.psi_deg)));
+        for s in samples {
+            let (i, o, d) = (s.theta_i_deg.to_radians(), s.theta_o_deg.to_radians(), s.dphi_deg.to_radians());
+            let mirror = (i.cos() * o.cos() - i.sin() * o.sin() * d.cos())
+                .clamp(-1.0, 1.0)
+                .acos()
+                .to_degrees();
+            let extent = s.extent_deg.unwrap();
+            if mirror < 3.0 - 0.5 {
+                slow += 1;
+                assert!(extent <= 0.25 * 1.01, "{extent}° at {mirror}° from the mirror: {s:?}");
+            } else if mirror > 3.0 + 3.5 && s.psi_deg > ends_lo + 4.0 && s.psi_deg < ends_hi - 4.0 {
+                // Beyond the ramps back to 20°/s and the row's own ramps.
+                fast += 1;
+                assert!((extent - 0.696).abs() < 0.02, "{extent}° at {mirror}° from the mirror: {s:?}");
+            }
+        }
+    }
+    assert!(slow >= 15 && fast >= 100, "{slow} slow and {fast} fast samples");
+}
+
+#[tokio::test]
+async fn a_sweep_steps_its_gain_down_across_a_bright_lobe_rather_than_saturate() {
+    // A tape whose mirror lobe (n = 1 000) is far brighter than where the
+    // Δφ = 180° row begins and its gain is ranged: one or two samples
+    // saturate as the row climbs into the lobe, then the gain steps down.
+    let mut narrow = Material::tape();
+    narrow.params[1] = 1000.0;
+    let sim = SimConfig {
+        material: Specimen::Model(narrow),
+        ..SimConfig::default()
+    };
+    let spec = rows();
+    let (outcome, by_row) = scan(sim, &spec).await;
+    assert_eq!(by_row.keys().copied().collect::<Vec<_>>(), sweepable(&spec), "{outcome:?}");
+    check_whole(&spec, &by_row);
+    let mirror = by_row
+        .iter()
+        .find(|(&o, _)| row(&spec, o).dphi_deg.abs() == 180.0)
+        .map(|(_, s)| s)
+        .expect("the Δφ = 180° row");
+    let gains: std::collections::BTreeSet<u8> = mirror.iter().map(|s| s.gain_index).collect();
+    assert!(gains.len() >= 2, "one gain all along: {gains:?}");
+    let saturated = |s: &Row| s.flags & SampleFlags::SATURATED.bits() != 0;
+    let longest = mirror.split(|s| !saturated(s)).map(<[Row]>::len).max().unwrap_or(0);
+    assert!(longest <= 2, "{longest} saturated samples in a row");
+    // Where the gain held, it is the one the samples' own codes asked for:
+    // the brightest sample of the row is not saturated.
+    let brightest = mirror
+        .iter()
+        .max_by(|a, b| (a.magnitude_v / a.gain_v_per_a).total_cmp(&(b.magnitude_v / b.gain_v_per_a)))
+        .unwrap();
+    assert!(!saturated(brightest), "{brightest:?}");
 }

@@ -1,11 +1,12 @@
-//! A trapezoidal move cut into `(interval, count, add)` blocks for the step
-//! timer, with fractional (Q32) intervals so the executor follows the
+//! A move's profile ([`Profile`]) cut into `(interval, count, add)` blocks
+//! for the step timer, with fractional (Q32) intervals so the executor follows the
 //! analytical schedule to within one timer tick at any speed.
 //!
 //! A block's steps follow a quadratic in the step number through the last
 //! emitted step and the block's first and last steps. Within one phase of the
-//! move the schedule is smooth (`t = C√k` accelerating, linear at cruise,
-//! `T − C√(n − k)` decelerating), so the interpolation error of that
+//! move the schedule is smooth (`t = t₀ + C√(k + r₀)` accelerating, linear
+//! at cruise, `T − C√(r₁ − k)` decelerating, `r₀`, `r₁` where the ramp would
+//! start from or end at rest), so the interpolation error of that
 //! quadratic is bounded by `max|t‴|·2c³/81` for a block of `c` steps; each
 //! block is the longest whose bound stays within [`TOLERANCE_TICKS`]. The
 //! first step of each phase is a block of its own (its interval spans the
@@ -16,9 +17,9 @@
 //! f64), it took 203 M instructions (1.2 s) to plan one three-axis move. The
 //! bound needs two evaluations of the schedule per block and a bisection in
 //! f32 for its length, and the blocks come one at a time
-//! ([`TrapezoidBlocks`]), so the planner can yield between them.
+//! ([`ProfileBlocks`]), so the planner can yield between them.
 
-use super::trapezoid::Trapezoid;
+use super::profile::{Kind, Profile};
 use crate::hw::StepBlock;
 use crate::math::sqrtf;
 
@@ -56,69 +57,96 @@ pub fn to_tick(q: u64) -> u64 {
     (q + (1 << 31)) >> 32
 }
 
-/// The smooth stretch a step belongs to.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Phase {
-    Accelerating,
-    Cruising,
-    Decelerating,
-}
-
-/// The blocks of a trapezoidal move on a `tick_hz` timer, one at a time.
-pub struct TrapezoidBlocks<'a> {
-    t: &'a Trapezoid,
+/// The blocks of a move on a `tick_hz` timer, one at a time.
+pub struct ProfileBlocks<'a> {
+    t: &'a Profile,
     hz: f64,
     /// `C` of `t = C√k` (ticks), for the error bound.
     c_ticks: f32,
-    /// Last step of the acceleration and of the cruise.
-    accel_end: u32,
-    cruise_end: u32,
     /// Steps already in blocks, and the executor's exact Q32 time of the last.
     done: u32,
     start: u64,
+    /// The phase of the last step in blocks (phases come in order).
+    phase: usize,
 }
 
-impl<'a> TrapezoidBlocks<'a> {
-    pub fn new(t: &'a Trapezoid, tick_hz: u32) -> Self {
+/// How far (steps) a block's steepest end lies from where its phase's ramp
+/// would start from or end at rest, `r` of the error bound.
+#[derive(Clone, Copy)]
+enum Reach {
+    /// A cruise: no bound.
+    Any,
+    /// Accelerating: `r` at the block's start, whatever its length.
+    From(f32),
+    /// Decelerating: `r` less the block's length.
+    Before(f32),
+}
+
+impl<'a> ProfileBlocks<'a> {
+    pub fn new(t: &'a Profile, tick_hz: u32) -> Self {
         let hz = tick_hz as f64;
-        let (accel_end, cruise_end) = t.phase_ends();
-        TrapezoidBlocks {
+        ProfileBlocks {
             t,
             hz,
             c_ticks: (libm::sqrt(2.0 / t.a) * hz) as f32,
-            accel_end,
-            cruise_end,
             done: 0,
             start: 0,
+            phase: 0,
         }
     }
 
+    /// Step `k`'s time (Q32 ticks), `k` in the current phase.
     fn time_q32(&self, k: u32) -> f64 {
-        self.t.step_time(k) * self.hz * Q32
+        self.t.step_time_in(self.phase, k) * self.hz * Q32
     }
 
-    /// Phase of step `k` and its last step.
-    fn phase(&self, k: u32) -> (Phase, u32) {
-        if k <= self.accel_end {
-            (Phase::Accelerating, self.accel_end)
-        } else if k <= self.cruise_end {
-            (Phase::Cruising, self.cruise_end)
-        } else {
-            (Phase::Decelerating, self.t.n)
+    /// Moves on to the phase of step `k`; whether it is a later one.
+    fn advance(&mut self, k: u32) -> bool {
+        let (phases, from) = (self.t.phases(), self.phase);
+        while self.phase + 1 < phases.len() && k as f64 > phases[self.phase].x1 {
+            self.phase += 1;
+        }
+        self.phase != from
+    }
+
+    /// The last step of the current phase.
+    fn phase_end(&self) -> u32 {
+        let phases = self.t.phases();
+        match phases.get(self.phase) {
+            Some(p) if self.phase + 1 < phases.len() => (p.x1 as u32).min(self.t.n),
+            _ => self.t.n,
         }
     }
 
-    /// Whether `c` steps after step `k0` stay within the tolerance:
+    /// The bound's reach for a block after step `k0` in the current phase,
+    /// worked out once in f64 for the bisection's f32 tests.
+    fn reach(&self, k0: u32) -> Reach {
+        let Some(p) = self.t.phases().get(self.phase) else {
+            return Reach::Before(0.0);
+        };
+        let rest = |v: f64| v * v / (2.0 * self.t.a);
+        match p.kind {
+            Kind::Cruising => Reach::Any,
+            Kind::Accelerating => Reach::From((k0 as f64 - p.x0 + rest(p.v0)) as f32),
+            Kind::Decelerating => Reach::Before((p.x1 + rest(p.v1) - k0 as f64) as f32),
+        }
+    }
+
+    /// Whether a block of `c` steps stays within the tolerance:
     /// `max|t‴|·2c³/81`, with `|t‴| = (3/8)·C·r^(−5/2)` at the block's
-    /// steepest end (`r` = `k0` accelerating, the steps left after the block
-    /// decelerating), that is `C·c³ ≤ 108·tol·r^(5/2)`.
-    fn within(&self, phase: Phase, k0: u32, c: u32) -> bool {
-        let r = match phase {
-            Phase::Cruising => return true,
-            Phase::Accelerating => k0,
-            Phase::Decelerating => self.t.n - k0 - c,
-        } as f32;
+    /// steepest end, `r` its distance (steps) from where the phase's ramp
+    /// would start from or end at rest (`k0` accelerating from rest, the
+    /// steps left after the block decelerating to a stop), that is
+    /// `C·c³ ≤ 108·tol·r^(5/2)`. Single precision: the bisection tests it
+    /// some fifteen times a block.
+    fn within(&self, reach: Reach, c: u32) -> bool {
         let c = c as f32;
+        let r = match reach {
+            Reach::Any => return true,
+            Reach::From(r) => r,
+            Reach::Before(r) => r - c,
+        }
+        .max(0.0);
         self.c_ticks * c * c * c <= 108.0 * TOLERANCE_TICKS * BOUND_MARGIN * r * r * sqrtf(r)
     }
 
@@ -141,7 +169,7 @@ impl<'a> TrapezoidBlocks<'a> {
     }
 }
 
-impl Iterator for TrapezoidBlocks<'_> {
+impl Iterator for ProfileBlocks<'_> {
     type Item = StepBlock;
 
     fn next(&mut self) -> Option<StepBlock> {
@@ -149,15 +177,16 @@ impl Iterator for TrapezoidBlocks<'_> {
         if k0 >= self.t.n {
             return None;
         }
-        let (phase, end) = self.phase(k0 + 1);
+        let first_of_phase = self.advance(k0 + 1);
         // The first step of a phase is a block of its own; then the longest
         // block within the bound (bisection on a predicate true at 1).
         let mut c = 1;
-        if k0 > 0 && self.phase(k0).0 == phase {
-            let mut hi = end - k0 + 1;
+        if k0 > 0 && !first_of_phase {
+            let reach = self.reach(k0);
+            let mut hi = self.phase_end() - k0 + 1;
             while hi - c > 1 {
                 let mid = c + (hi - c) / 2;
-                if self.within(phase, k0, mid) {
+                if self.within(reach, mid) {
                     c = mid;
                 } else {
                     hi = mid;
@@ -176,19 +205,19 @@ impl Iterator for TrapezoidBlocks<'_> {
     }
 }
 
-/// Blocks of a trapezoidal move on a `tick_hz` timer, handed to `emit` in
-/// order; stops early (returning false) when `emit` refuses one.
-pub fn trapezoid_blocks(t: &Trapezoid, tick_hz: u32, mut emit: impl FnMut(StepBlock) -> bool) -> bool {
-    TrapezoidBlocks::new(t, tick_hz).all(&mut emit)
+/// Blocks of a move on a `tick_hz` timer, handed to `emit` in order; stops
+/// early (returning false) when `emit` refuses one.
+pub fn profile_blocks(t: &Profile, tick_hz: u32, mut emit: impl FnMut(StepBlock) -> bool) -> bool {
+    ProfileBlocks::new(t, tick_hz).all(&mut emit)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    fn schedule(t: &Trapezoid) -> (Vec<StepBlock>, f64) {
+    fn schedule(t: &Profile) -> (Vec<StepBlock>, f64) {
         let mut blocks = Vec::new();
-        assert!(trapezoid_blocks(t, 1_000_000, |b| {
+        assert!(profile_blocks(t, 1_000_000, |b| {
             blocks.push(b);
             true
         }));
@@ -210,10 +239,20 @@ mod tests {
     fn long_and_short_moves_stay_within_a_tick_in_few_blocks() {
         // Arm: 30°/s, 60°/s² at 400 µsteps/°.
         for n in [1, 2, 3, 10, 100, 1000, 12_000, 72_000] {
-            let t = Trapezoid::new(n, 12_000.0, 24_000.0);
+            let t = Profile::new(n, 12_000.0, 24_000.0);
             let (blocks, worst) = schedule(&t);
             assert!(worst <= 1.0, "n = {n}: {worst} ticks");
             assert!(blocks.len() <= super::super::executor::QUEUE, "n = {n}: {} blocks", blocks.len());
         }
+    }
+
+    #[test]
+    fn a_row_slowed_in_its_lobes_stays_within_a_tick_in_few_blocks() {
+        // Slow near the retro lobe, fast, slow across the mirror lobe, fast.
+        let caps = [(4_000, 3_000.0), (14_000, 12_000.0), (20_000, 5_000.0), (34_000, 12_000.0)];
+        let t = Profile::levels(34_000, 24_000.0, &caps);
+        let (blocks, worst) = schedule(&t);
+        assert!(worst <= 1.0, "{worst} ticks");
+        assert!(blocks.len() <= super::super::executor::QUEUE, "{} blocks", blocks.len());
     }
 }

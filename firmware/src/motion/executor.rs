@@ -16,9 +16,11 @@ use embedded_hal::digital::OutputPin;
 use gonio_shared::Axis;
 use heapless::Deque;
 
-/// Blocks queued per axis: a whole move (two ramps of at most ~170 blocks
-/// at one-tick accuracy, and the cruise) is queued before it starts.
-pub const QUEUE: usize = 256;
+/// Blocks queued per axis: a whole move is queued before it starts, two
+/// ramps of at most ~100 blocks each at one-tick accuracy and the cruise, or
+/// a sweep scan's row slowed across two lobes, up to six ramps (280 blocks
+/// across two lobes 1.8° wide, `blocks` tests).
+pub const QUEUE: usize = 384;
 
 const Q32: f32 = 4_294_967_296.0;
 
@@ -244,7 +246,7 @@ impl<P: OutputPin> Executor<P> {
     /// Queues a block; an empty one is dropped (it has nothing to emit).
     /// A block whose intervals would fall below one (Q32) gets the least
     /// `add` that keeps its last one at one or more: no planner of ours makes
-    /// such a block (`TrapezoidBlocks` cuts a block to one step where its
+    /// such a block (`ProfileBlocks` cuts a block to one step where its
     /// rounding could), and checking here, once per block, spares the
     /// interrupt a clamp on every step.
     pub fn push(&mut self, axis: Axis, b: StepBlock) -> Result<(), QueueFull> {

@@ -1,14 +1,15 @@
 //! Moves: position bookkeeping in microsteps, trapezoidal profiles under the
-//! axes' speed and acceleration limits, and execution on the hardware step
-//! timer. A move's steps are scheduled analytically ([`trapezoid`]) and
+//! axes' speed and acceleration limits (a chain of them where a sweep slows
+//! down on its way, [`Level`]), and execution on the hardware step timer. A
+//! move's steps are scheduled analytically ([`profile`]) and
 //! compressed into `(interval, count, add)` blocks ([`blocks`]) that the
 //! timer emits without the core touching single steps; all three axes start
 //! at the same instant.
 
 pub mod blocks;
 pub mod executor;
+pub mod profile;
 pub mod step_irq;
-pub mod trapezoid;
 
 use crate::config::{AxisConfig, HeadConfig};
 use crate::hw::{Board, Hardware, StepTimer};
@@ -17,7 +18,7 @@ use embassy_futures::select::{select, Either};
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::{Axis, AxisAngles, Fault};
-use trapezoid::Trapezoid;
+use profile::{Profile, MAX_LEVELS};
 
 /// Slack (ms) beyond twice a move's scheduled duration before it counts as stalled.
 const STALL_MARGIN_MS: u32 = 500;
@@ -70,15 +71,42 @@ pub fn target_steps(cfg: &HeadConfig, a: &AxisAngles) -> [i32; 3] {
 }
 
 /// The analytical profile of an `n`-step move of an axis at up to `dps`.
-pub fn trapezoid(axis: &AxisConfig, n: u32, dps: f32) -> Trapezoid {
-    ramp(axis, n, Limits::new(dps, axis.max_accel_dps2))
+pub fn trapezoid(axis: &AxisConfig, n: u32, dps: f32) -> Profile {
+    ramp(axis, n, Limits::new(dps, axis.max_accel_dps2), &[])
 }
 
-/// The analytical profile of an `n`-step move of an axis within `limits`.
-pub fn ramp(axis: &AxisConfig, n: u32, limits: Limits) -> Trapezoid {
+/// The analytical profile of an `n`-step move of an axis within `limits`,
+/// in stretches at fractions of its speed (`levels`; none: one stretch).
+pub fn ramp(axis: &AxisConfig, n: u32, limits: Limits, levels: &[Level]) -> Profile {
     let per_deg = axis.microsteps_per_rev as f64 / 360.0;
-    Trapezoid::new(n, limits.speed_dps as f64 * per_deg, limits.accel_dps2 as f64 * per_deg)
+    let (v, a) = (limits.speed_dps as f64 * per_deg, limits.accel_dps2 as f64 * per_deg);
+    if levels.is_empty() {
+        return Profile::new(n, v, a);
+    }
+    let caps: heapless::Vec<(u32, f64), MAX_LEVELS> = levels
+        .iter()
+        .take(MAX_LEVELS)
+        .map(|l| {
+            (
+                libm::round(l.until.clamp(0.0, 1.0) as f64 * n as f64) as u32,
+                v * l.scale.clamp(0.0, 1.0) as f64,
+            )
+        })
+        .collect();
+    Profile::levels(n, a, &caps)
 }
+
+/// A stretch of a move: up to `until`, a fraction (0–1) of its way, at most
+/// `scale` (0–1) times its speed. Every axis runs the same stretches, so a
+/// straight line in axis space stays one.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Level {
+    pub until: f32,
+    pub scale: f32,
+}
+
+/// A move's stretches, in order.
+pub type Levels = heapless::Vec<Level, MAX_LEVELS>;
 
 /// The speed (deg/s) and acceleration (deg/s²) an axis moves with.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -101,10 +129,10 @@ pub fn move_time(cfg: &HeadConfig, delta: [i32; 3]) -> f64 {
 }
 
 /// Duration (s) of a move of every axis by `delta` microsteps within
-/// per-axis `limits`: the longest axis's profile.
-pub fn profile_s(cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3]) -> f64 {
+/// per-axis `limits` and `levels`: the longest axis's profile.
+pub fn profile_s(cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3], levels: &[Level]) -> f64 {
     (0..3)
-        .map(|i| ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i]).duration())
+        .map(|i| ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i], levels).duration())
         .fold(0.0, f64::max)
 }
 
@@ -114,7 +142,7 @@ pub fn move_blocks(cfg: &HeadConfig, delta: [i32; 3], tick_hz: u32) -> usize {
     (0..3)
         .map(|i| {
             let t = trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), cfg.axes[i].max_speed_dps);
-            blocks::TrapezoidBlocks::new(&t, tick_hz).count()
+            blocks::ProfileBlocks::new(&t, tick_hz).count()
         })
         .sum()
 }
@@ -158,20 +186,54 @@ impl Running {
 }
 
 /// Plans a move of the axes by signed microstep counts within per-axis
-/// `limits`, all axes together: sets DIR, enables the drivers and queues the
-/// blocks on the step timer, which [`start`] starts.
-pub async fn plan<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3]) -> Result<Running, Fault> {
-    let tick_hz = <B::Steps as StepTimer>::TICK_HZ;
+/// `limits` and `levels`, all axes together: sets DIR, enables the drivers
+/// and queues the blocks on the step timer, which [`start`] starts. Stretches
+/// whose ramps need more blocks than the queue holds (very slow ones) give
+/// way to the whole move at the slowest of them ([`slowest`]): two ramps.
+pub async fn plan<B: Board>(
+    hw: &mut Hardware<B>,
+    cfg: &HeadConfig,
+    delta: [i32; 3],
+    limits: [Limits; 3],
+    levels: &[Level],
+) -> Result<Running, Fault> {
     let dirs = delta.map(|d| if d == 0 { None } else { Some(d > 0) });
     prepare(hw, cfg, dirs).await?;
+    let mut levels = levels;
+    let fallback = slowest(levels);
+    if let Err(axis) = queue(hw, cfg, delta, limits, levels).await {
+        if levels.is_empty() {
+            return Err(Fault::StepTimer(axis));
+        }
+        levels = &fallback;
+        queue(hw, cfg, delta, limits, levels).await.map_err(Fault::StepTimer)?;
+    }
+    // A move that outlasts its schedule by far means a stalled timer: stop it.
+    let expected = profile_s(cfg, delta, limits, levels);
+    Ok(Running {
+        delta,
+        limit_ms: (expected * 2.0 * 1e3).min(u32::MAX as f64 / 2.0) as u32 + STALL_MARGIN_MS,
+    })
+}
+
+/// Queues the blocks of every axis's profile; the axis whose blocks the
+/// queue could not hold (the queue then cleared).
+async fn queue<B: Board>(
+    hw: &mut Hardware<B>,
+    cfg: &HeadConfig,
+    delta: [i32; 3],
+    limits: [Limits; 3],
+    levels: &[Level],
+) -> Result<(), Axis> {
+    let tick_hz = <B::Steps as StepTimer>::TICK_HZ;
     hw.steps.clear();
     for axis in Axis::ALL {
         let i = axis.index();
-        let t = ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i]);
-        for (j, b) in blocks::TrapezoidBlocks::new(&t, tick_hz).enumerate() {
+        let t = ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i], levels);
+        for (j, b) in blocks::ProfileBlocks::new(&t, tick_hz).enumerate() {
             if hw.steps.push(axis, b).is_err() {
                 hw.steps.clear();
-                return Err(Fault::StepTimer(axis));
+                return Err(axis);
             }
             // Planning a long move takes a few million instructions on the
             // chip: let the executor run the link and the watchdog meanwhile.
@@ -180,11 +242,23 @@ pub async fn plan<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, delta: [i32;
             }
         }
     }
-    // A move that outlasts its schedule by far means a stalled timer: stop it.
-    let expected = profile_s(cfg, delta, limits);
-    Ok(Running {
-        delta,
-        limit_ms: (expected * 2.0 * 1e3).min(u32::MAX as f64 / 2.0) as u32 + STALL_MARGIN_MS,
+    Ok(())
+}
+
+/// The whole move at the slowest of `levels`: what [`plan`] runs when their
+/// blocks overflow the queue.
+pub fn slowest(levels: &[Level]) -> [Level; 1] {
+    let scale = levels.iter().map(|l| l.scale).fold(1.0, f32::min);
+    [Level { until: 1.0, scale }]
+}
+
+/// Whether every axis's blocks of a move within `limits` and `levels` fit
+/// the step timer's queue on a `tick_hz` timer (what [`plan`] finds out by
+/// queueing them).
+pub fn fits_queue(cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3], levels: &[Level], tick_hz: u32) -> bool {
+    (0..3).all(|i| {
+        let t = ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i], levels);
+        blocks::ProfileBlocks::new(&t, tick_hz).count() <= executor::QUEUE
     })
 }
 
@@ -225,7 +299,7 @@ pub async fn move_by<B: Board>(
     speed_dps: [f32; 3],
 ) -> Result<(), Fault> {
     let limits = [0, 1, 2].map(|i| Limits::new(speed_dps[i], cfg.axes[i].max_accel_dps2));
-    let run = plan(hw, cfg, delta, limits).await?;
+    let run = plan(hw, cfg, delta, limits, &[]).await?;
     start(hw, pos, &run);
     let emitted = match select(hw.steps.finished(), hw.delay.delay_ms(run.limit_ms)).await {
         Either::First(e) => e,

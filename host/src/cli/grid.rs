@@ -1,7 +1,9 @@
 //! Scan grids on the command line: `--theta-i 15,30,60 --theta-o 0:90:3 --dphi -180:180:10`.
 
+use crate::{fit, lobe};
 use anyhow::{bail, Context, Result};
-use gonio_shared::{AngleRange, ScanSpec, SweepRequest, SweepScan};
+use gonio_shared::{AngleRange, ScanSpec, SweepLobe, SweepRequest, SweepScan};
+use std::path::PathBuf;
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct GridArgs {
@@ -26,6 +28,59 @@ pub struct GridArgs {
     /// Chop periods per swept sample (4–8).
     #[arg(long, value_name = "N", default_value_t = SweepRequest::PERIODS_MAX, requires = "sweep")]
     pub sweep_periods: u16,
+    #[command(flatten)]
+    pub lobe: LobeArgs,
+}
+
+/// How a sweep slows down across the material's narrow lobes
+/// ([`SweepLobe`]): near the retro and the mirror direction a swept sample
+/// spans at most a set fraction of the lobe's width.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct LobeArgs {
+    /// Slow a sweep down across the retro and mirror lobes, this wide (deg:
+    /// where a lobe falls to e^(-1/2) of its height, 1/√n rad for a cosine
+    /// lobe to the power n).
+    #[arg(long, value_name = "DEG", requires = "sweep", conflicts_with = "sweep_lobe_from")]
+    pub sweep_lobe: Option<f32>,
+    /// Slow a sweep down across the lobes of a fitted model (a `gonio fit
+    /// --out` file, say of a quick scan): as wide as its narrowest at the
+    /// scan's incidences.
+    #[arg(long, value_name = "FIT_JSON", requires = "sweep")]
+    pub sweep_lobe_from: Option<PathBuf>,
+    /// Largest angle a swept sample spans within three widths of a lobe's
+    /// peak, over the lobe's width.
+    #[arg(long, value_name = "F", default_value_t = SWEEP_EXTENT, requires = "sweep")]
+    pub sweep_extent: f32,
+}
+
+/// What a swept sample near a lobe's peak spans by default, over the lobe's
+/// width: a quarter, so that a Gaussian lobe's sample is blurred by
+/// `(e/σ)²/24`, 0.26 % at its peak, before the extent correction
+/// (`swept::unblur`) takes most of that away.
+pub const SWEEP_EXTENT: f32 = 0.25;
+
+impl LobeArgs {
+    /// The lobe a sweep scan at incidences `theta_i_deg` slows down for, if any.
+    pub fn lobe(&self, theta_i_deg: &[f32]) -> Result<Option<SweepLobe>> {
+        let width_deg = match (self.sweep_lobe, &self.sweep_lobe_from) {
+            (Some(w), _) => w,
+            (None, Some(path)) => lobe::narrowest_deg(&fit::file::read_material(path)?, theta_i_deg)
+                .with_context(|| format!("--sweep-lobe-from {}", path.display()))? as f32,
+            (None, None) => return Ok(None),
+        };
+        let l = SweepLobe {
+            width_deg,
+            extent_fraction: self.sweep_extent,
+        };
+        if !l.valid() {
+            bail!(
+                "sweep lobe {width_deg}° with --sweep-extent {}: the width must lie in {}–90°, the extent in (0, 1]",
+                self.sweep_extent,
+                SweepLobe::WIDTH_MIN_DEG
+            );
+        }
+        Ok(Some(l))
+    }
 }
 
 fn number(s: &str, what: &str) -> Result<f32> {
@@ -57,15 +112,20 @@ impl GridArgs {
                 .ok()
                 .context("--theta-i: at most 8 incidence angles")?;
         }
+        let sweep = match self.sweep {
+            true => Some(SweepScan {
+                speed_dps: self.sweep_speed,
+                periods_per_sample: self.sweep_periods,
+                lobe: self.lobe.lobe(&theta_i_deg)?,
+            }),
+            false => None,
+        };
         let spec = ScanSpec {
             theta_i_deg,
             theta_o: range(&self.theta_o, "--theta-o")?,
             dphi: range(&self.dphi, "--dphi")?,
             first_order: 0,
-            sweep: self.sweep.then_some(SweepScan {
-                speed_dps: self.sweep_speed,
-                periods_per_sample: self.sweep_periods,
-            }),
+            sweep,
         };
         spec.validate().map_err(|f| anyhow::anyhow!("grid refused: {f}"))?;
         Ok(spec)
@@ -85,6 +145,7 @@ mod tests {
             sweep: false,
             sweep_speed: 30.0,
             sweep_periods: 8,
+            lobe: LobeArgs::default(),
         };
         assert_eq!(g.spec().unwrap(), ScanSpec::belcour());
         assert_eq!(ScanSpec::belcour().len(), 3 * 31 * 37);
@@ -100,6 +161,7 @@ mod tests {
                 sweep: false,
                 sweep_speed: 30.0,
                 sweep_periods: 8,
+                lobe: LobeArgs::default(),
             }
             .spec()
         };

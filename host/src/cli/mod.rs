@@ -7,7 +7,7 @@ mod detector;
 mod devices;
 mod export;
 pub mod fit;
-mod grid;
+pub mod grid;
 pub mod material;
 mod model_eval;
 mod plan;

@@ -3,7 +3,7 @@
 use super::calibrate;
 use super::detector::DetectorArgs;
 use super::fit::{self, FitOptions};
-use super::grid::GridArgs;
+use super::grid::{GridArgs, LobeArgs};
 use super::material::SimHeadArgs;
 use super::plan::{PlanTarget, ScanPlan};
 use super::reference;
@@ -37,6 +37,8 @@ pub struct DemoArgs {
     /// point.
     #[arg(long)]
     pub sweep: bool,
+    #[command(flatten)]
+    pub lobe: LobeArgs,
     #[command(flatten)]
     pub output: OutputArgs,
 }
@@ -101,10 +103,15 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ..SimConfig::default()
     };
     let truth = sim.material.clone();
-    let spec = ScanSpec {
-        sweep: a.sweep.then_some(DEMO_SWEEP),
-        ..ScanSpec::belcour()
+    let belcour = ScanSpec::belcour();
+    let sweep = match a.sweep {
+        true => Some(SweepScan {
+            lobe: a.lobe.lobe(&belcour.theta_i_deg)?,
+            ..DEMO_SWEEP
+        }),
+        false => None,
     };
+    let spec = ScanSpec { sweep, ..belcour };
     let (outcome, samples) = demo_scan(sim, &spec, &a.out, &a.output).await?;
     let json = a.output.json;
     if !json {
@@ -183,6 +190,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
 pub const DEMO_SWEEP: SweepScan = SweepScan {
     speed_dps: 30.0,
     periods_per_sample: SweepRequest::PERIODS_MAX,
+    lobe: None,
 };
 
 /// The demo's scan of a simulated head into `dir`: the reference plate,
@@ -370,7 +378,7 @@ fn estimate_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
     let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
     if spec.sweep.is_some() {
         let ranging = acquire - det.integration_s as f64;
-        return sweep_time(cfg, spec, rest, PARK, settle, ranging).total_s();
+        return sweep_time(cfg, spec, rest, PARK, (settle, ranging), det.settings.chop_hz).total_s();
     }
     scan_time(cfg, spec, rest, PARK, settle, acquire).total_s()
 }

@@ -4,7 +4,7 @@
 use gonio_firmware::config::HeadConfig;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::plan_s;
-use gonio_firmware::motion::{move_blocks, move_time, profile_s, target_steps};
+use gonio_firmware::motion::{fits_queue, move_blocks, move_time, profile_s, slowest, target_steps};
 use gonio_firmware::sweep;
 use gonio_shared::{DetectionReport, ScanSpec, Visit};
 
@@ -78,15 +78,17 @@ pub fn scan_time(
 /// Duration of a sweep scan's rows in the order `visit` yields them, from
 /// stage position `from`, as the head runs them (`Head::sweep_turn`): the
 /// move to a row's start, `settle_s`, `prepare_s` to range the detector,
-/// then the arm's sweep at the row's speed. Rows that cannot be swept are skipped
-/// without moving. `integration_s` holds the sweeps.
+/// then the arm's sweep at the row's speed, slower across the lobes
+/// (`sweep::row_levels`, for samples of its periods at `chop_hz`). Rows that
+/// cannot be swept are skipped without moving. `integration_s` holds the
+/// sweeps.
 pub fn sweep_time(
     cfg: &HeadConfig,
     spec: &ScanSpec,
     visit: impl Iterator<Item = u32>,
     from: [i32; 3],
-    settle_s: f64,
-    prepare_s: f64,
+    (settle_s, prepare_s): (f64, f64),
+    chop_hz: f32,
 ) -> ScanTime {
     let mut t = ScanTime::default();
     let mut at = from;
@@ -100,13 +102,19 @@ pub fn sweep_time(
         };
         let (start, end) = (target_steps(cfg, &a), target_steps(cfg, &b));
         let (to_start, across) = ([0, 1, 2].map(|k| start[k] - at[k]), [0, 1, 2].map(|k| end[k] - start[k]));
-        let Ok(limits) = sweep::limits(cfg, across, sweep::row_speed(cfg, &row)) else {
+        let speed = sweep::row_speed(cfg, &row);
+        let Ok(limits) = sweep::limits(cfg, across, speed) else {
             t.skipped += 1;
             continue;
         };
+        let levels = sweep::row_levels(&row, &a, &b, speed, row.periods_per_sample as f32 / chop_hz);
+        let levels = match fits_queue(cfg, across, limits, &levels, STEP_TICK_HZ) {
+            true => &levels[..],
+            false => &slowest(&levels)[..],
+        };
         t.add_move(cfg, to_start);
         t.settle_s += settle_s + prepare_s;
-        t.integration_s += profile_s(cfg, across, limits);
+        t.integration_s += profile_s(cfg, across, limits, levels);
         t.measured += 1;
         at = end;
     }

@@ -22,7 +22,7 @@
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::hw::StepBlock;
 use gonio_firmware::kinematics;
-use gonio_firmware::motion::blocks::trapezoid_blocks;
+use gonio_firmware::motion::blocks::profile_blocks;
 use gonio_firmware::motion::{target_steps, trapezoid, Position, PARK};
 use gonio_firmware::units;
 use gonio_host::scan_order::{scan_time, visit_order};
@@ -100,7 +100,7 @@ fn max_step_error(cfg: &HeadConfig) -> (f64, u64) {
                 let t = trapezoid(c, n, dps);
                 let scope = Scope::default();
                 let mut exec = executor(&scope, pulse);
-                assert!(trapezoid_blocks(&t, TICK_HZ, |b| exec.push(axis, b).is_ok()), "queue too short");
+                assert!(profile_blocks(&t, TICK_HZ, |b| exec.push(axis, b).is_ok()), "queue too short");
                 run(&mut exec, &scope, 0, 1, 0);
                 let e = scope.rises("step", axis.index());
                 assert_eq!(e.len(), n as usize);

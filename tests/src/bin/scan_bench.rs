@@ -22,9 +22,11 @@
 //!   settings); `sweep_time_ratio` is the sweep scan's head time over the
 //!   grid scan's, beside the samples each stored.
 //! - `fit_agreement`: for the default simulated material (glass beads) and
-//!   a narrow-lobe one (the retroreflective tape, retro-phong with n = 500),
+//!   a narrow-lobe one (the retroreflective tape at n = 1 000),
 //!   the grid and the sweep scan each measured as `gonio demo` does (the
-//!   reference plate, the scan, the calibration), retro-phong fitted to
+//!   reference plate, the scan, the calibration; the sweep slowed down
+//!   across the lobes of the grid's fit, `sweep_lobe`, where they are
+//!   narrow enough to ask it), retro-phong fitted to
 //!   each, and every parameter's difference over its two standard errors
 //!   combined (`z`: each fit's standard errors as `gonio fit` reports them,
 //!   the samples' scatter and the inputs every sample shares, the plate and
@@ -36,19 +38,28 @@
 //!   every sample by the solid angle it stands for (`Weighting::Area`), on
 //!   the domain both scans see (beyond the blind zone around the retro
 //!   direction), from calibrated data whose swept samples are corrected for
-//!   their extent (`swept::unblur`).
+//!   their extent (`swept::unblur`). Beside the fits, each scan's head time
+//!   and its calibrated values against the material's own
+//!   (`*_value_error`, mean and rms of their ratio less one): how well each
+//!   scan measured, apart from how a model outside the material's family
+//!   settles on its samples. Where the sweep slowed down, the same sweep at
+//!   its speed all along beside it (`sweep_at_constant_speed`): what
+//!   slowing down bought.
 
 use anyhow::Result;
+use gonio_brdf::frame::Directions;
 use gonio_brdf::{Material, ModelId, Specimen};
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::motion::PARK;
 use gonio_host::cli::calibrate::{calibrate, CalibrateArgs};
+use gonio_host::cli::grid::SWEEP_EXTENT;
 use gonio_host::cli::scan::{demo_scan, OutputArgs, DEMO_SWEEP};
 use gonio_host::cli::simulated::Simulated;
 use gonio_host::fit::{fit, Fit, FitSpec, Weighting};
+use gonio_host::lobe;
 use gonio_host::scan::ScanOutcome;
 use gonio_host::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
-use gonio_shared::{AngleRange, DetectionSettings, Geometry, ScanSpec, SweepRequest};
+use gonio_shared::{AngleRange, DetectionSettings, Geometry, ScanSpec, SweepLobe, SweepRequest, SweepScan};
 use gonio_sim::SimConfig;
 use gonio_tests::scanning::{scan_and_read, session};
 use gonio_tests::sweeping::{tag_error_deg_max, SimHead};
@@ -171,6 +182,16 @@ fn sweep_scan() -> Value {
     })
 }
 
+/// The narrow-lobe material of `fit_agreement`: the retroreflective tape
+/// with retro and mirror lobes twice as narrow in n (n = 1 000, σ = 1.8°).
+fn narrow_lobe() -> Material {
+    let mut m = Material::tape();
+    m.params[1] = 1000.0;
+    m.params[2] = 0.4;
+    m.params[3] = 0.05;
+    m
+}
+
 /// Retro-phong fitted to `spec` measured on a simulated head of `material`
 /// as `gonio demo` measures, on the domain a grid and a sweep scan both see
 /// (beyond the blind zone around the retro direction: the grid reaches its
@@ -179,7 +200,7 @@ fn sweep_scan() -> Value {
 /// samples it fitted, the fit, and the standard errors of the samples' own
 /// scatter alone (without the inputs every sample of the head shares, the
 /// plate, the scale, the stage zeros).
-fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<(usize, Fit, Vec<Option<f64>>)> {
+fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<Fitted> {
     let sim = SimConfig {
         material: material.clone(),
         ..SimConfig::default()
@@ -187,7 +208,7 @@ fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<(usize, Fit, Vec<Optio
     let dir = tempfile::tempdir()?;
     let rt = tokio::runtime::Builder::new_current_thread().enable_time().build()?;
     let quiet = OutputArgs { force: false, json: true };
-    rt.block_on(demo_scan(sim, spec, dir.path(), &quiet))?;
+    let (outcome, _) = rt.block_on(demo_scan(sim, spec, dir.path(), &quiet))?;
     let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
     let blind = (SimConfig::default().machine.optics.blind_max_deg as f64).to_radians();
     let mut data = gonio_host::formats::load(&calibrated.csv)?.filter(|o| {
@@ -204,26 +225,84 @@ fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<(usize, Fit, Vec<Optio
         o.shared = Default::default();
     }
     let scatter = fit(&data, &spec)?.stderr;
-    Ok((data.observations.len(), f, scatter))
+    // Every calibrated value against the material itself.
+    let errors: Vec<f64> = data
+        .observations
+        .iter()
+        .map(|o| o.value / material.eval(&Directions::from_angles(o.theta_i, o.theta_o, o.dphi)) - 1.0)
+        .collect();
+    let mean = errors.iter().sum::<f64>() / errors.len() as f64;
+    let rms = (errors.iter().map(|e| e * e).sum::<f64>() / errors.len() as f64).sqrt();
+    Ok(Fitted {
+        samples: data.observations.len(),
+        fit: f,
+        scatter,
+        head_s: outcome.head_time_s,
+        value_error: json!({ "mean": mean, "rms": rms }),
+    })
+}
+
+/// A scan of a material fitted ([`fitted`]).
+struct Fitted {
+    samples: usize,
+    fit: Fit,
+    /// Standard errors of the samples' scatter alone.
+    scatter: Vec<Option<f64>>,
+    head_s: f64,
+    /// The calibrated values over the material's own, less one: their mean
+    /// and root mean square.
+    value_error: Value,
 }
 
 /// The grid's and the sweep scan's retro-phong fits of `material`, compared
 /// parameter by parameter, beside the grid's at twice its density.
 fn fit_agreement(material: &Specimen) -> Result<Value> {
+    let z = |d: f64, a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| d / a.hypot(b));
+    let belcour = ScanSpec::belcour();
+    let g = fitted(material, &belcour)?;
+    let grid = &g.fit;
+    // Slowed down across the lobes of the model being fitted, as the grid
+    // found them.
+    let lobe = lobe::narrowest_deg(&grid.material, &belcour.theta_i_deg).ok().map(|w| SweepLobe {
+        width_deg: w as f32,
+        extent_fraction: SWEEP_EXTENT,
+    });
     let swept = ScanSpec {
-        sweep: Some(DEMO_SWEEP),
-        ..ScanSpec::belcour()
+        sweep: Some(SweepScan { lobe, ..DEMO_SWEEP }),
+        ..belcour
     };
-    let (n_grid, grid, grid_scatter) = fitted(material, &ScanSpec::belcour())?;
-    let (n_sweep, sweep, sweep_scatter) = fitted(material, &swept)?;
+    let s = fitted(material, &swept)?;
+    let sweep = &s.fit;
+    // What slowing down bought: the same sweep at its speed all along.
+    let constant = match lobe {
+        Some(_) => {
+            let c = fitted(
+                material,
+                &ScanSpec {
+                    sweep: Some(DEMO_SWEEP),
+                    ..ScanSpec::belcour()
+                },
+            )?;
+            let z: Vec<Option<f64>> = (0..grid.material.params.len())
+                .map(|i| z(c.fit.material.params[i] - grid.material.params[i], grid.stderr[i], c.fit.stderr[i]))
+                .collect();
+            json!({
+                "sweep_head_s": c.head_s,
+                "sweep_rmse": c.fit.metrics.rmse,
+                "params": c.fit.material.params,
+                "z": z,
+                "params_within_2sigma": z.iter().all(|z| z.is_some_and(|z| z.abs() <= 2.0)),
+            })
+        }
+        None => Value::Null,
+    };
     let fine = ScanSpec {
         theta_o: AngleRange::new(0.0, 90.0, 1.5),
         dphi: AngleRange::new(-180.0, 180.0, 5.0),
         ..ScanSpec::belcour()
     };
-    let (n_fine, fine, _) = fitted(material, &fine)?;
+    let fine = fitted(material, &fine)?;
     let names = ModelId::RetroPhong.param_names();
-    let z = |d: f64, a: Option<f64>, b: Option<f64>| a.zip(b).map(|(a, b)| d / a.hypot(b));
     let params: Vec<Value> = (0..names.len())
         .map(|i| {
             let (a, b) = (grid.material.params[i], sweep.material.params[i]);
@@ -232,17 +311,23 @@ fn fit_agreement(material: &Specimen) -> Result<Value> {
                 "grid": a, "grid_stderr": grid.stderr[i],
                 "sweep": b, "sweep_stderr": sweep.stderr[i],
                 "z": z(b - a, grid.stderr[i], sweep.stderr[i]),
-                "z_scatter": z(b - a, grid_scatter[i], sweep_scatter[i]),
-                "fine_grid": fine.material.params[i], "fine_grid_stderr": fine.stderr[i],
+                "z_scatter": z(b - a, g.scatter[i], s.scatter[i]),
+                "fine_grid": fine.fit.material.params[i], "fine_grid_stderr": fine.fit.stderr[i],
             })
         })
         .collect();
     let within = |key: &str| params.iter().all(|p| p[key].as_f64().is_some_and(|z| z.abs() <= 2.0));
     Ok(json!({
         "material": material.describe(),
-        "grid_samples": n_grid,
-        "sweep_samples": n_sweep,
-        "fine_grid_samples": n_fine,
+        "sweep_lobe": lobe,
+        "sweep_at_constant_speed": constant,
+        "grid_samples": g.samples,
+        "sweep_samples": s.samples,
+        "fine_grid_samples": fine.samples,
+        "grid_head_s": g.head_s,
+        "sweep_head_s": s.head_s,
+        "grid_value_error": g.value_error,
+        "sweep_value_error": s.value_error,
         "grid_rmse": grid.metrics.rmse,
         "sweep_rmse": sweep.metrics.rmse,
         "params": params,
@@ -285,7 +370,7 @@ fn main() {
             .filter_map(|a| Some(a["samples"].as_f64()? / a["grid_points"].as_f64()?))
             .fold(f64::INFINITY, f64::min),
     });
-    let agreements: Vec<Value> = [SimConfig::default().material, Specimen::Model(Material::tape())]
+    let agreements: Vec<Value> = [SimConfig::default().material, Specimen::Model(narrow_lobe())]
         .iter()
         .map(|m| fit_agreement(m).unwrap_or_else(|e| json!({ "material": m.describe(), "error": format!("{e:#}") })))
         .collect();

@@ -16,7 +16,7 @@ use gonio_firmware::demod::{Design, Integrator, Reference};
 use gonio_firmware::dispatch;
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::kinematics;
-use gonio_firmware::motion::blocks::TrapezoidBlocks;
+use gonio_firmware::motion::blocks::ProfileBlocks;
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::motion::step_irq::{self, CompareTimer};
 use gonio_firmware::motion::{self, trapezoid, Position};
@@ -28,8 +28,8 @@ use gonio_firmware::Head;
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, PlanEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint};
 use gonio_shared::wire::check;
 use gonio_shared::{
-    AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, SweepRequest, SweepRow,
-    PLAN_CHUNK, PLAN_QUEUE,
+    AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, SweepLobe, SweepRequest,
+    SweepRow, PLAN_CHUNK, PLAN_QUEUE,
 };
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Topic};
@@ -129,11 +129,12 @@ fn set_counter(t: u32) {
     unsafe { core::ptr::write_volatile(&raw mut TIM_WORDS[0], t) };
 }
 
-/// A three-axis move at the axes' cruise speeds (acceleration, cruise and
-/// deceleration), its blocks planned as a move plans them (`move_plan`).
-fn queued_move() -> Executor<StorePin> {
-    let pulse = units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, TICK_HZ) as u64;
-    let mut exec = Executor::new([StorePin("a"), StorePin("bb"), StorePin("ccc")], pulse);
+/// Queues on `exec` (emptied first) a three-axis move at the axes' cruise
+/// speeds (acceleration, cruise and deceleration), its blocks planned as a
+/// move plans them (`move_plan`). One executor serves every probe: its
+/// queues take 28 KiB.
+fn queue_move(exec: &mut Executor<StorePin>) {
+    exec.clear();
     mark("move_plan", BEGIN);
     for axis in Axis::ALL {
         let cfg = &REFERENCE.axes[axis.index()];
@@ -141,13 +142,12 @@ fn queued_move() -> Executor<StorePin> {
         let deg = cfg.max_speed_dps * cfg.max_speed_dps / cfg.max_accel_dps2 + 0.5;
         let n = units::deg_to_steps(cfg, deg) as u32;
         let t = trapezoid(cfg, n, cfg.max_speed_dps);
-        let mut blocks = TrapezoidBlocks::new(&t, TICK_HZ);
+        let mut blocks = ProfileBlocks::new(&t, TICK_HZ);
         while let Some(b) = measure("move_block", || blocks.next()) {
             let _ = exec.push(axis, b);
         }
     }
     mark("move_plan", END);
-    exec
 }
 
 const TICK_HZ: u32 = 1_000_000;
@@ -158,7 +158,9 @@ const TICK_HZ: u32 = 1_000_000;
 /// half-way (`step_isr_braking`: the brake's f32 steps).
 #[inline(never)]
 fn step_events() {
-    let mut exec = queued_move();
+    let pulse = units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, TICK_HZ) as u64;
+    let mut exec = Executor::new([StorePin("a"), StorePin("bb"), StorePin("ccc")], pulse);
+    queue_move(&mut exec);
     let mut next = exec.start();
     while let Some(t) = next {
         next = measure("step_event", || exec.fire(t));
@@ -166,7 +168,7 @@ fn step_events() {
     black_box(exec.emitted());
 
     for (name, mut brake_at) in [("step_isr", None), ("step_isr_braking", Some(300_000u64))] {
-        let mut exec = queued_move();
+        queue_move(&mut exec);
         set_counter(0);
         let first = exec.start();
         let mut done = step_irq::schedule(&mut exec, &mut MemoryTimer, 0, first);
@@ -247,7 +249,7 @@ fn sweep_path() {
         return;
     };
     let checked = measure("sweep_check", || {
-        sweep::check(req.periods_per_sample, req.speed_dps).and_then(|()| sweep::check_path(&REFERENCE, &from, &to))
+        sweep::check(req.periods_per_sample, req.speed_dps, None).and_then(|()| sweep::check_path(&REFERENCE, &from, &to))
     });
     let (start, end) = (motion::target_steps(&REFERENCE, &from), motion::target_steps(&REFERENCE, &to));
     let delta = [0, 1, 2].map(|i| end[i] - start[i]);
@@ -257,8 +259,14 @@ fn sweep_path() {
         return;
     }
     // A sweep scan's row in place of the inverse kinematics: its ends, their
-    // stage targets and the arm's limits, in the first turn of the row.
-    for (ti, dp) in [(15.0, -180.0), (30.0, 90.0), (60.0, 10.0), (60.0, -120.0)] {
+    // stage targets, the arm's limits and its stretches across a narrow
+    // lobe, in the first turn of the row; then the blocks of its move
+    // (`move_block`), slowed down across the lobes.
+    let lobe = SweepLobe {
+        width_deg: 1.8,
+        extent_fraction: 0.25,
+    };
+    for (ti, dp) in [(15.0, -180.0), (30.0, 90.0), (60.0, 10.0), (60.0, -120.0), (30.0, 180.0)] {
         let row = SweepRow {
             theta_i_deg: ti,
             dphi_deg: dp,
@@ -266,13 +274,22 @@ fn sweep_path() {
             outward: true,
             speed_dps: 30.0,
             periods_per_sample: 8,
+            lobe: Some(lobe),
         };
-        let _ = black_box(measure("sweep_row", || {
+        let planned = black_box(measure("sweep_row", || {
             sweep::row_ends(&REFERENCE, &row).and_then(|(a, b)| {
                 let (s, e) = (motion::target_steps(&REFERENCE, &a), motion::target_steps(&REFERENCE, &b));
-                sweep::limits(&REFERENCE, [0, 1, 2].map(|i| e[i] - s[i]), row.speed_dps)
+                let delta = [0, 1, 2].map(|i| e[i] - s[i]);
+                let limits = sweep::limits(&REFERENCE, delta, row.speed_dps)?;
+                Ok((delta, limits, sweep::row_levels(&row, &a, &b, row.speed_dps, 8.0 / 230.0)))
             })
         }));
+        if let Ok((delta, limits, levels)) = planned {
+            let arm = Axis::Arm.index();
+            let t = motion::ramp(&REFERENCE.axes[arm], delta[arm].unsigned_abs(), limits[arm], &levels);
+            let mut blocks = ProfileBlocks::new(&t, TICK_HZ);
+            while black_box(measure("move_block", || blocks.next())).is_some() {}
+        }
     }
     let design = measure("design_8_periods", || Design::new(8, 230.0));
     // The end of a sample: the estimate of its periods (in two stretches,
