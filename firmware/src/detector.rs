@@ -241,8 +241,9 @@ impl Detector {
     /// sample's first period begins there). `moving` turns false once the
     /// move is over.
     ///
-    /// A sweep ranges as it goes: a sample whose codes reached the rails, or
-    /// that would fit ten times over, steps the gain for the next one
+    /// A sweep ranges as it goes (with `auto_range` set): a sample whose
+    /// codes reached the rails, or that would fit ten times over, steps the
+    /// gain for the next one
     /// ([`Detector::next_gain`]), which first discards the periods the
     /// amplifier needs ([`Detector::resettle_moving`]). A lobe's peak
     /// crossed at a gain set where the row began saturates one or two
@@ -259,7 +260,7 @@ impl Detector {
         let it = self.accumulate(hw, buf, &mut flags, &self.swept, Some(moving)).await;
         let (emitted, at_us) = (hw.steps.emitted(), hw.clock.now_us());
         let (signal, (min, max)) = self.conclude::<B>(cfg, it, flags).await;
-        if let Some(g) = self.next_gain::<B>(cfg, min, max) {
+        if let Some(g) = self.next_gain::<B>(cfg, min, max).filter(|_| self.settings.auto_range) {
             self.set_gain(hw, g)?;
             self.resettle = true;
         }
@@ -268,15 +269,17 @@ impl Detector {
 
     /// Discards the periods the amplifier needs after a sweep's gain
     /// changed, if it did: the steps the timer had emitted and the time
-    /// when they are over, where the next sample begins.
+    /// when they are over, where the next sample begins. A block lost
+    /// meanwhile is a fault, as within a sample: the ring would be out of
+    /// step with the chop for the rest of the sweep.
     pub async fn resettle_moving<B: Board>(
         &mut self,
         hw: &mut Hardware<B>,
         cfg: &HeadConfig,
         moving: &mut bool,
-    ) -> Option<([u32; 3], u64)> {
+    ) -> Result<Option<([u32; 3], u64)>, Fault> {
         if !core::mem::take(&mut self.resettle) {
-            return None;
+            return Ok(None);
         }
         let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];
@@ -284,7 +287,10 @@ impl Detector {
         for _ in 0..cfg.detector.settle_periods {
             period_moving(hw, buf, &mut flags, moving).await;
         }
-        Some((hw.steps.emitted(), hw.clock.now_us()))
+        if flags.contains(SampleFlags::OVERRUN) {
+            return Err(Fault::AdcOverrun);
+        }
+        Ok(Some((hw.steps.emitted(), hw.clock.now_us())))
     }
 
     /// Integrates `design`'s periods (while a move runs, when `moving` is

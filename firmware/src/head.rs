@@ -461,7 +461,8 @@ impl<B: Board> Head<B> {
 
     /// Checks what a sweep asks of the detector and of its samples.
     fn check_sweep(&self, periods_per_sample: u16, speed_dps: f32, lobe: Option<&SweepLobe>) -> Reply<()> {
-        sweep::check(periods_per_sample, speed_dps, lobe)?;
+        let chop_hz = self.detector.settings().chop_hz;
+        sweep::check(&self.cfg, periods_per_sample, speed_dps, lobe, chop_hz)?;
         if self.detector.settings().chop_hz > SweepRequest::CHOP_MAX_HZ {
             return Err(Fault::InvalidValue(Field::ChopFrequency));
         }
@@ -568,8 +569,10 @@ impl<B: Board> Head<B> {
             self.safe_state();
             return Err(f);
         }
-        if let Some(start) = self.detector.resettle_moving(&mut self.hw, &self.cfg, &mut sw.moving).await {
-            (sw.first, sw.start_us) = start;
+        match self.detector.resettle_moving(&mut self.hw, &self.cfg, &mut sw.moving).await {
+            Ok(Some(start)) => (sw.first, sw.start_us) = start,
+            Ok(None) => {}
+            Err(f) => return Err(self.abandon_sweep(f).await),
         }
         let (mut signal, last, end_us) = match self.detector.measure_moving(&mut self.hw, &self.cfg, &mut sw.moving).await {
             Ok(m) => m,

@@ -162,7 +162,8 @@ pub fn row_levels(row: &SweepRow, from: &AxisAngles, to: &AxisAngles, speed_dps:
     let mut zones: heapless::Vec<(f64, f64), 2> = heapless::Vec::new();
     let _ = zones.push((-half, half));
     if r > cos(half) {
-        let (mid, h) = (libm::atan2(b, a), acos(cos(half) / r));
+        // A zone wider than 90° a side (lobes over 30° wide) spans the row.
+        let (mid, h) = (libm::atan2(b, a), acos((cos(half) / r).clamp(-1.0, 1.0)));
         let _ = zones.push((mid - h, mid + h));
     }
     // Each zone as a stretch of the way (0 at `from`, 1 at `to`), in order.
@@ -204,15 +205,25 @@ pub fn row_levels(row: &SweepRow, from: &AxisAngles, to: &AxisAngles, speed_dps:
 
 /// Checks a sweep's sample length, speed and lobe (its ends are checked by
 /// [`crate::kinematics::inverse`], its speed against the axes by [`limits`]).
-pub fn check(periods_per_sample: u16, speed_dps: f32, lobe: Option<&SweepLobe>) -> Result<(), Fault> {
+/// A lobe is refused when its slow stretches would go slower than
+/// [`SweepRequest::SPEED_MIN_DPS`], or when the arm's whole travel at that
+/// speed would outlast [`SweepRequest::DURATION_MAX_S`] (what the step timer
+/// counts): a row whose stretches overflow the queue runs slow all along
+/// ([`motion::plan`]), so no row of the scan can.
+pub fn check(cfg: &HeadConfig, periods_per_sample: u16, speed_dps: f32, lobe: Option<&SweepLobe>, chop_hz: f32) -> Result<(), Fault> {
     if !(SweepRequest::PERIODS_MIN..=SweepRequest::PERIODS_MAX).contains(&periods_per_sample) {
         return Err(Fault::InvalidValue(Field::Periods));
     }
     if !speed_ok(speed_dps) {
         return Err(Fault::InvalidValue(Field::SweepSpeed));
     }
-    if lobe.is_some_and(|l| !l.valid()) {
-        return Err(Fault::InvalidValue(Field::SweepLobe));
+    if let Some(l) = lobe {
+        let slow = l.extent_fraction * l.width_deg * chop_hz / periods_per_sample as f32;
+        let arm = &cfg.axes[Axis::Arm.index()];
+        let travel = arm.max_deg - arm.min_deg;
+        if !l.valid() || !speed_ok(slow) || travel / slow.min(speed_dps) > SweepRequest::DURATION_MAX_S {
+            return Err(Fault::InvalidValue(Field::SweepLobe));
+        }
     }
     Ok(())
 }
@@ -334,9 +345,9 @@ mod tests {
         /// elsewhere.
         #[test]
         fn a_row_slows_down_within_three_widths_of_either_peak(
-            ti in 5.0f32..75.0, dp in -180.0f32..180.0, width in 0.3f32..6.0, outward: bool,
+            ti in 5.0f32..75.0, dp in -180.0f32..180.0, width in 0.3f32..40.0, fraction in 0.01f32..1.0, outward: bool,
         ) {
-            let lobe = SweepLobe { width_deg: width, extent_fraction: 0.25 };
+            let lobe = SweepLobe { width_deg: width, extent_fraction: fraction };
             let row = SweepRow {
                 theta_i_deg: ti, dphi_deg: dp, theta_o_stop_deg: 87.0, outward, speed_dps: 30.0, periods_per_sample: 8,
                 lobe: Some(lobe),
@@ -346,7 +357,7 @@ mod tests {
             };
             let sample_s = 8.0 / 230.0;
             let levels = row_levels(&row, &a, &b, 30.0, sample_s);
-            let slow = 0.25 * width / (sample_s * 30.0);
+            let slow = fraction * width / (sample_s * 30.0);
             prop_assert!(levels.windows(2).all(|w| w[0].until < w[1].until));
             let zone = SweepLobe::ZONE_WIDTHS * width;
             for k in 0..=400 {
@@ -362,6 +373,23 @@ mod tests {
                     prop_assert!(scale == 1.0, "{near}° from the peaks at {x}: scale {scale} {levels:?}");
                 }
             }
+        }
+    }
+
+    #[test]
+    fn a_lobe_that_would_make_a_row_outlast_the_step_timer_is_refused() {
+        let lobe = |width_deg, extent_fraction| SweepLobe {
+            width_deg,
+            extent_fraction,
+        };
+        let ok = |l: SweepLobe, chop_hz| check(&REFERENCE, 8, 30.0, Some(&l), chop_hz);
+        assert_eq!(ok(lobe(1.8, 0.25), 230.0), Ok(()));
+        // 0.05° at a hundredth: 0.014°/s, the arm's travel in hours.
+        assert_eq!(ok(lobe(0.05, 0.01), 230.0), Err(Fault::InvalidValue(Field::SweepLobe)));
+        // A chop of 1 Hz: 8 s samples.
+        assert_eq!(ok(lobe(0.05, 0.25), 1.0), Err(Fault::InvalidValue(Field::SweepLobe)));
+        for bad in [lobe(f32::NAN, 0.25), lobe(1.0, 0.0), lobe(1.0, 1.5), lobe(f32::INFINITY, 0.25)] {
+            assert_eq!(ok(bad, 230.0), Err(Fault::InvalidValue(Field::SweepLobe)), "{bad:?}");
         }
     }
 

@@ -7,6 +7,7 @@
 
 use gonio_brdf::{Material, Specimen};
 use gonio_firmware::config::REFERENCE;
+use gonio_firmware::motion::{self, executor::QUEUE};
 use gonio_firmware::sweep;
 use gonio_host::cli::simulated::Simulated;
 use gonio_host::samples_csv::Row;
@@ -30,6 +31,23 @@ fn rows() -> ScanSpec {
             periods_per_sample: 8,
             lobe: None,
         }),
+    }
+}
+
+/// [`rows`] at `speed_dps`, slowed down for a lobe `width_deg` wide, a
+/// sample spanning at most a quarter of it.
+fn slowed(width_deg: f32, speed_dps: f32) -> ScanSpec {
+    let lobe = SweepLobe {
+        width_deg,
+        extent_fraction: 0.25,
+    };
+    ScanSpec {
+        sweep: rows().sweep.map(|s| SweepScan {
+            lobe: Some(lobe),
+            speed_dps,
+            ..s
+        }),
+        ..rows()
     }
 }
 
@@ -126,12 +144,7 @@ async fn a_row_slows_down_across_a_narrow_lobe_so_its_samples_span_a_fraction_of
     // A lobe 1° wide, a sample at most a quarter of it: 7.2°/s within 3°
     // of the mirror direction (on the Δφ = 180° row at θo = 30°), 20°/s
     // elsewhere (0.70° a sample).
-    let lobe = SweepLobe {
-        width_deg: 1.0,
-        extent_fraction: 0.25,
-    };
-    let mut spec = rows();
-    spec.sweep = spec.sweep.map(|s| SweepScan { lobe: Some(lobe), ..s });
+    let spec = slowed(1.0, 20.0);
     let (_, by_row) = scan(SimConfig::default(), &spec).await;
     check_whole(&spec, &by_row);
     let (mut slow, mut fast) = (0, 0);
@@ -184,11 +197,39 @@ async fn a_sweep_steps_its_gain_down_across_a_bright_lobe_rather_than_saturate()
     let saturated = |s: &Row| s.flags & SampleFlags::SATURATED.bits() != 0;
     let longest = mirror.split(|s| !saturated(s)).map(<[Row]>::len).max().unwrap_or(0);
     assert!(longest <= 2, "{longest} saturated samples in a row");
-    // Where the gain held, it is the one the samples' own codes asked for:
-    // the brightest sample of the row is not saturated.
-    let brightest = mirror
-        .iter()
-        .max_by(|a, b| (a.magnitude_v / a.gain_v_per_a).total_cmp(&(b.magnitude_v / b.gain_v_per_a)))
-        .unwrap();
-    assert!(!saturated(brightest), "{brightest:?}");
+}
+
+#[tokio::test]
+async fn a_row_whose_slow_stretch_overflows_the_step_queue_runs_slow_all_along() {
+    // A lobe 0.05° wide on rows at 30°/s: 0.36°/s across the mirror lobe,
+    // 1.2 % of the row's speed; the five ramps from rest, in and out of the
+    // slow stretch and to rest take 408 blocks, more than the queue's 384.
+    let spec = slowed(0.05, 30.0);
+    let crossing = |o: u32| row(&spec, o).dphi_deg.abs() == 180.0;
+    for o in sweepable(&spec) {
+        let r = row(&spec, o);
+        let (a, b) = sweep::row_ends(&REFERENCE, &r).unwrap();
+        let (s, e) = (motion::target_steps(&REFERENCE, &a), motion::target_steps(&REFERENCE, &b));
+        let delta = [0, 1, 2].map(|i| e[i] - s[i]);
+        let limits = sweep::limits(&REFERENCE, delta, r.speed_dps).unwrap();
+        let levels = sweep::row_levels(&r, &a, &b, r.speed_dps, 8.0 / 230.0);
+        let blocks = motion::axis_blocks(&REFERENCE, delta, limits, &levels, 1_000_000);
+        assert_eq!(blocks.iter().any(|&n| n > QUEUE), crossing(o), "row {o}: {blocks:?} blocks");
+    }
+    let (_, by_row) = scan(SimConfig::default(), &spec).await;
+    check_whole(&spec, &by_row);
+    for (&o, samples) in &by_row {
+        let extents: Vec<f32> = samples.iter().map(|s| s.extent_deg.unwrap()).collect();
+        if crossing(o) {
+            // 0.0125° a sample at 0.36°/s (within a microstep, 0.0025°)
+            // beyond the ramps at the row's ends, short at this speed.
+            for e in &extents[extents.len() / 4..extents.len() * 3 / 4] {
+                assert!((e - 0.0125).abs() < 0.003, "row {o}: {e}°");
+            }
+        } else {
+            // At 30°/s between its ramps: 1.04° a sample.
+            let top = extents.iter().copied().fold(0.0, f32::max);
+            assert!((top - 30.0 * 8.0 / 230.0).abs() < 0.03, "row {o}: {top}°");
+        }
+    }
 }

@@ -32,7 +32,8 @@ const BOUND_MARGIN: f32 = 0.98;
 const Q32: f64 = 4_294_967_296.0;
 
 /// What the chip spends planning one block (instructions): `chip-bench`'s
-/// `move_block_instructions_max` (4 805 measured), rounded up; chip-bench
+/// `move_block_instructions_max` (4 930 measured, a sweep scan's row
+/// slowed across its lobes included), rounded up; chip-bench
 /// fails should it ever measure more. The simulated head waits this long per
 /// block before a move starts, and the host's duration estimate counts it, so
 /// neither hides a cost the chip pays.

@@ -17,9 +17,12 @@ use gonio_shared::Axis;
 use heapless::Deque;
 
 /// Blocks queued per axis: a whole move is queued before it starts, two
-/// ramps of at most ~100 blocks each at one-tick accuracy and the cruise, or
-/// a sweep scan's row slowed across two lobes, up to six ramps (280 blocks
-/// across two lobes 1.8° wide, `blocks` tests).
+/// ramps of at most ~100 blocks each at one-tick accuracy and the cruise
+/// (about 207 for a long move of the reference axes), or a sweep scan's row
+/// slowed across two lobes, up to six ramps (283 for a row slowed to a
+/// quarter of its speed where it begins and to 40 % across the mirror lobe,
+/// `blocks` tests). A row whose stretches take more runs at its slowest
+/// speed all along (`motion::plan`).
 pub const QUEUE: usize = 384;
 
 const Q32: f32 = 4_294_967_296.0;

@@ -139,12 +139,18 @@ pub fn profile_s(cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3], levels:
 /// Blocks the move of every axis by `delta` microsteps at cruise speed takes
 /// on a `tick_hz` step timer (what the chip plans before it starts).
 pub fn move_blocks(cfg: &HeadConfig, delta: [i32; 3], tick_hz: u32) -> usize {
-    (0..3)
-        .map(|i| {
-            let t = trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), cfg.axes[i].max_speed_dps);
-            blocks::ProfileBlocks::new(&t, tick_hz).count()
-        })
-        .sum()
+    let limits = cfg.axes.map(|a| Limits::new(a.max_speed_dps, a.max_accel_dps2));
+    axis_blocks(cfg, delta, limits, &[], tick_hz).iter().sum()
+}
+
+/// Blocks each axis's profile of a move within `limits` and `levels` takes
+/// on a `tick_hz` step timer: what [`plan`] queues, at most
+/// [`executor::QUEUE`] an axis.
+pub fn axis_blocks(cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3], levels: &[Level], tick_hz: u32) -> [usize; 3] {
+    [0, 1, 2].map(|i| {
+        let t = ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i], levels);
+        blocks::ProfileBlocks::new(&t, tick_hz).count()
+    })
 }
 
 /// Sets DIR and enables the drivers of the axes about to move, then waits the
@@ -250,16 +256,6 @@ async fn queue<B: Board>(
 pub fn slowest(levels: &[Level]) -> [Level; 1] {
     let scale = levels.iter().map(|l| l.scale).fold(1.0, f32::min);
     [Level { until: 1.0, scale }]
-}
-
-/// Whether every axis's blocks of a move within `limits` and `levels` fit
-/// the step timer's queue on a `tick_hz` timer (what [`plan`] finds out by
-/// queueing them).
-pub fn fits_queue(cfg: &HeadConfig, delta: [i32; 3], limits: [Limits; 3], levels: &[Level], tick_hz: u32) -> bool {
-    (0..3).all(|i| {
-        let t = ramp(&cfg.axes[i], delta[i].unsigned_abs(), limits[i], levels);
-        blocks::ProfileBlocks::new(&t, tick_hz).count() <= executor::QUEUE
-    })
 }
 
 /// Starts a planned move: its steps are in flight from now on.

@@ -4,7 +4,8 @@
 use gonio_firmware::config::HeadConfig;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::plan_s;
-use gonio_firmware::motion::{fits_queue, move_blocks, move_time, profile_s, slowest, target_steps};
+use gonio_firmware::motion::executor::QUEUE;
+use gonio_firmware::motion::{axis_blocks, move_blocks, move_time, profile_s, slowest, target_steps};
 use gonio_firmware::sweep;
 use gonio_shared::{DetectionReport, ScanSpec, Visit};
 
@@ -108,10 +109,18 @@ pub fn sweep_time(
             continue;
         };
         let levels = sweep::row_levels(&row, &a, &b, speed, row.periods_per_sample as f32 / chop_hz);
-        let levels = match fits_queue(cfg, across, limits, &levels, STEP_TICK_HZ) {
+        // As `motion::plan` queues it: the stretches, or the slowest all
+        // along where they overflow the queue; planned before the arm starts.
+        let fallback = slowest(&levels);
+        let mut blocks = axis_blocks(cfg, across, limits, &levels, STEP_TICK_HZ);
+        let levels = match blocks.iter().all(|&b| b <= QUEUE) {
             true => &levels[..],
-            false => &slowest(&levels)[..],
+            false => {
+                blocks = axis_blocks(cfg, across, limits, &fallback, STEP_TICK_HZ);
+                &fallback[..]
+            }
         };
+        t.planning_s += plan_s(blocks.iter().sum());
         t.add_move(cfg, to_start);
         t.settle_s += settle_s + prepare_s;
         t.integration_s += profile_s(cfg, across, limits, levels);

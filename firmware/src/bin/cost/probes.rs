@@ -249,7 +249,8 @@ fn sweep_path() {
         return;
     };
     let checked = measure("sweep_check", || {
-        sweep::check(req.periods_per_sample, req.speed_dps, None).and_then(|()| sweep::check_path(&REFERENCE, &from, &to))
+        sweep::check(&REFERENCE, req.periods_per_sample, req.speed_dps, None, 230.0)
+            .and_then(|()| sweep::check_path(&REFERENCE, &from, &to))
     });
     let (start, end) = (motion::target_steps(&REFERENCE, &from), motion::target_steps(&REFERENCE, &to));
     let delta = [0, 1, 2].map(|i| end[i] - start[i]);
