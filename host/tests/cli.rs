@@ -187,32 +187,39 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
     assert!(text(&again).contains("already holds a scan"));
 }
 
-#[test]
-fn a_scan_killed_at_a_random_point_resumes_to_exactly_the_grid() {
-    use rand::Rng;
+/// Runs `gonio scan --sim --out OUT` with `extra` options and kills it with
+/// SIGKILL once more than `lines` samples are on disk.
+fn scan_killed(out: &Path, extra: &[&str], lines: usize) {
     use std::time::{Duration, Instant};
-    let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("scan");
     let mut child = Command::new(env!("CARGO_BIN_EXE_gonio"))
-        .args(["scan", "--sim", "--out", out.to_str().unwrap()])
+        .args([&["scan", "--sim", "--out", out.to_str().unwrap()], extra].concat())
         .stdout(std::process::Stdio::null())
         .stderr(std::process::Stdio::null())
         .spawn()
         .unwrap();
-    // Kill it with SIGKILL once a random number of samples are on disk.
-    let kill_after = rand::rng().random_range(20..1500);
     let part = out.join("samples.csv.part");
     let t0 = Instant::now();
     loop {
         let rows = std::fs::read_to_string(&part).map(|t| t.lines().count()).unwrap_or(0);
-        if rows > kill_after || t0.elapsed() > Duration::from_secs(120) {
+        if rows > lines || t0.elapsed() > Duration::from_secs(120) {
             break;
         }
-        std::thread::sleep(Duration::from_millis(5));
+        std::thread::sleep(Duration::from_millis(2));
     }
     child.kill().unwrap();
     child.wait().unwrap();
     assert!(!out.join("samples.csv").exists(), "the scan finished before it was killed");
+}
+
+#[test]
+fn a_scan_killed_at_a_random_point_resumes_to_exactly_the_grid() {
+    use rand::Rng;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scan");
+    // Killed once a random number of samples are on disk.
+    let kill_after = rand::rng().random_range(20..1500);
+    scan_killed(&out, &[], kill_after);
+    let part = out.join("samples.csv.part");
 
     let o = gonio(&["scan", "--resume", out.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", text(&o));
@@ -235,4 +242,37 @@ fn a_scan_killed_at_a_random_point_resumes_to_exactly_the_grid() {
     let again = gonio(&["scan", "--resume", out.to_str().unwrap()]);
     assert!(!again.status.success());
     assert!(text(&again).contains("complete scan"));
+}
+
+#[test]
+fn a_sweep_scan_killed_at_a_random_point_resumes_to_every_row_once_and_whole() {
+    use rand::Rng;
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("sweep");
+    // Some 90 samples a row, 111 rows: killed within one of them or between.
+    let kill_after = rand::rng().random_range(50..9000);
+    scan_killed(&out, &["--sweep"], kill_after);
+    let o = gonio(&["scan", "--resume", out.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    // Each row's samples stand together, once: the row cut short by the kill
+    // was dropped and swept again.
+    let idx = csv_indices(&out.join("samples.csv"));
+    let mut runs: Vec<(u32, usize)> = Vec::new();
+    for i in &idx {
+        match runs.last_mut() {
+            Some((r, n)) if r == i => *n += 1,
+            _ => runs.push((*i, 1)),
+        }
+    }
+    let rows: BTreeSet<u32> = runs.iter().map(|r| r.0).collect();
+    assert_eq!(rows.len(), runs.len(), "a row stored twice (killed after {kill_after} samples)");
+    assert_eq!(
+        rows,
+        (0..111).collect(),
+        "rows missing after resuming (killed after {kill_after} samples)"
+    );
+    assert!(runs.iter().all(|r| r.1 > 20), "a row cut short: {runs:?}");
+    let run: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
+    assert_eq!(run["counts"]["measured"].as_u64(), Some(111));
+    assert_eq!(run["counts"]["swept_samples"].as_u64(), Some(idx.len() as u64));
 }
