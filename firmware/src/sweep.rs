@@ -220,8 +220,8 @@ pub fn check(cfg: &HeadConfig, periods_per_sample: u16, speed_dps: f32, lobe: Op
     if let Some(l) = lobe {
         let slow = l.extent_fraction * l.width_deg * chop_hz / periods_per_sample as f32;
         let arm = &cfg.axes[Axis::Arm.index()];
-        let travel = arm.max_deg - arm.min_deg;
-        if !l.valid() || !speed_ok(slow) || travel / slow.min(speed_dps) > SweepRequest::DURATION_MAX_S {
+        let (travel, slowest) = (arm.max_deg - arm.min_deg, slow.min(speed_dps).min(arm.max_speed_dps));
+        if !l.valid() || !speed_ok(slow) || travel / slowest > SweepRequest::DURATION_MAX_S {
             return Err(Fault::InvalidValue(Field::SweepLobe));
         }
     }
@@ -388,6 +388,12 @@ mod tests {
         assert_eq!(ok(lobe(0.05, 0.01), 230.0), Err(Fault::InvalidValue(Field::SweepLobe)));
         // A chop of 1 Hz: 8 s samples.
         assert_eq!(ok(lobe(0.05, 0.25), 1.0), Err(Fault::InvalidValue(Field::SweepLobe)));
+        // At the bound: the arm's travel in 3 000 s at a hundredth of the
+        // width a sample (8 periods at 230 Hz).
+        let arm = &REFERENCE.axes[Axis::Arm.index()];
+        let width = (arm.max_deg - arm.min_deg) / SweepRequest::DURATION_MAX_S * 8.0 / (0.01 * 230.0);
+        assert_eq!(ok(lobe(width * 1.01, 0.01), 230.0), Ok(()));
+        assert_eq!(ok(lobe(width * 0.99, 0.01), 230.0), Err(Fault::InvalidValue(Field::SweepLobe)));
         for bad in [lobe(f32::NAN, 0.25), lobe(1.0, 0.0), lobe(1.0, 1.5), lobe(f32::INFINITY, 0.25)] {
             assert_eq!(ok(bad, 230.0), Err(Fault::InvalidValue(Field::SweepLobe)), "{bad:?}");
         }

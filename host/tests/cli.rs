@@ -127,10 +127,15 @@ fn a_sweep_scan_takes_its_lobe_width_from_a_fit_file() {
 }
 
 fn csv_indices(path: &Path) -> Vec<u32> {
+    csv_column(path, "index")
+}
+
+/// A column of numbers of a samples file.
+fn csv_column(path: &Path, name: &str) -> Vec<u32> {
     let text = std::fs::read_to_string(path).unwrap();
     let mut lines = text.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = header.iter().position(|h| *h == "index").unwrap();
+    let col = header.iter().position(|h| *h == name).unwrap();
     lines.map(|l| l.split(',').nth(col).unwrap().parse().unwrap()).collect()
 }
 
@@ -254,13 +259,23 @@ fn a_sweep_scan_killed_at_a_random_point_resumes_to_every_row_once_and_whole() {
     scan_killed(&out, &["--sweep"], kill_after);
     let o = gonio(&["scan", "--resume", out.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", text(&o));
-    // Each row's samples stand together, once: the row cut short by the kill
-    // was dropped and swept again.
-    let idx = csv_indices(&out.join("samples.csv"));
+    // Each row's samples stand together, once, and whole: consecutive
+    // sample numbers of one sweep (the last row stored before the kill was
+    // dropped and swept again; kept beside its first sweep, its samples
+    // would continue the row with the new run's numbers).
+    let path = out.join("samples.csv");
+    let (idx, seq) = (csv_indices(&path), csv_column(&path, "seq"));
     let mut runs: Vec<(u32, usize)> = Vec::new();
-    for i in &idx {
+    for (k, i) in idx.iter().enumerate() {
         match runs.last_mut() {
-            Some((r, n)) if r == i => *n += 1,
+            Some((r, n)) if r == i => {
+                assert_eq!(
+                    seq[k],
+                    seq[k - 1] + 1,
+                    "row {i} is not one sweep (killed after {kill_after} samples)"
+                );
+                *n += 1;
+            }
             _ => runs.push((*i, 1)),
         }
     }

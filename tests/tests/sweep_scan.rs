@@ -217,6 +217,7 @@ async fn a_row_whose_slow_stretch_overflows_the_step_queue_runs_slow_all_along()
         assert_eq!(blocks.iter().any(|&n| n > QUEUE), crossing(o), "row {o}: {blocks:?} blocks");
     }
     let (_, by_row) = scan(SimConfig::default(), &spec).await;
+    assert_eq!(by_row.keys().copied().collect::<Vec<_>>(), sweepable(&spec));
     check_whole(&spec, &by_row);
     for (&o, samples) in &by_row {
         let extents: Vec<f32> = samples.iter().map(|s| s.extent_deg.unwrap()).collect();
