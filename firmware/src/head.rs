@@ -463,7 +463,7 @@ impl<B: Board> Head<B> {
     fn check_sweep(&self, periods_per_sample: u16, speed_dps: f32, lobe: Option<&SweepLobe>) -> Reply<()> {
         let chop_hz = self.detector.settings().chop_hz;
         sweep::check(&self.cfg, periods_per_sample, speed_dps, lobe, chop_hz)?;
-        if self.detector.settings().chop_hz > SweepRequest::CHOP_MAX_HZ {
+        if chop_hz > SweepRequest::CHOP_MAX_HZ {
             return Err(Fault::InvalidValue(Field::ChopFrequency));
         }
         Ok(())
@@ -476,13 +476,12 @@ impl<B: Board> Head<B> {
     pub(crate) async fn sweep_turn(&mut self, row: &SweepRow, at: ScanPosition) -> Reply<SweepTurn> {
         let Some(mut sw) = self.sweeping.take() else {
             self.check_sweep(row.periods_per_sample, row.speed_dps, row.lobe.as_ref())?;
-            let (from, to) = sweep::row_ends(&self.cfg, row)?;
-            let speed = sweep::row_speed(&self.cfg, row);
-            let (start, end, limits) = self.stage_path(&from, &to, speed)?;
-            let sample_s = row.periods_per_sample as f32 / self.detector.settings().chop_hz;
-            let levels = sweep::row_levels(row, &from, &to, speed, sample_s);
+            let p = sweep::row_plan(&self.cfg, row, self.detector.settings().chop_hz)?;
+            if !self.pos.all_homed() {
+                return Err(Fault::NotHomed);
+            }
             self.sweeping = Some(
-                self.begin_sweep(row.periods_per_sample, (limits, &levels), start, end, Some(at))
+                self.begin_sweep(row.periods_per_sample, (p.limits, &p.levels), p.start, p.end, Some(at))
                     .await?,
             );
             return Ok(SweepTurn::Begun);

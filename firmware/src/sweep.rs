@@ -129,6 +129,39 @@ pub fn row_ends(cfg: &HeadConfig, row: &SweepRow) -> Result<(AxisAngles, AxisAng
     Ok(if row.outward { (a, b) } else { (b, a) })
 }
 
+/// What a sweep scan's row runs, worked out once for the head
+/// (`Head::sweep_turn`) and for the host's estimate alike: the stage targets
+/// of its start and end, the axes' limits at its speed and its stretches.
+pub struct RowPlan {
+    pub start: [i32; 3],
+    pub end: [i32; 3],
+    pub limits: [Limits; 3],
+    pub levels: Levels,
+}
+
+impl RowPlan {
+    /// The microsteps each axis moves from the row's start to its end.
+    pub fn delta(&self) -> [i32; 3] {
+        [0, 1, 2].map(|i| self.end[i] - self.start[i])
+    }
+}
+
+/// The plan of a sweep scan's row ([`row_ends`], [`row_speed`], [`limits`],
+/// [`row_levels`]) for samples of its periods at `chop_hz`.
+pub fn row_plan(cfg: &HeadConfig, row: &SweepRow, chop_hz: f32) -> Result<RowPlan, Fault> {
+    let (from, to) = row_ends(cfg, row)?;
+    let speed = row_speed(cfg, row);
+    let (start, end) = (motion::target_steps(cfg, &from), motion::target_steps(cfg, &to));
+    let limits = limits(cfg, [0, 1, 2].map(|i| end[i] - start[i]), speed)?;
+    let levels = row_levels(row, &from, &to, speed, row.periods_per_sample as f32 / chop_hz);
+    Ok(RowPlan {
+        start,
+        end,
+        limits,
+        levels,
+    })
+}
+
 /// The speed a sweep scan's row runs at: its own, at most the arm's limit
 /// (the arm alone moves).
 pub fn row_speed(cfg: &HeadConfig, row: &SweepRow) -> f32 {

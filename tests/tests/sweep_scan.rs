@@ -207,13 +207,8 @@ async fn a_row_whose_slow_stretch_overflows_the_step_queue_runs_slow_all_along()
     let spec = slowed(0.05, 30.0);
     let crossing = |o: u32| row(&spec, o).dphi_deg.abs() == 180.0;
     for o in sweepable(&spec) {
-        let r = row(&spec, o);
-        let (a, b) = sweep::row_ends(&REFERENCE, &r).unwrap();
-        let (s, e) = (motion::target_steps(&REFERENCE, &a), motion::target_steps(&REFERENCE, &b));
-        let delta = [0, 1, 2].map(|i| e[i] - s[i]);
-        let limits = sweep::limits(&REFERENCE, delta, r.speed_dps).unwrap();
-        let levels = sweep::row_levels(&r, &a, &b, r.speed_dps, 8.0 / 230.0);
-        let blocks = motion::axis_blocks(&REFERENCE, delta, limits, &levels, 1_000_000);
+        let p = sweep::row_plan(&REFERENCE, &row(&spec, o), 230.0).unwrap();
+        let blocks = motion::axis_blocks(&REFERENCE, p.delta(), p.limits, &p.levels, 1_000_000);
         assert_eq!(blocks.iter().any(|&n| n > QUEUE), crossing(o), "row {o}: {blocks:?} blocks");
     }
     let (_, by_row) = scan(SimConfig::default(), &spec).await;

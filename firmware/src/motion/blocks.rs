@@ -251,7 +251,7 @@ mod tests {
     fn a_row_slowed_in_its_lobes_stays_within_a_tick_in_few_blocks() {
         // Slow near the retro lobe, fast, slow across the mirror lobe, fast.
         let caps = [(4_000, 3_000.0), (14_000, 12_000.0), (20_000, 5_000.0), (34_000, 12_000.0)];
-        let t = Profile::levels(34_000, 24_000.0, &caps);
+        let t = Profile::levels(34_000, 24_000.0, caps);
         let (blocks, worst) = schedule(&t);
         assert!(worst <= 1.0, "{worst} ticks");
         assert!(blocks.len() <= super::super::executor::QUEUE, "{} blocks", blocks.len());

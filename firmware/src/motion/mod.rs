@@ -83,17 +83,13 @@ pub fn ramp(axis: &AxisConfig, n: u32, limits: Limits, levels: &[Level]) -> Prof
     if levels.is_empty() {
         return Profile::new(n, v, a);
     }
-    let caps: heapless::Vec<(u32, f64), MAX_LEVELS> = levels
-        .iter()
-        .take(MAX_LEVELS)
-        .map(|l| {
-            (
-                libm::round(l.until.clamp(0.0, 1.0) as f64 * n as f64) as u32,
-                v * l.scale.clamp(0.0, 1.0) as f64,
-            )
-        })
-        .collect();
-    Profile::levels(n, a, &caps)
+    let caps = levels.iter().map(|l| {
+        (
+            libm::round(l.until.clamp(0.0, 1.0) as f64 * n as f64) as u32,
+            v * l.scale.clamp(0.0, 1.0) as f64,
+        )
+    });
+    Profile::levels(n, a, caps)
 }
 
 /// A stretch of a move: up to `until`, a fraction (0–1) of its way, at most

@@ -75,7 +75,7 @@ impl Profile {
     /// One stretch at up to `v`. `v` and `a` must be positive and finite (a
     /// `HeadConfig`'s are).
     pub fn new(n: u32, v: f64, a: f64) -> Self {
-        Self::levels(n, a, &[(n, v)])
+        Self::levels(n, a, [(n, v)])
     }
 
     /// Consecutive stretches `(last step, speed cap)`: the first from the
@@ -84,13 +84,15 @@ impl Profile {
     /// Each junction is passed at the lower cap of its two stretches, or
     /// lower where the acceleration limit asks it (the stretches before and
     /// after too short to ramp): no stretch is ever run above its cap.
-    pub fn levels(n: u32, a: f64, caps: &[(u32, f64)]) -> Self {
+    pub fn levels(n: u32, a: f64, caps: impl IntoIterator<Item = (u32, f64)>) -> Self {
         // Stretch ends (steps) and caps, empty stretches dropped.
         let mut ends: Vec<(f64, f64), MAX_LEVELS> = Vec::new();
         let mut from = 0u32;
-        for (i, &(end, cap)) in caps.iter().enumerate() {
-            let end = if i + 1 == caps.len() { n } else { end.min(n) };
-            if end <= from && i + 1 < caps.len() {
+        let mut caps = caps.into_iter().peekable();
+        while let Some((end, cap)) = caps.next() {
+            let last = caps.peek().is_none();
+            let end = if last { n } else { end.min(n) };
+            if end <= from && !last {
                 continue;
             }
             if ends.is_full() {
@@ -211,7 +213,7 @@ mod tests {
     fn slow_stretches_are_run_at_their_cap_without_stopping() {
         let (a, fast, slow) = (24_000.0, 12_000.0, 4_000.0);
         let caps = [(10_000, slow), (30_000, fast), (40_000, slow), (60_000, fast)];
-        let p = Profile::levels(60_000, a, &caps);
+        let p = Profile::levels(60_000, a, caps);
         let v = speeds(&p);
         for (k, s) in v.iter().enumerate() {
             let step = k as u32 + 1;
@@ -234,7 +236,7 @@ mod tests {
     fn short_stretches_are_passed_below_their_neighbours_caps() {
         // Too short to reach either cap: the profile stays continuous.
         let caps = [(100, 1_500.0), (300, 12_000.0), (400, 1_500.0)];
-        let p = Profile::levels(400, 24_000.0, &caps);
+        let p = Profile::levels(400, 24_000.0, caps);
         let mut last = 0.0;
         for k in 1..=400 {
             let t = p.step_time(k);
@@ -264,7 +266,7 @@ mod tests {
     #[test]
     fn too_many_stretches_join_the_last_at_its_lowest_cap() {
         let caps: std::vec::Vec<(u32, f64)> = (1..=8).map(|i| (i * 1_000, if i == 7 { 1_000.0 } else { 8_000.0 })).collect();
-        let p = Profile::levels(8_000, 24_000.0, &caps);
+        let p = Profile::levels(8_000, 24_000.0, caps.iter().copied());
         let v = speeds(&p);
         assert!(v[6_000..].iter().all(|&s| s <= 1_000.0 * (1.0 + 1e-6)));
     }

@@ -97,24 +97,17 @@ pub fn sweep_time(
         let Some(Visit::Row(row)) = spec.visit(i, order) else {
             continue;
         };
-        let Ok((a, b)) = sweep::row_ends(cfg, &row) else {
+        let Ok(p) = sweep::row_plan(cfg, &row, chop_hz) else {
             t.skipped += 1;
             continue;
         };
-        let (start, end) = (target_steps(cfg, &a), target_steps(cfg, &b));
-        let (to_start, across) = ([0, 1, 2].map(|k| start[k] - at[k]), [0, 1, 2].map(|k| end[k] - start[k]));
-        let speed = sweep::row_speed(cfg, &row);
-        let Ok(limits) = sweep::limits(cfg, across, speed) else {
-            t.skipped += 1;
-            continue;
-        };
-        let levels = sweep::row_levels(&row, &a, &b, speed, row.periods_per_sample as f32 / chop_hz);
+        let (to_start, across, limits) = ([0, 1, 2].map(|k| p.start[k] - at[k]), p.delta(), p.limits);
         // As `motion::plan` queues it: the stretches, or the slowest all
         // along where they overflow the queue; planned before the arm starts.
-        let fallback = slowest(&levels);
-        let mut blocks = axis_blocks(cfg, across, limits, &levels, STEP_TICK_HZ);
+        let fallback = slowest(&p.levels);
+        let mut blocks = axis_blocks(cfg, across, limits, &p.levels, STEP_TICK_HZ);
         let levels = match blocks.iter().all(|&b| b <= QUEUE) {
-            true => &levels[..],
+            true => &p.levels[..],
             false => {
                 blocks = axis_blocks(cfg, across, limits, &fallback, STEP_TICK_HZ);
                 &fallback[..]
@@ -125,7 +118,7 @@ pub fn sweep_time(
         t.settle_s += settle_s + prepare_s;
         t.integration_s += profile_s(cfg, across, limits, levels);
         t.measured += 1;
-        at = end;
+        at = p.end;
     }
     t
 }

@@ -277,17 +277,10 @@ fn sweep_path() {
             periods_per_sample: 8,
             lobe: Some(lobe),
         };
-        let planned = black_box(measure("sweep_row", || {
-            sweep::row_ends(&REFERENCE, &row).and_then(|(a, b)| {
-                let (s, e) = (motion::target_steps(&REFERENCE, &a), motion::target_steps(&REFERENCE, &b));
-                let delta = [0, 1, 2].map(|i| e[i] - s[i]);
-                let limits = sweep::limits(&REFERENCE, delta, row.speed_dps)?;
-                Ok((delta, limits, sweep::row_levels(&row, &a, &b, row.speed_dps, 8.0 / 230.0)))
-            })
-        }));
-        if let Ok((delta, limits, levels)) = planned {
+        let planned = black_box(measure("sweep_row", || sweep::row_plan(&REFERENCE, &row, 230.0)));
+        if let Ok(p) = planned {
             let arm = Axis::Arm.index();
-            let t = motion::ramp(&REFERENCE.axes[arm], delta[arm].unsigned_abs(), limits[arm], &levels);
+            let t = motion::ramp(&REFERENCE.axes[arm], p.delta()[arm].unsigned_abs(), p.limits[arm], &p.levels);
             let mut blocks = ProfileBlocks::new(&t, TICK_HZ);
             while black_box(measure("move_block", || blocks.next())).is_some() {}
         }
