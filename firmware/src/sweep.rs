@@ -293,7 +293,7 @@ mod tests {
     use super::*;
     use crate::config::REFERENCE;
     use crate::kinematics;
-    use gonio_shared::Geometry;
+    use gonio_shared::{AngleRange, Geometry, ScanSpec, SweepScan, Visit};
     use proptest::prelude::*;
 
     /// The path's worst polar angle and whether it enters the blind zone,
@@ -367,6 +367,40 @@ mod tests {
                 let horizon = kinematics::forward(&AxisAngles { psi_deg: a.omega_deg + 90.0, ..a });
                 let off = crate::units::wrap_deg((horizon.dphi_deg - dp) as f64).abs();
                 prop_assert!((horizon.theta_o_deg - 90.0).abs() < 0.01 && off < 0.05, "{horizon:?} for Δφ {dp}");
+            }
+        }
+    }
+
+    proptest! {
+        /// Neighbouring rows of a sweep scan lie nowhere farther apart than
+        /// the grid's Δφ step: the angle between their planes, each through
+        /// the laser and a point of the row as the forward kinematics place
+        /// it, is at most the step (rows evenly spaced at the horizon
+        /// instead are 19.4° apart next to the plane of incidence at
+        /// θi = 60° for a 10° step).
+        #[test]
+        fn neighbouring_rows_are_at_most_the_dphi_step_apart(ti in 0.5f32..80.0, step in 2.0f32..40.0) {
+            let spec = ScanSpec {
+                theta_i_deg: heapless::Vec::from_slice(&[ti]).unwrap(),
+                theta_o: AngleRange::new(0.0, 87.0, 3.0),
+                dphi: AngleRange::new(-180.0, 180.0, step),
+                first_order: 0,
+                sweep: Some(SweepScan { speed_dps: 30.0, periods_per_sample: 8, lobe: None }),
+            };
+            let normal = |i: u32| {
+                let Some(Visit::Row(row)) = spec.visit(i, 0) else { return None };
+                let (a, _) = row_ends(&REFERENCE, &row).ok()?;
+                let g = kinematics::forward(&AxisAngles { psi_deg: 60.0, ..a });
+                let (i, o, d) = (g.theta_i_deg as f64 * DEG, g.theta_o_deg as f64 * DEG, g.dphi_deg as f64 * DEG);
+                let (l, v) = ([sin(i), 0.0, cos(i)], [sin(o) * cos(d), sin(o) * sin(d), cos(o)]);
+                let n = [l[1] * v[2] - l[2] * v[1], l[2] * v[0] - l[0] * v[2], l[0] * v[1] - l[1] * v[0]];
+                let norm = libm::sqrt(n.iter().map(|x| x * x).sum::<f64>());
+                Some(n.map(|x| x / norm))
+            };
+            for k in 1..spec.len() {
+                let (Some(p), Some(q)) = (normal(k - 1), normal(k)) else { continue };
+                let apart = acos(p.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>().clamp(-1.0, 1.0)) / DEG;
+                prop_assert!(apart <= step as f64 + 0.01, "rows {} and {k} at θi {ti}: {apart}° apart", k - 1);
             }
         }
     }

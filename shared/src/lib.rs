@@ -16,6 +16,7 @@ pub mod icd;
 pub mod identity;
 pub mod mechanics;
 pub mod models;
+pub mod row_turn;
 pub mod safety;
 pub mod sample;
 pub mod sanity;

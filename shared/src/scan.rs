@@ -13,6 +13,7 @@
 
 use crate::fault::{Fault, Field};
 use crate::geometry::Geometry;
+use crate::row_turn;
 use crate::sample::Sample;
 use crate::sweep::{SweepLobe, SweptSample};
 use postcard_schema::Schema;
@@ -91,8 +92,10 @@ pub struct SweepScan {
 /// direction that meets the horizon at azimuth `dphi_deg`, from just outside
 /// the blind zone around the retro direction out to `theta_o_stop_deg`
 /// (`outward`) or back. Moving one axis, the cheapest path the kinematics
-/// offer, keeps θi exact; the rows of every Δφ cover the hemisphere, densest
-/// around the retro direction, where retroreflectors put their light.
+/// offer, keeps θi exact; the rows of a scan, turned evenly about the laser
+/// ([`crate::row_turn`]), cover the hemisphere no sparser anywhere than the
+/// grid's Δφ step, densest around the retro direction, where
+/// retroreflectors put their light.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SweepRow {
     pub theta_i_deg: f32,
@@ -211,19 +214,21 @@ impl ScanSpec {
     }
 
     /// What canonical index `index` is when visited at position `order`: a
-    /// point, or a sweep scan's row (θi and Δφ of the grid, out to θo's last
-    /// value short of 90°, outward at an even position and back at an odd
-    /// one, so consecutive rows join near the retro direction or near the
-    /// horizon).
+    /// point, or a sweep scan's row (θi of the grid, its rows turned evenly
+    /// about the laser across the Δφ span, [`crate::row_turn`], out to θo's
+    /// last value short of 90°, outward at an even position and back at an
+    /// odd one, so consecutive rows join near the retro direction or near
+    /// the horizon).
     pub fn visit(&self, index: u32, order: u32) -> Option<Visit> {
         let Some(how) = self.sweep else {
             return self.point(index).map(Visit::Point);
         };
-        let (_, a, _, c) = self.locate(index, |d| d.n_dp)?;
+        let (d, a, _, c) = self.locate(index, |d| d.n_dp)?;
         let stop = self.row_stop()?;
+        let ti = self.theta_i_deg[a as usize];
         Some(Visit::Row(SweepRow {
-            theta_i_deg: self.theta_i_deg[a as usize],
-            dphi_deg: self.dphi.at(c),
+            theta_i_deg: ti,
+            dphi_deg: row_turn::row_dphi_deg(ti, self.dphi.at(0), self.dphi.at(d.n_dp - 1), c, d.n_dp),
             theta_o_stop_deg: stop,
             outward: order % 2 == 0,
             speed_dps: how.speed_dps,

@@ -16,9 +16,11 @@ pub struct GridArgs {
     /// Azimuth differences Δφ as START:STOP:STEP (degrees, STOP included).
     #[arg(long, value_name = "RANGE", default_value = "-180:180:10", allow_hyphen_values = true)]
     pub dphi: String,
-    /// Measure while moving: every (θi, Δφ) row swept over the θo span in
-    /// one move, its samples tagged with where the stages were (the θo STEP
-    /// is then unused).
+    /// Measure while moving: a row per θi and Δφ value, each swept over the
+    /// θo span in one move, its samples tagged with where the stages were
+    /// (the θo STEP is then unused); the rows of a θi turned evenly about
+    /// the laser, the Δφ STEP apart, between those meeting the horizon at
+    /// the Δφ START and STOP.
     #[arg(long)]
     pub sweep: bool,
     /// Top speed of the arm in a sweep (deg/s), at most its limit (30 deg/s

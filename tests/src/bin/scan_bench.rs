@@ -33,8 +33,10 @@
 //!   the stage zeros; `z_scatter`: the scatter alone, as if both scans
 //!   shared those inputs' errors exactly); `params_within_2sigma` when every
 //!   |z| ≤ 2 (`params_within_2sigma_of_scatter` for `z_scatter`). Beside them
-//!   the fit of the grid at twice its density both ways (`fine_grid`): where
-//!   the two disagree, which one finer sampling sides with. Both fits weigh
+//!   the fit of the grid at twice its density both ways (`fine_grid`): how
+//!   far a model outside the material's family moves with the density the
+//!   grid and the sweep scan share (their rows the grid's Δφ step apart at
+//!   most, `gonio_shared::row_turn`). Both fits weigh
 //!   every sample by the solid angle it stands for (`Weighting::Area`), on
 //!   the domain both scans see (beyond the blind zone around the retro
 //!   direction), from calibrated data whose swept samples are corrected for

@@ -29,7 +29,7 @@ use gonio_shared::icd::{HomeEndpoint, HomeRequest, PlanEndpoint, SanityEndpoint,
 use gonio_shared::wire::check;
 use gonio_shared::{
     AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, SweepLobe, SweepRequest,
-    SweepRow, PLAN_CHUNK, PLAN_QUEUE,
+    SweepScan, Visit, PLAN_CHUNK, PLAN_QUEUE,
 };
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Topic};
@@ -259,26 +259,31 @@ fn sweep_path() {
         mark("sweep_refused", BEGIN);
         return;
     }
-    // A sweep scan's row in place of the inverse kinematics: its ends, their
-    // stage targets, the arm's limits and its stretches across a narrow
-    // lobe, in the first turn of the row; then the blocks of its move
-    // (`move_block`), slowed down across the lobes.
-    let lobe = SweepLobe {
-        width_deg: 1.8,
-        extent_fraction: 0.25,
-    };
-    for (ti, dp) in [(15.0, -180.0), (30.0, 90.0), (60.0, 10.0), (60.0, -120.0), (30.0, 180.0)] {
-        let row = SweepRow {
-            theta_i_deg: ti,
-            dphi_deg: dp,
-            theta_o_stop_deg: 87.0,
-            outward: true,
+    // A sweep scan's row in place of the inverse kinematics: which row its
+    // index is (where it meets the horizon, its rows turned evenly about the
+    // laser), its ends, their stage targets, the arm's limits and its
+    // stretches across a narrow lobe, in the first turn of the row; then the
+    // blocks of its move (`move_block`), slowed down across the lobes.
+    let swept = ScanSpec {
+        sweep: Some(SweepScan {
             speed_dps: 30.0,
             periods_per_sample: 8,
-            lobe: Some(lobe),
-        };
-        let planned = black_box(measure("sweep_row", || sweep::row_plan(&REFERENCE, &row, 230.0)));
-        if let Ok(p) = planned {
+            lobe: Some(SweepLobe {
+                width_deg: 1.8,
+                extent_fraction: 0.25,
+            }),
+        }),
+        ..ScanSpec::belcour()
+    };
+    // θi 15° at Δφ −180°, 30° at 90° and 180°, 60° at 10° and −120° (37
+    // rows an incidence): the ends of the span, a row between, and the
+    // longest rows across the mirror lobe.
+    for index in [0, 64, 73, 93, 80] {
+        let planned = black_box(measure("sweep_row", || match swept.visit(index, 0) {
+            Some(Visit::Row(row)) => sweep::row_plan(&REFERENCE, &row, 230.0).ok(),
+            _ => None,
+        }));
+        if let Some(p) = planned {
             let arm = Axis::Arm.index();
             let t = motion::ramp(&REFERENCE.axes[arm], p.delta()[arm].unsigned_abs(), p.limits[arm], &p.levels);
             let mut blocks = ProfileBlocks::new(&t, TICK_HZ);
