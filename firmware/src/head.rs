@@ -25,7 +25,7 @@ use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
     Axis, AxisAngles, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Field, Geometry, HeadState, Identity,
     PlanChunk, PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, SweepLobe,
-    SweepReport, SweepRequest, SweepRow, SweptSample, Visit,
+    SweepReport, SweepRequest, SweepRow, SweptSample,
 };
 
 /// Who this head is; the board and the serial come from the binary.
@@ -639,9 +639,9 @@ impl<B: Board> Head<B> {
             return Err(f);
         }
         let total = spec.validate()?;
-        if let Some(Visit::Row(row)) = spec.visit(0, 0) {
+        if let Some(how) = spec.sweep {
             // Every row shares these: refused here, not row by row.
-            self.check_sweep(row.periods_per_sample, row.speed_dps, row.lobe.as_ref())?;
+            self.check_sweep(how.periods_per_sample, how.speed_dps, how.lobe.as_ref())?;
         }
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);

@@ -373,34 +373,52 @@ mod tests {
 
     proptest! {
         /// Neighbouring rows of a sweep scan lie nowhere farther apart than
-        /// the grid's Δφ step: the angle between their planes, each through
-        /// the laser and a point of the row as the forward kinematics place
-        /// it, is at most the step (rows evenly spaced at the horizon
-        /// instead are 19.4° apart next to the plane of incidence at
-        /// θi = 60° for a 10° step).
+        /// the grid's Δφ step where its span closes the circle, from any
+        /// start, the last row beside the first included: the angle between
+        /// their planes, each through the laser and a point of the row as
+        /// the forward kinematics place it, is at most the step (rows evenly
+        /// spaced at the horizon instead are 19.4° apart next to the plane
+        /// of incidence at θi = 60° for a 10° step). Over a part of the
+        /// circle they are turned evenly, at most 1/cos θi times the step
+        /// apart.
         #[test]
-        fn neighbouring_rows_are_at_most_the_dphi_step_apart(ti in 0.5f32..80.0, step in 2.0f32..40.0) {
-            let spec = ScanSpec {
-                theta_i_deg: heapless::Vec::from_slice(&[ti]).unwrap(),
-                theta_o: AngleRange::new(0.0, 87.0, 3.0),
-                dphi: AngleRange::new(-180.0, 180.0, step),
-                first_order: 0,
-                sweep: Some(SweepScan { speed_dps: 30.0, periods_per_sample: 8, lobe: None }),
-            };
-            let normal = |i: u32| {
-                let Some(Visit::Row(row)) = spec.visit(i, 0) else { return None };
-                let (a, _) = row_ends(&REFERENCE, &row).ok()?;
-                let g = kinematics::forward(&AxisAngles { psi_deg: 60.0, ..a });
-                let (i, o, d) = (g.theta_i_deg as f64 * DEG, g.theta_o_deg as f64 * DEG, g.dphi_deg as f64 * DEG);
-                let (l, v) = ([sin(i), 0.0, cos(i)], [sin(o) * cos(d), sin(o) * sin(d), cos(o)]);
-                let n = [l[1] * v[2] - l[2] * v[1], l[2] * v[0] - l[0] * v[2], l[0] * v[1] - l[1] * v[0]];
-                let norm = libm::sqrt(n.iter().map(|x| x * x).sum::<f64>());
-                Some(n.map(|x| x / norm))
-            };
-            for k in 1..spec.len() {
-                let (Some(p), Some(q)) = (normal(k - 1), normal(k)) else { continue };
-                let apart = acos(p.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>().clamp(-1.0, 1.0)) / DEG;
-                prop_assert!(apart <= step as f64 + 0.01, "rows {} and {k} at θi {ti}: {apart}° apart", k - 1);
+        fn neighbouring_rows_are_at_most_the_dphi_step_apart(
+            ti in 0.5f32..80.0, step in 2.0f32..40.0, start in -180.0f32..180.0, part in 0.0f32..1.0,
+        ) {
+            let whole = (360.0 / step) as u32 + 1;
+            for n in [whole, 2 + ((whole - 3) as f32 * part) as u32] {
+                let spec = ScanSpec {
+                    theta_i_deg: heapless::Vec::from_slice(&[ti]).unwrap(),
+                    theta_o: AngleRange::new(0.0, 87.0, 3.0),
+                    dphi: AngleRange::new(start, start + step * (n - 1) as f32, step),
+                    first_order: 0,
+                    sweep: Some(SweepScan { speed_dps: 30.0, periods_per_sample: 8, lobe: None }),
+                };
+                // Positions 1..=n are the rows (0 is the retro point).
+                prop_assert_eq!(spec.len(), n + 1);
+                let normal = |i: u32| {
+                    let Some(Visit::Row(row)) = spec.visit(i, 0) else { return None };
+                    let (a, _) = row_ends(&REFERENCE, &row).ok()?;
+                    let g = kinematics::forward(&AxisAngles { psi_deg: 60.0, ..a });
+                    let (i, o, d) = (g.theta_i_deg as f64 * DEG, g.theta_o_deg as f64 * DEG, g.dphi_deg as f64 * DEG);
+                    let (l, v) = ([sin(i), 0.0, cos(i)], [sin(o) * cos(d), sin(o) * sin(d), cos(o)]);
+                    let n = [l[1] * v[2] - l[2] * v[1], l[2] * v[0] - l[0] * v[2], l[0] * v[1] - l[1] * v[0]];
+                    let norm = libm::sqrt(n.iter().map(|x| x * x).sum::<f64>());
+                    Some(n.map(|x| x / norm))
+                };
+                let apart = |p: [f64; 3], q: [f64; 3]| acos(p.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>().clamp(-1.0, 1.0)) / DEG;
+                let closing = n == whole;
+                let pairs = (1..n).map(|k| (k, k + 1)).chain(closing.then_some((n, 1)));
+                let gaps: Vec<f64> = pairs.filter_map(|(a, b)| Some(apart(normal(a)?, normal(b)?))).collect();
+                prop_assert!(gaps.len() as u32 >= n - 1, "rows refused: {gaps:?}");
+                let bound = match closing {
+                    true => step as f64,
+                    false => step as f64 / cos(ti as f64 * DEG),
+                };
+                prop_assert!(gaps.iter().all(|&g| g <= bound + 0.01), "θi {ti}, {n} rows from {start}: {gaps:?}");
+                if !closing {
+                    prop_assert!(gaps.iter().all(|&g| (g - gaps[0]).abs() < 0.02), "not evenly turned: {gaps:?}");
+                }
             }
         }
     }

@@ -126,6 +126,47 @@ fn a_sweep_scan_takes_its_lobe_width_from_a_fit_file() {
     assert!(!o.status.success() && text(&o).contains("--sweep"), "{}", text(&o));
 }
 
+/// A sweep scan planned under an earlier protocol (its rows and retro
+/// points elsewhere) is not resumed into a mix of the two layouts; a grid
+/// scan, unchanged, is.
+#[test]
+fn a_sweep_scan_planned_under_another_protocol_is_not_resumed() {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, extra) in [("sweep", &["--sweep"][..]), ("grid", &[][..])] {
+        let out = dir.path().join(name);
+        let args = [
+            &[
+                "scan",
+                "--sim",
+                "--out",
+                out.to_str().unwrap(),
+                "--theta-i",
+                "30",
+                "--theta-o",
+                "0:60:6",
+                "--dphi",
+                "180:180:10",
+            ][..],
+            extra,
+        ]
+        .concat();
+        let o = gonio(&args);
+        assert!(o.status.success(), "{}", text(&o));
+        // Interrupted as if killed, under protocol 10.
+        std::fs::rename(out.join("samples.csv"), out.join("samples.csv.part")).unwrap();
+        let plan = out.join("scan.json");
+        let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
+        assert_eq!(json["protocol"].as_u64(), Some(gonio_shared::PROTOCOL_VERSION as u64));
+        json["protocol"] = 10.into();
+        std::fs::write(&plan, json.to_string()).unwrap();
+        let o = gonio(&["scan", "--resume", out.to_str().unwrap()]);
+        match name {
+            "sweep" => assert!(!o.status.success() && text(&o).contains("protocol 10"), "{}", text(&o)),
+            _ => assert!(o.status.success(), "{}", text(&o)),
+        }
+    }
+}
+
 fn csv_indices(path: &Path) -> Vec<u32> {
     csv_column(path, "index")
 }
@@ -250,16 +291,17 @@ fn a_scan_killed_at_a_random_point_resumes_to_exactly_the_grid() {
 }
 
 #[test]
-fn a_sweep_scan_killed_at_a_random_point_resumes_to_every_row_once_and_whole() {
+fn a_sweep_scan_killed_at_a_random_point_resumes_to_every_position_once_and_whole() {
     use rand::Rng;
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sweep");
-    // Some 90 samples a row, 111 rows: killed within one of them or between.
+    // Some 90 samples a row, 111 rows and 3 retro points (one an incidence,
+    // before its rows): killed within one of them or between.
     let kill_after = rand::rng().random_range(50..9000);
     scan_killed(&out, &["--sweep"], kill_after);
     let o = gonio(&["scan", "--resume", out.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", text(&o));
-    // Each row's samples stand together, once, and whole: consecutive
+    // Each position's samples stand together, once, and whole: consecutive
     // sample numbers of one sweep (the last row stored before the kill was
     // dropped and swept again; kept beside its first sweep, its samples
     // would continue the row with the new run's numbers).
@@ -279,15 +321,24 @@ fn a_sweep_scan_killed_at_a_random_point_resumes_to_every_row_once_and_whole() {
             _ => runs.push((*i, 1)),
         }
     }
-    let rows: BTreeSet<u32> = runs.iter().map(|r| r.0).collect();
-    assert_eq!(rows.len(), runs.len(), "a row stored twice (killed after {kill_after} samples)");
+    let positions: BTreeSet<u32> = runs.iter().map(|r| r.0).collect();
     assert_eq!(
-        rows,
-        (0..111).collect(),
-        "rows missing after resuming (killed after {kill_after} samples)"
+        positions.len(),
+        runs.len(),
+        "a position stored twice (killed after {kill_after} samples)"
     );
-    assert!(runs.iter().all(|r| r.1 > 20), "a row cut short: {runs:?}");
+    assert_eq!(
+        positions,
+        (0..114).collect(),
+        "positions missing after resuming (killed after {kill_after} samples)"
+    );
+    // Each incidence's retro point one sample, its rows many.
+    let retro = |i: u32| i % 38 == 0;
+    assert!(
+        runs.iter().all(|&(i, n)| if retro(i) { n == 1 } else { n > 20 }),
+        "a row cut short or a point measured twice: {runs:?}"
+    );
     let run: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
-    assert_eq!(run["counts"]["measured"].as_u64(), Some(111));
-    assert_eq!(run["counts"]["swept_samples"].as_u64(), Some(idx.len() as u64));
+    assert_eq!(run["counts"]["measured"].as_u64(), Some(114));
+    assert_eq!(run["counts"]["swept_samples"].as_u64(), Some(idx.len() as u64 - 3));
 }

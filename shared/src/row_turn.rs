@@ -2,9 +2,16 @@
 //! circle through the laser (the retro direction `l`), so every row's plane
 //! contains `l` and rows differ by a turn `γ` about it: two rows are nowhere
 //! farther apart than the angle between their planes, `|Δγ|`, which they
-//! reach 90° from the laser. Turned evenly, the rows of a Δφ span its step
-//! apart are never farther apart than the grid's Δφ lines are at the
-//! horizon.
+//! reach 90° from the laser. The rows of a θi are turned evenly, between the
+//! rows that meet the horizon at the Δφ span's ends, so for a span whose
+//! ends lie at 0°, ±90° or ±180° (the Belcour grid's −180°..180°) they are
+//! the Δφ step apart: never farther apart than the grid's Δφ lines are at
+//! the horizon. A span that closes the circle (its next value would be its
+//! first again, or beyond it) has its rows spread evenly around the whole
+//! turn from its first, so they are at most the step apart there too, the
+//! last beside the first included. Between other ends the turn they span
+//! is up to `1/cos θi` times the Δφ span (next to the plane of incidence),
+//! and so is their spacing.
 //!
 //! The turn fixes where the row meets the sample's horizon: with the sample
 //! tilted so that its normal lies at θi from `l`, `tan Δφ_H = cos θi·tan γ`
@@ -42,21 +49,32 @@ fn beside(angle: f32, near: f32) -> f32 {
 /// Where the `k`-th of `n` rows of a sweep scan at incidence `theta_i_deg`
 /// meets the horizon (deg), its rows turned evenly about the laser from the
 /// one meeting it at `first_deg` to the one meeting it at `last_deg` (the
-/// grid's Δφ span): those two exactly, the others between, to some
-/// 10⁻⁵°. Ten trigonometric calls in f32, the chip's own floating point
-/// (in f64, emulated on the M4, they cost a row 35 000 instructions more:
-/// `chip-bench`).
+/// grid's Δφ span of `n` values): those two exactly, the others between, to
+/// some 10⁻⁵°; or, for a span that closes the circle short of its first
+/// value again, around the whole turn from the first. Ten trigonometric
+/// calls in f32, the chip's own floating point (in f64, emulated on the M4,
+/// they cost a row 29 000 instructions more: `chip-bench`).
 pub fn row_dphi_deg(theta_i_deg: f32, first_deg: f32, last_deg: f32, k: u32, n: u32) -> f32 {
     if k == 0 || n < 2 {
         return first_deg;
     }
-    if k + 1 >= n {
+    let step = (last_deg - first_deg) / (n - 1) as f32;
+    let closes = n as f32 * step >= 360.0 - CLOSE_DEG && last_deg - first_deg < 360.0 - CLOSE_DEG;
+    if k >= n - 1 && !closes {
         return last_deg;
     }
     let cos_i = cosf(theta_i_deg * DEG);
-    let (a, b) = (turn_deg(cos_i, first_deg), turn_deg(cos_i, last_deg));
-    horizon_deg(cos_i, a + (b - a) * k as f32 / (n - 1) as f32)
+    let a = turn_deg(cos_i, first_deg);
+    let turn = match closes {
+        true => a + 360.0 * k.min(n - 1) as f32 / n as f32,
+        false => a + (turn_deg(cos_i, last_deg) - a) * k as f32 / (n - 1) as f32,
+    };
+    horizon_deg(cos_i, turn)
 }
+
+/// A span within this (deg) of a whole turn is one: the f32 rounding of its
+/// values.
+const CLOSE_DEG: f32 = 1e-3;
 
 #[cfg(test)]
 mod tests {
@@ -78,19 +96,31 @@ mod tests {
 
     proptest! {
         /// The turn and the horizon azimuth are one another's inverse, and
-        /// the rows keep the span's order and ends, beyond ±180° as well.
+        /// the rows keep the span's order from its first value, beyond ±180°
+        /// as well: to its last, or, for a span that closes the circle, a
+        /// whole turn shared evenly.
         #[test]
         fn rows_keep_their_span_in_order(
-            ti in 0.0f32..89.0, first in -400.0f32..400.0, width in -360.0f32..360.0, n in 2u32..60,
+            ti in 0.0f32..89.0, first in -400.0f32..400.0, width in 0.0f32..=360.0, n in 2u32..60,
         ) {
-            let last = first + width;
+            let (last, c) = (first + width, cosf(ti * DEG));
             let d = (first + 37.0) % 360.0 - 180.0;
-            let c = cosf(ti * DEG);
             prop_assert!((horizon_deg(c, turn_deg(c, d)) - d).abs() < 1e-3);
             let rows: Vec<f32> = (0..n).map(|k| row_dphi_deg(ti, first, last, k, n)).collect();
-            prop_assert_eq!((rows[0], rows[n as usize - 1]), (first, last));
-            let sign = width.signum();
-            prop_assert!(rows.windows(2).all(|w| (w[1] - w[0]) * sign >= -1e-3), "{rows:?}");
+            prop_assert_eq!(rows[0], first);
+            prop_assert!(rows.windows(2).all(|w| w[1] - w[0] >= -1e-3), "{rows:?}");
+            let closes = n as f32 * width / (n - 1) as f32 >= 360.0 - CLOSE_DEG && width < 360.0 - CLOSE_DEG;
+            if closes {
+                let turns: Vec<f32> = rows.iter().map(|&r| turn_deg(c, r)).collect();
+                let apart = 360.0 / n as f32;
+                prop_assert!(turns.windows(2).all(|w| (w[1] - w[0] - apart).abs() < 0.01), "{turns:?}");
+            } else {
+                prop_assert_eq!(rows[n as usize - 1], last);
+            }
+            // Past the last row, and any n: the span's ends, no overflow.
+            prop_assert_eq!(row_dphi_deg(ti, first, last, 0, 0), first);
+            let beyond = row_dphi_deg(ti, first, last, u32::MAX, n);
+            prop_assert!(beyond.is_finite() && (closes || beyond == last));
         }
     }
 }

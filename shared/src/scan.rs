@@ -3,7 +3,8 @@
 //!
 //! A sweep scan ([`SweepScan`]) measures while moving: its positions are
 //! rows ([`SweepRow`]), one per incidence and Δφ of the grid, each swept by
-//! the arm alone and yielding many swept samples.
+//! the arm alone and yielding many swept samples, and at each incidence the
+//! retro direction, which no row reaches, measured at rest.
 //!
 //! Two orders matter. The *canonical index* enumerates the grid θi-major,
 //! then θo, then Δφ; files and resumption use it. The *visit order* is what
@@ -93,9 +94,9 @@ pub struct SweepScan {
 /// the blind zone around the retro direction out to `theta_o_stop_deg`
 /// (`outward`) or back. Moving one axis, the cheapest path the kinematics
 /// offer, keeps θi exact; the rows of a scan, turned evenly about the laser
-/// ([`crate::row_turn`]), cover the hemisphere no sparser anywhere than the
-/// grid's Δφ step, densest around the retro direction, where
-/// retroreflectors put their light.
+/// ([`crate::row_turn`]: the Δφ step apart over the whole circle), cover the
+/// hemisphere densest around the retro direction, where retroreflectors put
+/// their light.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SweepRow {
     pub theta_i_deg: f32,
@@ -162,16 +163,21 @@ impl ScanSpec {
         if self.sweep.is_none() {
             return Ok(Dims { n_ti, n_to, n_dp });
         }
-        // A sweep scan's rows are its positions, one θo "column" each, and
-        // a row needs a θo short of the horizon to run to.
+        // A sweep scan's positions are, per incidence, its retro point
+        // (column 0) and its rows (one θo "column" each, columns 1..), and a
+        // row needs a θo short of the horizon to run to.
         if self.row_stop().is_none() {
             return bad;
         }
-        Ok(Dims { n_ti, n_to: 1, n_dp })
+        Ok(Dims {
+            n_ti,
+            n_to: 1,
+            n_dp: n_dp + 1,
+        })
     }
 
     /// Checks the grid and the start position; returns the number of
-    /// positions (points, or a sweep scan's rows).
+    /// positions (points, or a sweep scan's retro points and rows).
     pub fn validate(&self) -> Result<u32, Fault> {
         let d = self.dims()?;
         let n = d.n_ti * d.n_to * d.n_dp;
@@ -204,7 +210,7 @@ impl ScanSpec {
     }
 
     /// The geometry of canonical index `index` (`None` in a sweep scan,
-    /// whose positions are rows: [`ScanSpec::visit`]).
+    /// whose positions are mostly rows: [`ScanSpec::visit`]).
     pub fn point(&self, index: u32) -> Option<Geometry> {
         if self.sweep.is_some() {
             return None;
@@ -214,11 +220,15 @@ impl ScanSpec {
     }
 
     /// What canonical index `index` is when visited at position `order`: a
-    /// point, or a sweep scan's row (θi of the grid, its rows turned evenly
-    /// about the laser across the Δφ span, [`crate::row_turn`], out to θo's
-    /// last value short of 90°, outward at an even position and back at an
-    /// odd one, so consecutive rows join near the retro direction or near
-    /// the horizon).
+    /// point, or in a sweep scan an incidence's retro point (measured at
+    /// rest through the beam splitter, where no row reaches: rows begin
+    /// beyond the blind zone around it) or one of its rows (θi of the grid,
+    /// its rows turned evenly about the laser across the Δφ span,
+    /// [`crate::row_turn`], out to θo's last value short of 90°). An
+    /// incidence's retro point is visited first, then its rows, the first
+    /// outward from the retro direction and each next one back the other
+    /// way, so consecutive rows join near the retro direction or near the
+    /// horizon ([`ScanSpec::index_at_order`]).
     pub fn visit(&self, index: u32, order: u32) -> Option<Visit> {
         let Some(how) = self.sweep else {
             return self.point(index).map(Visit::Point);
@@ -226,11 +236,16 @@ impl ScanSpec {
         let (d, a, _, c) = self.locate(index, |d| d.n_dp)?;
         let stop = self.row_stop()?;
         let ti = self.theta_i_deg[a as usize];
+        let Some(row) = c.checked_sub(1) else {
+            return Some(Visit::Point(Geometry::new(ti, ti, 0.0)));
+        };
+        let rows = d.n_dp - 1;
         Some(Visit::Row(SweepRow {
             theta_i_deg: ti,
-            dphi_deg: row_turn::row_dphi_deg(ti, self.dphi.at(0), self.dphi.at(d.n_dp - 1), c, d.n_dp),
+            dphi_deg: row_turn::row_dphi_deg(ti, self.dphi.at(0), self.dphi.at(rows - 1), row, rows),
             theta_o_stop_deg: stop,
-            outward: order % 2 == 0,
+            // The position among the incidence's, the retro point's first.
+            outward: order % d.n_dp % 2 == 1,
             speed_dps: how.speed_dps,
             periods_per_sample: how.periods_per_sample,
             lobe: how.lobe,
@@ -254,9 +269,20 @@ impl ScanSpec {
             .find(|&t| t < HORIZON_DEG)
     }
 
-    /// Canonical index of the point visited at position `order`.
+    /// Canonical index of the point visited at position `order`: a grid's
+    /// points row by row of θo, Δφ's way back on every other one; a sweep
+    /// scan's retro point first at each incidence, then its rows, Δφ's way
+    /// back at every other incidence.
     pub fn index_at_order(&self, order: u32) -> Option<u32> {
         let (d, a, row, col) = self.locate(order, |d| d.n_to)?;
+        if self.sweep.is_some() {
+            let c = match row {
+                0 => 0,
+                r if a % 2 == 0 => r,
+                r => d.n_dp - r,
+            };
+            return Some(a * d.n_dp + c);
+        }
         let c = if a % 2 == 0 { row } else { d.n_dp - 1 - row };
         let b = if row % 2 == 0 { col } else { d.n_to - 1 - col };
         Some((a * d.n_to + b) * d.n_dp + c)

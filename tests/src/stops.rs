@@ -313,11 +313,15 @@ pub fn trial(head: &mut FrameHead, activity: Activity, trigger: Trigger, tau: f6
     let steps = w.step_log.take().unwrap_or_default();
     let laser = w.laser_log.take().unwrap_or_default();
     w.estop_at = None;
-    let was_on = laser.iter().rev().find(|(t, _)| *t < tt).is_some_and(|(_, on)| *on);
+    // The head counts the host's silence in whole µs from an f32 timeout:
+    // its watch runs out within a few µs of `tt`, either side (39 ns before
+    // it once a sweep scan began with its retro point).
+    let before = if trigger == Trigger::HostSilence { tt - 1e-4 } else { tt };
+    let was_on = laser.iter().rev().find(|(t, _)| *t < before).is_some_and(|(_, on)| *on);
     let laser_off_ms = if was_on {
         laser
             .iter()
-            .find(|(t, on)| *t >= tt && !on)
+            .find(|(t, on)| *t >= before && !on)
             .map_or(f64::INFINITY, |(t, _)| (t - tt) * 1e3)
     } else {
         0.0

@@ -1,11 +1,12 @@
 //! The scan grid shared by head and host: canonical indexing, the
-//! serpentine visit order, and the host's plan against its lower bound.
+//! serpentine visit order (a sweep scan's too), and the host's plan against
+//! its lower bound.
 
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::{target_steps, PARK};
 use gonio_host::scan_order::{lower_bound, scan_time, visit_order, ScanTime};
-use gonio_shared::{AngleRange, ScanSpec};
+use gonio_shared::{row_turn, AngleRange, Geometry, ScanSpec, SweepScan, Visit};
 use proptest::prelude::*;
 use std::collections::BTreeSet;
 
@@ -34,6 +35,39 @@ proptest! {
             }
             let steps = ((a.theta_o_deg - b.theta_o_deg).abs() / 3.0).round() + ((a.dphi_deg - b.dphi_deg).abs() / 10.0).round();
             prop_assert_eq!(steps, 1.0, "{:?} -> {:?}", a, b);
+        }
+    }
+}
+
+proptest! {
+    /// A sweep scan visits every position once: at each incidence its retro
+    /// point first, then its rows, the first outward from the retro
+    /// direction and each next one back, Δφ's way back at every other
+    /// incidence.
+    #[test]
+    fn a_sweep_scan_visits_each_incidence_retro_point_first_then_its_rows(spec in grid()) {
+        let spec = ScanSpec {
+            theta_o: AngleRange::new(0.0, 87.0, 3.0),
+            sweep: Some(SweepScan { speed_dps: 30.0, periods_per_sample: 8, lobe: None }),
+            ..spec
+        };
+        let (n, rows) = (spec.len(), spec.dphi.count().unwrap());
+        prop_assert_eq!(n, spec.theta_i_deg.len() as u32 * (rows + 1));
+        let order: Vec<u32> = (0..n).map(|o| spec.index_at_order(o).unwrap()).collect();
+        prop_assert_eq!(order.iter().collect::<BTreeSet<_>>().len() as u32, n);
+        prop_assert!(spec.index_at_order(n).is_none() && spec.visit(n, n).is_none());
+        let span = (spec.dphi.at(0), spec.dphi.at(rows - 1));
+        for (o, &i) in (0..).zip(&order) {
+            let (a, k) = (o / (rows + 1), o % (rows + 1));
+            let ti = spec.theta_i_deg[a as usize];
+            match spec.visit(i, o).unwrap() {
+                Visit::Point(g) => prop_assert!(k == 0 && g == Geometry::new(ti, ti, 0.0), "{o}: {g:?}"),
+                Visit::Row(r) => {
+                    prop_assert!(k > 0 && r.theta_i_deg == ti && r.outward == (k % 2 == 1), "{o}: {r:?}");
+                    let along = if a % 2 == 0 { k - 1 } else { rows - k };
+                    prop_assert_eq!(r.dphi_deg, row_turn::row_dphi_deg(ti, span.0, span.1, along, rows));
+                }
+            }
         }
     }
 }

@@ -118,19 +118,18 @@ fn a_stop_mid_row_darkens_the_laser_brakes_the_arm_and_the_row_is_swept_again() 
     );
     let events = scan_events(&sent);
     let whole = events.last().map(|(_, s)| s.t_s - t0).expect("the scan ended");
-    let mut rows: Vec<(f64, f64)> = Vec::new();
+    // Each row's first and last sample, by visit position (the retro point,
+    // measured at rest, is none).
+    let mut rows: std::collections::BTreeMap<u32, (f64, f64)> = Default::default();
     for (e, sent) in &events {
         if let ScanEvent::SweptSample(s) = e {
-            let row = s.scan.expect("a row's sample").order as usize;
-            if rows.len() <= row {
-                rows.push((sent.t_s, sent.t_s));
-            }
-            rows[row].1 = sent.t_s;
+            let row = rows.entry(s.scan.expect("a row's sample").order).or_insert((sent.t_s, sent.t_s));
+            row.1 = sent.t_s;
         }
     }
     assert_eq!(rows.len(), 2);
     // (The trial's clock starts a millisecond after `ready`.)
-    let mid_rows = rows.iter().map(|(a, b)| a + 0.4 * (b - a) - t0 - 0.001);
+    let mid_rows = rows.values().map(|(a, b)| a + 0.4 * (b - a) - t0 - 0.001);
     let taus: Vec<f64> = mid_rows.collect();
     for trigger in Trigger::ALL {
         for &tau in &taus {
@@ -148,7 +147,8 @@ fn a_stop_mid_row_darkens_the_laser_brakes_the_arm_and_the_row_is_swept_again() 
         }
     }
     // Paused mid-row and continued: the row is swept again, and every row
-    // ends whole (as many samples as its `Swept` says, consecutive).
+    // ends whole (as many samples as its `Swept` says, consecutive); the
+    // retro point is measured once.
     ready(&mut head);
     let t = head.now();
     let scan = scan_frames(&small_sweep_scan()).into_iter().map(|f| (t, Cue::Frame(f)));
@@ -165,7 +165,7 @@ fn a_stop_mid_row_darkens_the_laser_brakes_the_arm_and_the_row_is_swept_again() 
             events.last(),
             Some((
                 ScanEvent::Finished {
-                    measured: 2,
+                    measured: 3,
                     skipped: 0,
                     ..
                 },
@@ -194,7 +194,8 @@ fn a_stop_mid_row_darkens_the_laser_brakes_the_arm_and_the_row_is_swept_again() 
             _ => {}
         }
     }
-    assert_eq!(rows, [0, 1]);
+    // (Position 0 is the retro point, measured at rest.)
+    assert_eq!(rows, [1, 2]);
 }
 
 fn far_move() -> Geometry {

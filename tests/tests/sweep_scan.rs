@@ -1,7 +1,7 @@
 //! Sweep scans through the host, on the simulated head: every row the head
 //! can sweep is stored once and whole (consecutive samples, as many as the
 //! head says it sent), at its incidence, from the retro direction's side out
-//! to its θo stop or back; lost,
+//! to its θo stop or back, and each incidence's retro point once; lost,
 //! duplicated and reordered frames and a pulled cable are recovered by
 //! sweeping the row again.
 
@@ -54,28 +54,43 @@ fn slowed(width_deg: f32, speed_dps: f32) -> ScanSpec {
 /// The rows (visit positions) the head can sweep.
 fn sweepable(spec: &ScanSpec) -> Vec<u32> {
     (0..spec.len())
-        .filter(|&o| sweep::row_ends(&REFERENCE, &row(spec, o)).is_ok())
+        .filter(|&o| matches!(visit(spec, o), Visit::Row(r) if sweep::row_ends(&REFERENCE, &r).is_ok()))
         .collect()
+}
+
+/// The visit positions of the retro points.
+fn retro_points(spec: &ScanSpec) -> Vec<u32> {
+    (0..spec.len()).filter(|&o| matches!(visit(spec, o), Visit::Point(_))).collect()
+}
+
+/// What is visited at position `o`.
+fn visit(spec: &ScanSpec, o: u32) -> Visit {
+    spec.index_at_order(o)
+        .and_then(|i| spec.visit(i, o))
+        .unwrap_or_else(|| panic!("no position {o}"))
 }
 
 /// The row visited at position `o`.
 fn row(spec: &ScanSpec, o: u32) -> SweepRow {
-    match spec.index_at_order(o).and_then(|i| spec.visit(i, o)) {
-        Some(Visit::Row(r)) => r,
+    match visit(spec, o) {
+        Visit::Row(r) => r,
         other => panic!("position {o} is not a row: {other:?}"),
     }
 }
 
-async fn scan(sim: SimConfig, spec: &ScanSpec) -> (ScanOutcome, BTreeMap<u32, Vec<Row>>) {
+/// The scan's outcome and its stored samples by visit position: the rows'
+/// (swept, with an extent), then the retro points' (at rest).
+async fn scan(sim: SimConfig, spec: &ScanSpec) -> (ScanOutcome, BTreeMap<u32, Vec<Row>>, BTreeMap<u32, Vec<Row>>) {
     let mut session = session(Arc::new(Simulated(sim))).await;
     let dir = tempfile::tempdir().unwrap();
     let (outcome, stored) = scan_and_read(&mut session, spec, dir.path()).await;
     session.close().await;
-    let mut by_row: BTreeMap<u32, Vec<Row>> = BTreeMap::new();
+    let (mut by_row, mut retro): (BTreeMap<u32, Vec<Row>>, BTreeMap<u32, Vec<Row>>) = Default::default();
     for r in stored {
-        by_row.entry(r.order.expect("a scan position")).or_default().push(r);
+        let at = if r.extent_deg.is_some() { &mut by_row } else { &mut retro };
+        at.entry(r.order.expect("a scan position")).or_default().push(r);
     }
-    (outcome, by_row)
+    (outcome, by_row, retro)
 }
 
 /// Every row stored is whole: consecutive samples in time and `seq`, each
@@ -105,14 +120,23 @@ fn check_whole(spec: &ScanSpec, by_row: &BTreeMap<u32, Vec<Row>>) {
 }
 
 #[tokio::test]
-async fn a_sweep_scan_stores_every_row_it_can_sweep_once_and_whole() {
+async fn a_sweep_scan_stores_every_row_it_can_sweep_once_and_whole_and_the_retro_point() {
     let spec = rows();
-    let (outcome, by_row) = scan(SimConfig::default(), &spec).await;
+    let (outcome, by_row, retro) = scan(SimConfig::default(), &spec).await;
     let rows: Vec<u32> = by_row.keys().copied().collect();
     let expected = sweepable(&spec);
     assert!(expected.len() >= 3, "{expected:?}");
     assert_eq!(rows, expected);
-    assert_eq!(outcome.measured as usize, rows.len());
+    // The incidence's retro point, first, once, at rest through the beam
+    // splitter: where no row reaches.
+    assert_eq!(retro_points(&spec), vec![0]);
+    assert_eq!(retro.keys().copied().collect::<Vec<_>>(), retro_points(&spec));
+    let point = &retro[&0];
+    assert_eq!(point.len(), 1, "{point:?}");
+    let p = &point[0];
+    assert!(p.psi_deg.abs() <= REFERENCE.optics.retro_max_deg, "{p:?}");
+    assert!((p.theta_o_deg - 30.0).abs() < 0.01 && p.dphi_deg.abs() < 0.1, "{p:?}");
+    assert_eq!(outcome.measured as usize, rows.len() + 1);
     assert_eq!(outcome.measured + outcome.skipped, spec.len());
     assert_eq!(outcome.swept_samples as usize, by_row.values().map(Vec::len).sum::<usize>());
     check_whole(&spec, &by_row);
@@ -127,7 +151,7 @@ async fn lost_duplicated_and_reordered_frames_and_a_pulled_cable_cost_a_row_swep
         ..SimConfig::default()
     };
     let spec = rows();
-    let (outcome, by_row) = scan(sim, &spec).await;
+    let (outcome, by_row, _) = scan(sim, &spec).await;
     assert_eq!(by_row.keys().copied().collect::<Vec<_>>(), sweepable(&spec));
     check_whole(&spec, &by_row);
     let recovered: u32 = outcome.recoveries.values().sum();
@@ -145,7 +169,7 @@ async fn a_row_slows_down_across_a_narrow_lobe_so_its_samples_span_a_fraction_of
     // of the mirror direction (on the Δφ = 180° row at θo = 30°), 20°/s
     // elsewhere (0.70° a sample).
     let spec = slowed(1.0, 20.0);
-    let (_, by_row) = scan(SimConfig::default(), &spec).await;
+    let (_, by_row, _) = scan(SimConfig::default(), &spec).await;
     check_whole(&spec, &by_row);
     let (mut slow, mut fast) = (0, 0);
     for samples in by_row.values() {
@@ -184,7 +208,7 @@ async fn a_sweep_steps_its_gain_down_across_a_bright_lobe_rather_than_saturate()
         ..SimConfig::default()
     };
     let spec = rows();
-    let (outcome, by_row) = scan(sim, &spec).await;
+    let (outcome, by_row, _) = scan(sim, &spec).await;
     assert_eq!(by_row.keys().copied().collect::<Vec<_>>(), sweepable(&spec), "{outcome:?}");
     check_whole(&spec, &by_row);
     let mirror = by_row
@@ -211,7 +235,7 @@ async fn a_row_whose_slow_stretch_overflows_the_step_queue_runs_slow_all_along()
         let blocks = motion::axis_blocks(&REFERENCE, p.delta(), p.limits, &p.levels, 1_000_000);
         assert_eq!(blocks.iter().any(|&n| n > QUEUE), crossing(o), "row {o}: {blocks:?} blocks");
     }
-    let (_, by_row) = scan(SimConfig::default(), &spec).await;
+    let (_, by_row, _) = scan(SimConfig::default(), &spec).await;
     assert_eq!(by_row.keys().copied().collect::<Vec<_>>(), sweepable(&spec));
     check_whole(&spec, &by_row);
     for (&o, samples) in &by_row {

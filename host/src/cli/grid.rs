@@ -19,8 +19,9 @@ pub struct GridArgs {
     /// Measure while moving: a row per θi and Δφ value, each swept over the
     /// θo span in one move, its samples tagged with where the stages were
     /// (the θo STEP is then unused); the rows of a θi turned evenly about
-    /// the laser, the Δφ STEP apart, between those meeting the horizon at
-    /// the Δφ START and STOP.
+    /// the laser between those meeting the horizon at the first and last Δφ
+    /// (the Δφ STEP apart for the whole circle), and its retro point
+    /// measured at rest.
     #[arg(long)]
     pub sweep: bool,
     /// Top speed of the arm in a sweep (deg/s), at most its limit (30 deg/s

@@ -6,9 +6,9 @@ use super::simulated::Simulated;
 use crate::scan::Monitor;
 use crate::scan_dir::ScanDir;
 use crate::target::{Port, Target};
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use gonio_brdf::Specimen;
-use gonio_shared::ScanSpec;
+use gonio_shared::{ScanSpec, PROTOCOL_VERSION};
 use gonio_sim::faults::Faults;
 use gonio_sim::{Imperfections, SimConfig};
 use serde::{Deserialize, Serialize};
@@ -50,6 +50,10 @@ pub struct ScanPlan {
     /// resume runs on the repaired head).
     #[serde(skip)]
     pub faults: Faults,
+    /// The protocol the scan was planned under (0: before it was kept): a
+    /// sweep scan's positions depend on it.
+    #[serde(default)]
+    pub protocol: u16,
 }
 
 impl ScanPlan {
@@ -78,6 +82,7 @@ impl ScanPlan {
             monitor: None,
             reference_plate: false,
             faults,
+            protocol: PROTOCOL_VERSION,
         }
     }
 
@@ -119,10 +124,22 @@ impl ScanPlan {
         std::fs::write(&path, serde_json::to_string_pretty(self)? + "\n").with_context(|| format!("writing {}", path.display()))
     }
 
+    /// The plan of the scan in `dir`, to resume: refused for a sweep scan
+    /// planned under another protocol, whose rows and retro points lay
+    /// elsewhere (protocol 11 turned the rows evenly about the laser and
+    /// added the retro points), so that no scan mixes the two.
     pub fn read(dir: &Path) -> Result<Self> {
         let path = ScanDir::new(dir).plan();
         let text = std::fs::read_to_string(&path)
             .with_context(|| format!("{} holds no scan to resume ({} missing)", dir.display(), path.display()))?;
-        serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))
+        let plan: Self = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
+        if plan.spec.sweep.is_some() && plan.protocol != PROTOCOL_VERSION {
+            bail!(
+                "{} holds a sweep scan planned under protocol {} (this gonio speaks {PROTOCOL_VERSION}), whose positions lie elsewhere; scan it again into a new directory",
+                dir.display(),
+                plan.protocol
+            );
+        }
+        Ok(plan)
     }
 }

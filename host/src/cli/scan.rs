@@ -308,9 +308,10 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     let estimate = estimate_s(&config, spec, &detection);
     if !json {
         if spec.sweep.is_some() {
+            let retro = spec.theta_i_deg.len() as u32;
             eprintln!(
-                "{} rows to sweep; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
-                spec.len(),
+                "{} rows to sweep and {retro} retro points to measure at rest; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
+                spec.len() - retro,
                 hms(estimate),
                 detection.settings.settle_s * 1e3,
             );
@@ -337,7 +338,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         }
         None => SampleWriter::create(dir)?,
     };
-    let unit = if spec.sweep.is_some() { "rows" } else { "points" };
+    let unit = if spec.sweep.is_some() { "positions" } else { "points" };
     let pb = Operator::for_json(json).bar(spec.len() as u64, "scanning", unit);
     let mut outcome = scan::run(&mut session, spec, &mut writer, &pb, plan.monitor.as_ref())
         .await
@@ -378,7 +379,7 @@ fn estimate_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
     let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
     if spec.sweep.is_some() {
         let ranging = acquire - det.integration_s as f64;
-        return sweep_time(cfg, spec, rest, PARK, (settle, ranging), det.settings.chop_hz).total_s();
+        return sweep_time(cfg, spec, rest, PARK, (settle, acquire, ranging), det.settings.chop_hz).total_s();
     }
     scan_time(cfg, spec, rest, PARK, settle, acquire).total_s()
 }
@@ -415,8 +416,10 @@ fn summarise(o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
         println!("{}", serde_json::to_string_pretty(o)?);
         return Ok(());
     }
+    // A sweep scan's positions are rows and retro points.
+    let unit = if o.swept_samples > 0 { "positions" } else { "points" };
     println!(
-        "{} points: {} measured, {} unreachable, {} flagged; {:.0} s of head time in {:.1} s",
+        "{} {unit}: {} measured, {} unreachable, {} flagged; {:.0} s of head time in {:.1} s",
         o.points, o.measured, o.skipped, o.flagged, o.head_time_s, o.wall_time_s
     );
     if let Some(bound) = o.lower_bound_s {

@@ -7,7 +7,7 @@ use gonio_firmware::motion::blocks::plan_s;
 use gonio_firmware::motion::executor::QUEUE;
 use gonio_firmware::motion::{axis_blocks, move_blocks, move_time, profile_s, slowest, target_steps};
 use gonio_firmware::sweep;
-use gonio_shared::{DetectionReport, ScanSpec, Visit};
+use gonio_shared::{DetectionReport, Geometry, ScanSpec, Visit};
 
 /// The step timer's tick rate on the reference board (chip/step_timer.rs).
 const STEP_TICK_HZ: u32 = 1_000_000;
@@ -30,6 +30,23 @@ impl ScanTime {
     fn add_move(&mut self, cfg: &HeadConfig, delta: [i32; 3]) {
         self.moves_s += move_time(cfg, delta);
         self.planning_s += plan_s(move_blocks(cfg, delta, STEP_TICK_HZ));
+    }
+
+    /// Counts a point at `g` visited from stage position `at` (which it
+    /// moves to the point's): the move, `settle_s` and `integration_s`; or
+    /// a point skipped without moving, where the kinematics cannot reach it.
+    fn add_point(&mut self, cfg: &HeadConfig, at: &mut [i32; 3], g: &Geometry, settle_s: f64, integration_s: f64) {
+        match kinematics::inverse(cfg, g) {
+            Ok(axes) => {
+                let target = target_steps(cfg, &axes);
+                self.add_move(cfg, [0, 1, 2].map(|i| target[i] - at[i]));
+                *at = target;
+                self.settle_s += settle_s;
+                self.integration_s += integration_s;
+                self.measured += 1;
+            }
+            Err(_) => self.skipped += 1,
+        }
     }
 
     pub fn total_s(&self) -> f64 {
@@ -61,41 +78,37 @@ pub fn scan_time(
     let mut t = ScanTime::default();
     let mut at = from;
     for g in visit.filter_map(|i| spec.point(i)) {
-        match kinematics::inverse(cfg, &g) {
-            Ok(axes) => {
-                let target = target_steps(cfg, &axes);
-                t.add_move(cfg, [0, 1, 2].map(|i| target[i] - at[i]));
-                at = target;
-                t.settle_s += settle_s;
-                t.integration_s += integration_s;
-                t.measured += 1;
-            }
-            Err(_) => t.skipped += 1,
-        }
+        t.add_point(cfg, &mut at, &g, settle_s, integration_s);
     }
     t
 }
 
-/// Duration of a sweep scan's rows in the order `visit` yields them, from
-/// stage position `from`, as the head runs them (`Head::sweep_turn`): the
-/// move to a row's start, `settle_s`, `prepare_s` to range the detector,
-/// then the arm's sweep at the row's speed, slower across the lobes
-/// (`sweep::row_levels`, for samples of its periods at `chop_hz`). Rows that
-/// cannot be swept are skipped without moving. `integration_s` holds the
-/// sweeps.
+/// Duration of a sweep scan's positions in the order `visit` yields them,
+/// from stage position `from`, as the head runs them (`Head::sweep_turn`):
+/// a retro point as [`scan_time`] counts a point (the move, `settle_s`,
+/// `acquire_s`); a row as the move to its start, `settle_s`, `prepare_s` to
+/// range the detector, then the arm's sweep at the row's speed, slower
+/// across the lobes (`sweep::row_levels`, for samples of its periods at
+/// `chop_hz`). Positions that cannot be reached are skipped without moving.
+/// `integration_s` holds the sweeps and the points' acquisitions.
 pub fn sweep_time(
     cfg: &HeadConfig,
     spec: &ScanSpec,
     visit: impl Iterator<Item = u32>,
     from: [i32; 3],
-    (settle_s, prepare_s): (f64, f64),
+    (settle_s, acquire_s, prepare_s): (f64, f64, f64),
     chop_hz: f32,
 ) -> ScanTime {
     let mut t = ScanTime::default();
     let mut at = from;
     for (order, i) in (spec.first_order..).zip(visit) {
-        let Some(Visit::Row(row)) = spec.visit(i, order) else {
-            continue;
+        let row = match spec.visit(i, order) {
+            Some(Visit::Row(row)) => row,
+            Some(Visit::Point(g)) => {
+                t.add_point(cfg, &mut at, &g, settle_s, acquire_s);
+                continue;
+            }
+            None => continue,
         };
         let Ok(p) = sweep::row_plan(cfg, &row, chop_hz) else {
             t.skipped += 1;

@@ -176,7 +176,7 @@ fn main() -> Result<()> {
         "sweep_instructions": {
             "check (once)": max("sweep_check")?,
             "limits (once)": max("sweep_limits")?,
-            "scan row's ends, targets and limits (once per row)": max("sweep_row")?,
+            "scan row's place, ends, targets, limits and stretches (once per row)": max("sweep_row")?,
             "design of 8-period samples (once)": max("design_8_periods")?,
             "drift fit (per sample)": max("sweep_drift")?,
             "estimate (per sample)": max("sweep_estimate")?,

@@ -18,9 +18,10 @@
 //!   refused arc is listed with its reason and counted in `refused_arcs`.
 //! - `sweep_scan`: the Belcour coverage scanned both ways through the host on
 //!   the simulated head (`scan::run`, as `gonio scan` does): stop-and-go at
-//!   its 3 441 points, and swept row by row (`gonio demo --sweep`'s
-//!   settings); `sweep_time_ratio` is the sweep scan's head time over the
-//!   grid scan's, beside the samples each stored.
+//!   its 3 441 points, and swept row by row, each incidence's retro point
+//!   measured at rest (`gonio demo --sweep`'s settings); `sweep_time_ratio`
+//!   is the sweep scan's head time over the grid scan's, beside the samples
+//!   each stored (`samples_over_grid_measured` counts the swept ones).
 //! - `fit_agreement`: for the default simulated material (glass beads) and
 //!   a narrow-lobe one (the retroreflective tape at n = 1 000),
 //!   the grid and the sweep scan each measured as `gonio demo` does (the
@@ -35,8 +36,8 @@
 //!   |z| ≤ 2 (`params_within_2sigma_of_scatter` for `z_scatter`). Beside them
 //!   the fit of the grid at twice its density both ways (`fine_grid`): how
 //!   far a model outside the material's family moves with the density the
-//!   grid and the sweep scan share (their rows the grid's Δφ step apart at
-//!   most, `gonio_shared::row_turn`). Both fits weigh
+//!   grid and the sweep scan share (the sweep's rows the grid's Δφ step
+//!   apart, `gonio_shared::row_turn`). Both fits weigh
 //!   every sample by the solid angle it stands for (`Weighting::Area`), on
 //!   the domain both scans see (beyond the blind zone around the retro
 //!   direction), from calibrated data whose swept samples are corrected for
@@ -172,9 +173,10 @@ fn sweep_scan() -> Value {
         "grid_points": g.points,
         "grid_measured": g.measured,
         "grid_head_s": g.head_time_s,
-        "rows": s.points,
-        "rows_swept": s.measured,
-        "rows_refused": s.skipped_by_reason,
+        "positions": s.points,
+        "retro_points": swept.theta_i_deg.len(),
+        "measured": s.measured,
+        "refused": s.skipped_by_reason,
         "sweep_samples": s.swept_samples,
         "sweep_head_s": s.head_time_s,
         "sweep_time_ratio": s.head_time_s / g.head_time_s,
@@ -417,11 +419,11 @@ fn main() {
         sweep["tag_error_deg_max"], sweep["arc_time_ratio_max"]
     );
     eprintln!(
-        "Belcour coverage through the host: grid {:.0} s, swept {:.0} s ({} samples from {} rows): sweep_time_ratio {:.3} (≤ 0.25)",
+        "Belcour coverage through the host: grid {:.0} s, swept {:.0} s ({} samples from {} rows and retro points): sweep_time_ratio {:.3} (≤ 0.25)",
         out["sweep_scan"]["grid_head_s"],
         out["sweep_scan"]["sweep_head_s"],
         out["sweep_scan"]["sweep_samples"],
-        out["sweep_scan"]["rows_swept"],
+        out["sweep_scan"]["measured"],
         out["sweep_scan"]["sweep_time_ratio"]
     );
     let worst_z = |params: &Value| {
