@@ -383,8 +383,11 @@ mod tests {
         /// apart.
         #[test]
         fn neighbouring_rows_are_at_most_the_dphi_step_apart(
-            ti in 0.5f32..80.0, step in 2.0f32..40.0, start in -180.0f32..180.0, part in 0.0f32..1.0,
+            ti in 0.5f32..80.0, step in 2u32..40, start in -180i32..180, part in 0.0f32..1.0,
         ) {
+            // Whole degrees: the span's ends exact in f32, a whole circle
+            // never a rounding beyond 360°.
+            let (step, start) = (step as f32, start as f32);
             let whole = (360.0 / step) as u32 + 1;
             for n in [whole, 2 + ((whole - 3) as f32 * part) as u32] {
                 let spec = ScanSpec {

@@ -29,7 +29,7 @@ pub struct Grid {
     pub theta_i_deg: Vec<f32>,
     pub theta_o_deg: [f32; 3],
     pub dphi_deg: [f32; 3],
-    /// Visit positions: points, or a sweep scan's rows.
+    /// Visit positions: points, or a sweep scan's rows and retro points.
     pub points: u32,
     /// How a sweep scan swept its rows (speed, sample length, the lobe it
     /// slowed down for); absent for a grid scan.

@@ -22,7 +22,7 @@ const EVENT_TIMEOUT: Duration = Duration::from_secs(180);
 /// What a completed scan did.
 #[derive(Debug, Clone, Serialize)]
 pub struct ScanOutcome {
-    /// Visit positions: points, or a sweep scan's rows.
+    /// Visit positions: points, or a sweep scan's rows and retro points.
     pub points: u32,
     pub measured: u32,
     /// Samples a sweep scan's rows yielded (0 for a scan of points).

@@ -127,13 +127,20 @@ fn a_sweep_scan_takes_its_lobe_width_from_a_fit_file() {
 }
 
 /// A sweep scan planned under an earlier protocol (its rows and retro
-/// points elsewhere) is not resumed into a mix of the two layouts; a grid
-/// scan, unchanged, is.
+/// points elsewhere), or by a gonio that did not keep it, is not resumed
+/// into a mix of the two layouts; a grid scan, unchanged, is.
 #[test]
 fn a_sweep_scan_planned_under_another_protocol_is_not_resumed() {
     let dir = tempfile::tempdir().unwrap();
-    for (name, extra) in [("sweep", &["--sweep"][..]), ("grid", &[][..])] {
-        let out = dir.path().join(name);
+    let cases = [
+        ("sweep", Some(11), "protocol 11"),
+        ("sweep", None, "an earlier gonio"),
+        ("grid", Some(11), ""),
+        ("grid", None, ""),
+    ];
+    for (k, (name, protocol, says)) in cases.into_iter().enumerate() {
+        let out = dir.path().join(format!("{name}{k}"));
+        let extra = if name == "sweep" { &["--sweep"][..] } else { &[][..] };
         let args = [
             &[
                 "scan",
@@ -152,16 +159,20 @@ fn a_sweep_scan_planned_under_another_protocol_is_not_resumed() {
         .concat();
         let o = gonio(&args);
         assert!(o.status.success(), "{}", text(&o));
-        // Interrupted as if killed, under protocol 10.
+        // Interrupted as if killed, under protocol 11 or by a gonio that
+        // did not keep its protocol.
         std::fs::rename(out.join("samples.csv"), out.join("samples.csv.part")).unwrap();
         let plan = out.join("scan.json");
         let mut json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&plan).unwrap()).unwrap();
         assert_eq!(json["protocol"].as_u64(), Some(gonio_shared::PROTOCOL_VERSION as u64));
-        json["protocol"] = 10.into();
+        match protocol {
+            Some(p) => json["protocol"] = p.into(),
+            None => _ = json.as_object_mut().unwrap().remove("protocol"),
+        }
         std::fs::write(&plan, json.to_string()).unwrap();
         let o = gonio(&["scan", "--resume", out.to_str().unwrap()]);
         match name {
-            "sweep" => assert!(!o.status.success() && text(&o).contains("protocol 10"), "{}", text(&o)),
+            "sweep" => assert!(!o.status.success() && text(&o).contains(says), "{}", text(&o)),
             _ => assert!(o.status.success(), "{}", text(&o)),
         }
     }

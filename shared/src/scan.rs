@@ -7,7 +7,8 @@
 //! retro direction, which no row reaches, measured at rest.
 //!
 //! Two orders matter. The *canonical index* enumerates the grid θi-major,
-//! then θo, then Δφ; files and resumption use it. The *visit order* is what
+//! then θo, then Δφ (a sweep scan's: θi-major, then the retro point, then
+//! the rows); files and resumption use it. The *visit order* is what
 //! the head follows: a serpentine that reverses the θo sweep on every other
 //! Δφ row and the Δφ sweep on every other incidence, so the arm and the
 //! sample never swing back across the whole range between neighbours.
@@ -19,6 +20,13 @@ use crate::sample::Sample;
 use crate::sweep::{SweepLobe, SweptSample};
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
+
+/// The protocol since which a sweep scan's positions lie where they do now
+/// (each incidence's retro point first, its rows turned evenly about the
+/// laser): a scan planned under an earlier one is not resumed under this.
+/// Raised only when `ScanSpec::visit` or `index_at_order` move a sweep
+/// scan's positions.
+pub const SWEEP_LAYOUT_SINCE: u16 = 12;
 
 /// Inclusive, evenly stepped range of angles (degrees).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
@@ -94,7 +102,7 @@ pub struct SweepScan {
 /// the blind zone around the retro direction out to `theta_o_stop_deg`
 /// (`outward`) or back. Moving one axis, the cheapest path the kinematics
 /// offer, keeps θi exact; the rows of a scan, turned evenly about the laser
-/// ([`crate::row_turn`]: the Δφ step apart over the whole circle), cover the
+/// ([`crate::row_turn`]: the Δφ step apart over a whole circle), cover the
 /// hemisphere densest around the retro direction, where retroreflectors put
 /// their light.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -313,10 +313,11 @@ pub fn trial(head: &mut FrameHead, activity: Activity, trigger: Trigger, tau: f6
     let steps = w.step_log.take().unwrap_or_default();
     let laser = w.laser_log.take().unwrap_or_default();
     w.estop_at = None;
-    // The head counts the host's silence in whole µs from an f32 timeout:
-    // its watch runs out within a few µs of `tt`, either side (39 ns before
-    // it once a sweep scan began with its retro point).
-    let before = if trigger == Trigger::HostSilence { tt - 1e-4 } else { tt };
+    // The head counts the host's silence in whole µs (the frame heard last
+    // rounded, an f32 timeout rounded up): its watch runs out within a µs of
+    // `tt`, either side (39 ns before it once a sweep scan began with its
+    // retro point).
+    let before = if trigger == Trigger::HostSilence { tt - 2e-6 } else { tt };
     let was_on = laser.iter().rev().find(|(t, _)| *t < before).is_some_and(|(_, on)| *on);
     let laser_off_ms = if was_on {
         laser

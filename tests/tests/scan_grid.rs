@@ -45,11 +45,15 @@ proptest! {
     /// direction and each next one back, Δφ's way back at every other
     /// incidence.
     #[test]
-    fn a_sweep_scan_visits_each_incidence_retro_point_first_then_its_rows(spec in grid()) {
+    fn a_sweep_scan_visits_each_incidence_retro_point_first_then_its_rows(n_ti in 1usize..=8, n_dp in 1u32..=37) {
+        // Up to 8 incidences, up to the whole circle of Δφ (36 rows close
+        // it, 37 reach −180° again).
         let spec = ScanSpec {
+            theta_i_deg: heapless::Vec::from_slice(&[10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0][..n_ti]).unwrap(),
             theta_o: AngleRange::new(0.0, 87.0, 3.0),
+            dphi: AngleRange::new(-180.0, -180.0 + 10.0 * (n_dp - 1) as f32, 10.0),
+            first_order: 0,
             sweep: Some(SweepScan { speed_dps: 30.0, periods_per_sample: 8, lobe: None }),
-            ..spec
         };
         let (n, rows) = (spec.len(), spec.dphi.count().unwrap());
         prop_assert_eq!(n, spec.theta_i_deg.len() as u32 * (rows + 1));

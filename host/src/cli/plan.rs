@@ -8,6 +8,7 @@ use crate::scan_dir::ScanDir;
 use crate::target::{Port, Target};
 use anyhow::{bail, Context, Result};
 use gonio_brdf::Specimen;
+use gonio_shared::scan::SWEEP_LAYOUT_SINCE;
 use gonio_shared::{ScanSpec, PROTOCOL_VERSION};
 use gonio_sim::faults::Faults;
 use gonio_sim::{Imperfections, SimConfig};
@@ -50,8 +51,8 @@ pub struct ScanPlan {
     /// resume runs on the repaired head).
     #[serde(skip)]
     pub faults: Faults,
-    /// The protocol the scan was planned under (0: before it was kept): a
-    /// sweep scan's positions depend on it.
+    /// The protocol the scan was planned under (0: by a gonio that did not
+    /// keep it): a sweep scan's positions depend on it.
     #[serde(default)]
     pub protocol: u16,
 }
@@ -125,19 +126,23 @@ impl ScanPlan {
     }
 
     /// The plan of the scan in `dir`, to resume: refused for a sweep scan
-    /// planned under another protocol, whose rows and retro points lay
-    /// elsewhere (protocol 11 turned the rows evenly about the laser and
-    /// added the retro points), so that no scan mixes the two.
+    /// planned before its positions took their place
+    /// ([`SWEEP_LAYOUT_SINCE`]: the rows turned evenly about the laser, each
+    /// incidence's retro point first) or by a later gonio, so that no scan
+    /// mixes two layouts.
     pub fn read(dir: &Path) -> Result<Self> {
         let path = ScanDir::new(dir).plan();
         let text = std::fs::read_to_string(&path)
             .with_context(|| format!("{} holds no scan to resume ({} missing)", dir.display(), path.display()))?;
         let plan: Self = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
-        if plan.spec.sweep.is_some() && plan.protocol != PROTOCOL_VERSION {
+        if plan.spec.sweep.is_some() && !(SWEEP_LAYOUT_SINCE..=PROTOCOL_VERSION).contains(&plan.protocol) {
+            let by = match plan.protocol {
+                0 => "an earlier gonio".to_string(),
+                p => format!("protocol {p}"),
+            };
             bail!(
-                "{} holds a sweep scan planned under protocol {} (this gonio speaks {PROTOCOL_VERSION}), whose positions lie elsewhere; scan it again into a new directory",
-                dir.display(),
-                plan.protocol
+                "{} holds a sweep scan planned by {by} (this gonio speaks protocol {PROTOCOL_VERSION}), whose positions lie elsewhere; scan it again into a new directory",
+                dir.display()
             );
         }
         Ok(plan)

@@ -113,6 +113,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
     };
     let spec = ScanSpec { sweep, ..belcour };
     let (outcome, samples) = demo_scan(sim, &spec, &a.out, &a.output).await?;
+    let retro = spec.theta_i_deg.len() as u32;
     let json = a.output.json;
     if !json {
         summarise(&outcome, &samples, false)?;
@@ -131,8 +132,13 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
             "scan".to_string(),
             if a.sweep {
                 format!(
-                    "{} rows of the Belcour grid swept: {} swept ({} samples), {} refused, {} flagged",
-                    outcome.points, outcome.measured, outcome.swept_samples, outcome.skipped, outcome.flagged
+                    "{} rows of the Belcour grid swept and {} retro points measured at rest: {} of them measured ({} swept samples), {} refused, {} flagged",
+                    outcome.points - retro,
+                    retro,
+                    outcome.measured,
+                    outcome.swept_samples,
+                    outcome.skipped,
+                    outcome.flagged
                 )
             } else {
                 format!(

@@ -51,8 +51,9 @@ pub fn move_s(cfg: &HeadConfig, from: [i32; 3], to: [i32; 3]) -> f64 {
 }
 
 /// The visit order of a whole scan (canonical indices), from stage position
-/// `from` (microsteps). A sweep scan's rows follow the serpentine, each
-/// starting where the previous one ended (`ScanSpec::visit`).
+/// `from` (microsteps). A sweep scan's positions follow their serpentine
+/// (`ScanSpec::index_at_order`): each incidence's retro point, then its
+/// rows, each starting where the previous one ended.
 pub fn visit_order(cfg: &HeadConfig, spec: &ScanSpec, from: [i32; 3]) -> impl Iterator<Item = u32> {
     let n = spec.len();
     if spec.sweep.is_some() {
