@@ -389,7 +389,11 @@ mod tests {
             // never a rounding beyond 360°.
             let (step, start) = (step as f32, start as f32);
             let whole = (360.0 / step) as u32 + 1;
-            for n in [whole, 2 + ((whole - 3) as f32 * part) as u32] {
+            // The span over the whole circle (both ends on it, or beyond
+            // it), a step short of it (where the step divides 360°), and a
+            // part of it.
+            let short = (360.0 / step).ceil() as u32;
+            for n in [whole, short, 2 + ((whole - 3) as f32 * part) as u32] {
                 let spec = ScanSpec {
                     theta_i_deg: heapless::Vec::from_slice(&[ti]).unwrap(),
                     theta_o: AngleRange::new(0.0, 87.0, 3.0),
@@ -410,7 +414,7 @@ mod tests {
                     Some(n.map(|x| x / norm))
                 };
                 let apart = |p: [f64; 3], q: [f64; 3]| acos(p.iter().zip(&q).map(|(a, b)| a * b).sum::<f64>().clamp(-1.0, 1.0)) / DEG;
-                let closing = n == whole;
+                let closing = n >= short;
                 let pairs = (1..n).map(|k| (k, k + 1)).chain(closing.then_some((n, 1)));
                 let gaps: Vec<f64> = pairs.filter_map(|(a, b)| Some(apart(normal(a)?, normal(b)?))).collect();
                 prop_assert!(gaps.len() as u32 >= n - 1, "rows refused: {gaps:?}");

@@ -6,10 +6,10 @@
 //! rows that meet the horizon at the Δφ span's ends, so for a span whose
 //! ends lie at 0°, ±90° or ±180° (the Belcour grid's −180°..180°) they are
 //! the Δφ step apart: never farther apart than the grid's Δφ lines are at
-//! the horizon. A span that closes the circle (its next value would be its
-//! first again, or beyond it) has its rows spread evenly around the whole
-//! turn from its first, so they are at most the step apart there too, the
-//! last beside the first included. Between other ends the turn they span
+//! the horizon. A span short of the whole circle by a step or less (its
+//! next value would reach its first again, or pass it) has its rows spread
+//! evenly around the whole turn from its first, so they are at most the
+//! step apart there too, the last beside the first included. Between other ends the turn they span
 //! is up to `1/cos θi` times the Δφ span (next to the plane of incidence),
 //! and so is their spacing.
 //!

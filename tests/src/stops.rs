@@ -314,9 +314,9 @@ pub fn trial(head: &mut FrameHead, activity: Activity, trigger: Trigger, tau: f6
     let laser = w.laser_log.take().unwrap_or_default();
     w.estop_at = None;
     // The head counts the host's silence in whole µs (the frame heard last
-    // rounded, an f32 timeout rounded up): its watch runs out within a µs of
-    // `tt`, either side (39 ns before it once a sweep scan began with its
-    // retro point).
+    // and its clock rounded, an f32 timeout rounded up): its watch runs out
+    // within 2 µs of `tt` for the τ of under 32 s the trials draw, either
+    // side (39 ns before it once a sweep scan began with its retro point).
     let before = if trigger == Trigger::HostSilence { tt - 2e-6 } else { tt };
     let was_on = laser.iter().rev().find(|(t, _)| *t < before).is_some_and(|(_, on)| *on);
     let laser_off_ms = if was_on {

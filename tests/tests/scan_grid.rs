@@ -46,8 +46,8 @@ proptest! {
     /// incidence.
     #[test]
     fn a_sweep_scan_visits_each_incidence_retro_point_first_then_its_rows(n_ti in 1usize..=8, n_dp in 1u32..=37) {
-        // Up to 8 incidences, up to the whole circle of Δφ (36 rows close
-        // it, 37 reach −180° again).
+        // Up to 8 incidences, up to the whole circle of Δφ (36 rows a step
+        // short of it, 37 from −180° to 180°, one great circle).
         let spec = ScanSpec {
             theta_i_deg: heapless::Vec::from_slice(&[10.0, 20.0, 30.0, 40.0, 50.0, 60.0, 70.0, 80.0][..n_ti]).unwrap(),
             theta_o: AngleRange::new(0.0, 87.0, 3.0),

@@ -137,11 +137,11 @@ impl ScanPlan {
         let plan: Self = serde_json::from_str(&text).with_context(|| format!("reading {}", path.display()))?;
         if plan.spec.sweep.is_some() && !(SWEEP_LAYOUT_SINCE..=PROTOCOL_VERSION).contains(&plan.protocol) {
             let by = match plan.protocol {
-                0 => "an earlier gonio".to_string(),
-                p => format!("protocol {p}"),
+                0 => "by an earlier gonio".to_string(),
+                p => format!("under protocol {p}"),
             };
             bail!(
-                "{} holds a sweep scan planned by {by} (this gonio speaks protocol {PROTOCOL_VERSION}), whose positions lie elsewhere; scan it again into a new directory",
+                "{} holds a sweep scan planned {by} (this gonio speaks protocol {PROTOCOL_VERSION}), whose positions may lie elsewhere; scan it again into a new directory",
                 dir.display()
             );
         }

@@ -133,7 +133,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
             if a.sweep {
                 format!(
                     "{} rows of the Belcour grid swept and {} retro points measured at rest: {} of them measured ({} swept samples), {} refused, {} flagged",
-                    outcome.points - retro,
+                    outcome.points.saturating_sub(retro),
                     retro,
                     outcome.measured,
                     outcome.swept_samples,
@@ -317,7 +317,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
             let retro = spec.theta_i_deg.len() as u32;
             eprintln!(
                 "{} rows to sweep and {retro} retro points to measure at rest; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
-                spec.len() - retro,
+                spec.len().saturating_sub(retro),
                 hms(estimate),
                 detection.settings.settle_s * 1e3,
             );
