@@ -184,6 +184,8 @@ pub fn row_levels(row: &SweepRow, from: &AxisAngles, to: &AxisAngles, speed_dps:
     let Some(lobe) = row.lobe else {
         return out;
     };
+    // `lobe.slow_dps(sample_s) / speed_dps`, in the order of its rounding
+    // that every measured figure of the sweeps was taken with.
     let scale = lobe.extent_fraction * lobe.width_deg / (sample_s * speed_dps);
     if !(scale < 1.0 && scale > 0.0) {
         return out;
@@ -251,7 +253,7 @@ pub fn check(cfg: &HeadConfig, periods_per_sample: u16, speed_dps: f32, lobe: Op
         return Err(Fault::InvalidValue(Field::SweepSpeed));
     }
     if let Some(l) = lobe {
-        let slow = l.extent_fraction * l.width_deg * chop_hz / periods_per_sample as f32;
+        let slow = l.slow_dps(periods_per_sample as f32 / chop_hz);
         let arm = &cfg.axes[Axis::Arm.index()];
         let (travel, slowest) = (arm.max_deg - arm.min_deg, slow.min(speed_dps).min(arm.max_speed_dps));
         if !l.valid() || !speed_ok(slow) || travel / slowest > SweepRequest::DURATION_MAX_S {

@@ -195,6 +195,15 @@ impl ScanSpec {
         Ok(n)
     }
 
+    /// A sweep scan's retro points, one an incidence, among its positions
+    /// (0 for a grid, whose points are all of them).
+    pub fn retro_points(&self) -> u32 {
+        match self.sweep {
+            Some(_) => self.theta_i_deg.len() as u32,
+            None => 0,
+        }
+    }
+
     /// Number of positions (0 for an invalid spec).
     pub fn len(&self) -> u32 {
         self.validate().unwrap_or(0)

@@ -72,6 +72,13 @@ impl SweepLobe {
     /// below it.
     pub const WIDTH_MIN_DEG: f32 = 0.05;
 
+    /// The speed (deg/s) at which a sample of `sample_s` spans its
+    /// `extent_fraction` of the width: a row's speed within the zones, where
+    /// its own is faster.
+    pub fn slow_dps(&self, sample_s: f32) -> f32 {
+        self.extent_fraction * self.width_deg / sample_s
+    }
+
     /// Whether the widths and the fraction are in range.
     pub fn valid(&self) -> bool {
         self.width_deg.is_finite()

@@ -113,10 +113,10 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
     };
     let spec = ScanSpec { sweep, ..belcour };
     let (outcome, samples) = demo_scan(sim, &spec, &a.out, &a.output).await?;
-    let retro = spec.theta_i_deg.len() as u32;
+    let retro = spec.retro_points();
     let json = a.output.json;
     if !json {
-        summarise(&outcome, &samples, false)?;
+        summarise(&spec, &outcome, &samples, false)?;
     }
     let calibrated = calibrate::calibrate(&calibrate::CalibrateArgs::for_scan(a.out.clone(), json))?;
     let options = FitOptions {
@@ -217,7 +217,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         }
         let first = resume_from(dir, &plan.spec)?;
         let (outcome, samples) = scan_to_dir(&plan, dir, &a.output, Some(first)).await?;
-        return summarise(&outcome, &samples, a.output.json);
+        return summarise(&plan.spec, &outcome, &samples, a.output.json);
     }
     let (spec, det) = (a.grid.spec()?, &a.detector.checked()?);
     let mut plan = match (&a.port, a.sim) {
@@ -238,7 +238,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
     plan.reference_plate = a.reference_plate;
     let out = a.out.context("--out is required")?;
     let (outcome, samples) = scan_to_dir(&plan, &out, &a.output, None).await?;
-    summarise(&outcome, &samples, a.output.json)
+    summarise(&spec, &outcome, &samples, a.output.json)
 }
 
 /// The first visit position an interrupted scan of `spec` has not stored.
@@ -314,7 +314,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     let estimate = estimate_s(&config, spec, &detection);
     if !json {
         if spec.sweep.is_some() {
-            let retro = spec.theta_i_deg.len() as u32;
+            let retro = spec.retro_points();
             eprintln!(
                 "{} rows to sweep and {retro} retro points to measure at rest; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
                 spec.len().saturating_sub(retro),
@@ -344,8 +344,7 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
         }
         None => SampleWriter::create(dir)?,
     };
-    let unit = if spec.sweep.is_some() { "positions" } else { "points" };
-    let pb = Operator::for_json(json).bar(spec.len() as u64, "scanning", unit);
+    let pb = Operator::for_json(json).bar(spec.len() as u64, "scanning", positions(spec));
     let mut outcome = scan::run(&mut session, spec, &mut writer, &pb, plan.monitor.as_ref())
         .await
         .with_context(|| {
@@ -417,16 +416,29 @@ fn hms(s: f64) -> String {
     format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }
 
-fn summarise(o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
+/// What a scan's visit positions are called: a grid's points, or a sweep
+/// scan's positions (rows and retro points).
+fn positions(spec: &ScanSpec) -> &'static str {
+    match spec.sweep {
+        Some(_) => "positions",
+        None => "points",
+    }
+}
+
+fn summarise(spec: &ScanSpec, o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
     if json {
         println!("{}", serde_json::to_string_pretty(o)?);
         return Ok(());
     }
-    // A sweep scan's positions are rows and retro points.
-    let unit = if o.swept_samples > 0 { "positions" } else { "points" };
     println!(
-        "{} {unit}: {} measured, {} unreachable, {} flagged; {:.0} s of head time in {:.1} s",
-        o.points, o.measured, o.skipped, o.flagged, o.head_time_s, o.wall_time_s
+        "{} {}: {} measured, {} unreachable, {} flagged; {:.0} s of head time in {:.1} s",
+        o.points,
+        positions(spec),
+        o.measured,
+        o.skipped,
+        o.flagged,
+        o.head_time_s,
+        o.wall_time_s
     );
     if let Some(bound) = o.lower_bound_s {
         println!("  {}", against_bound(o.head_time_s, bound));

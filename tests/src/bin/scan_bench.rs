@@ -174,7 +174,7 @@ fn sweep_scan() -> Value {
         "grid_measured": g.measured,
         "grid_head_s": g.head_time_s,
         "positions": s.points,
-        "retro_points": swept.theta_i_deg.len(),
+        "retro_points": swept.retro_points(),
         "measured": s.measured,
         "refused": s.skipped_by_reason,
         "sweep_samples": s.swept_samples,
@@ -281,7 +281,7 @@ fn fit_agreement(material: &Specimen) -> Result<Value> {
     // Slower than the rows' own speed only where a sample at that speed
     // would span more than its share of the width.
     let sample_s = DEMO_SWEEP.periods_per_sample as f32 / DetectionSettings::default().chop_hz;
-    let slows = lobe.is_some_and(|l| l.extent_fraction * l.width_deg < DEMO_SWEEP.speed_dps * sample_s);
+    let slows = lobe.is_some_and(|l| l.slow_dps(sample_s) < DEMO_SWEEP.speed_dps);
     let constant = match slows {
         true => {
             let c = fitted(
