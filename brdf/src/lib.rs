@@ -3,6 +3,7 @@
 //! these; the fitting engine builds on the same evaluations.
 
 mod abc_retro;
+pub mod aperture;
 mod beckmann_retro;
 mod blinn_retro;
 mod catalog;

@@ -43,13 +43,20 @@ pub struct DriverTiming {
     pub step_pulse_s: f32,
 }
 
-/// Geometry of the beam-splitter plate on the arm.
+/// Geometry of the beam-splitter plate on the arm (`docs/optics.md`): which
+/// arm angles see the sample through the splitter, which are shadowed, and
+/// (beyond) which see it directly.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ArmOptics {
-    /// Up to this |ψ| the return is seen through the splitter (retro zone).
+    /// Up to this |ψ| (the observation angle α) the return is seen through
+    /// the splitter (the retro zone), and carries its factor.
     pub retro_max_deg: f32,
-    /// From `retro_max_deg` up to this |ψ| the plate cuts the incident beam.
+    /// From `retro_max_deg` up to this |ψ| the plate holding splitter and
+    /// detector cuts the incident beam: nothing can be measured.
     pub blind_max_deg: f32,
+    /// Solid angle (sr) of the detector seen from the sample: a reading is
+    /// the BRDF averaged over this field about the view.
+    pub detector_sr: f32,
 }
 
 /// Photodiode front end.
@@ -89,6 +96,7 @@ impl HeadConfig {
             }),
             retro_max_deg: self.optics.retro_max_deg,
             blind_max_deg: self.optics.blind_max_deg,
+            detector_sr: self.optics.detector_sr,
         }
     }
 
@@ -107,6 +115,7 @@ impl HeadConfig {
         cfg.optics = ArmOptics {
             retro_max_deg: m.retro_max_deg,
             blind_max_deg: m.blind_max_deg,
+            detector_sr: m.detector_sr,
         };
         cfg
     }
@@ -155,9 +164,14 @@ pub const REFERENCE: HeadConfig = HeadConfig {
         dir_hold_s: 5.0e-6,
         step_pulse_s: 3.0e-6,
     },
+    // The CEA head's (Belcour et al. 2014, §2.A): through the splitter out
+    // to 5° from the laser, the plate holding splitter and detector in the
+    // incident beam from there to 11.5° (docs/optics.md); its 2.4 × 2.4 mm
+    // photodiode subtends 3.6e-5 sr at the sample.
     optics: ArmOptics {
-        retro_max_deg: 0.25,
-        blind_max_deg: 5.0,
+        retro_max_deg: 5.0,
+        blind_max_deg: 11.5,
+        detector_sr: 3.6e-5,
     },
     detector: DetectorConfig {
         gains_v_per_a: [1.0e4, 1.0e5, 1.0e6, 1.0e7],
@@ -177,7 +191,8 @@ mod tests {
         other.axes[1].max_speed_dps = 4.0;
         other.axes[2].max_accel_dps2 = 15.0;
         other.axes[2].min_deg = -120.0;
-        other.optics.blind_max_deg = 7.0;
+        other.optics.blind_max_deg = 14.0;
+        other.optics.detector_sr = 1.0e-4;
         let rebuilt = REFERENCE.with_mechanics(&other.mechanics());
         assert_eq!(rebuilt, other);
         assert_eq!(REFERENCE.with_mechanics(&REFERENCE.mechanics()), REFERENCE);

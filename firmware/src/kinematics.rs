@@ -142,7 +142,12 @@ mod tests {
     #[test]
     fn refusals_name_the_reason() {
         let r = |g| inverse(&REFERENCE, &g).unwrap_err();
-        assert_eq!(r(Geometry::new(30.0, 33.0, 0.0)), Fault::Unreachable(Unreachable::BlindZone));
+        assert_eq!(r(Geometry::new(30.0, 38.0, 0.0)), Fault::Unreachable(Unreachable::BlindZone));
+        // Within 5° of the laser the splitter shows the sample.
+        assert!(through_splitter(
+            &REFERENCE,
+            &inverse(&REFERENCE, &Geometry::new(30.0, 34.5, 0.0)).unwrap()
+        ));
         assert_eq!(r(Geometry::new(30.0, 90.0, 0.0)), Fault::Unreachable(Unreachable::BehindSample));
         assert_eq!(r(Geometry::new(f32::NAN, 10.0, 0.0)), Fault::InvalidValue(Field::ThetaI));
         assert_eq!(r(Geometry::new(10.0, -1.0, 0.0)), Fault::InvalidValue(Field::ThetaO));

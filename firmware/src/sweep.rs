@@ -385,8 +385,10 @@ mod tests {
         /// apart.
         #[test]
         fn neighbouring_rows_are_at_most_the_dphi_step_apart(
-            ti in 0.5f32..80.0, step in 2u32..40, start in -180i32..180, part in 0.0f32..1.0,
+            ti in 0.5f32..72.0, step in 2u32..40, start in -180i32..180, part in 0.0f32..1.0,
         ) {
+            // (Beyond θi ≈ 75° a row towards the horizon would start past
+            // it: rows start beyond the plate's shadow, 11.5° from the laser.)
             // Whole degrees: the span's ends exact in f32, a whole circle
             // never a rounding beyond 360°.
             let (step, start) = (step as f32, start as f32);
@@ -402,6 +404,7 @@ mod tests {
                     dphi: AngleRange::new(start, start + step * (n - 1) as f32, step),
                     first_order: 0,
                     sweep: Some(SweepScan { speed_dps: 30.0, periods_per_sample: 8, lobe: None }),
+                    patterns: None,
                 };
                 // Positions 1..=n are the rows (0 is the retro point).
                 prop_assert_eq!(spec.len(), n + 1);

@@ -5,7 +5,7 @@
 //! data. Everything it links is written beside it, by relative path.
 
 use crate::calibration::IncidenceBudget;
-use crate::coefficients::{self, Kind, Source};
+use crate::coefficients::{self, Estimate, Fitted, Kind, Provenance, Source, Support};
 use crate::fit::{self, Dataset, Fit, Metrics, Units};
 use crate::formats::brdf_explorer;
 use crate::plot;
@@ -30,21 +30,59 @@ pub struct Report<'a> {
     pub budget: &'a [IncidenceBudget],
 }
 
-/// R_A (ASTM E810 set, ε = 0: the BRDF is isotropic) and R_L (EN 1436) of
-/// the best fit, with the fit's uncertainty and the calibration's common one.
-fn coefficients_section(best: &Fit) -> Result<String> {
-    let source = Source::Model {
-        material: best.material.clone(),
-        covariance: best.covariance.clone(),
-    };
+/// Every fit with what weighs it against the others.
+fn fitted(fits: &[Fit]) -> Vec<Fitted> {
+    fits.iter()
+        .map(|f| Fitted {
+            material: f.material.clone(),
+            covariance: f.covariance.clone(),
+            rmse: f.metrics.rmse,
+            aic: f.aic,
+        })
+        .collect()
+}
+
+/// One table cell: the value ± u, extrapolated ones marked.
+fn coefficient_cell(e: &Estimate) -> String {
+    let provenance = e.basis.as_ref().map(|b| b.provenance);
+    let title = e.basis.as_ref().map_or(String::new(), |b| escape(&b.why));
+    let text = format!("{:.4e} ± {:.1e}", e.value, e.u);
+    match provenance {
+        Some(Provenance::Extrapolated) => format!(
+            "<td class=\"ex\" title=\"{title}\">{text}<br><small>extrapolated ({}, models ±{:.1e})</small></td>",
+            e.model.unwrap_or("model"),
+            e.u_model.unwrap_or(0.0)
+        ),
+        Some(p) => format!("<td title=\"{title}\">{text}<br><small>{}</small></td>", p.name()),
+        None => format!("<td>{text}</td>"),
+    }
+}
+
+/// R_A (ASTM E810 set, ε = 0: the BRDF is isotropic) and R_L (EN 1436):
+/// from the data where they hold the geometry, from the best fit beyond it
+/// (marked, with the adequate models' spread in its uncertainty), and the
+/// picture of R_A against α per β.
+fn coefficients_section(fits: &[Fit], data: &Dataset, dir: &Path) -> Result<String> {
+    let source = Source::measured(fitted(fits), Support::of(data)?)?;
     let values = coefficients::compute(&source, &coefficients::report_requests())?;
     let mut html = format!(
-        "<h2>Coefficients of retroreflection</h2>\n<p>From the best fit ({}), averaged over the instruments' source and \
-         receiver apertures, ± the standard uncertainty (k = 1: from the fit's covariance, which holds the shared inputs of calibrated data, the plate and the stage zeros{}). Spectral values at the laser's \
-         wavelength ({} nm), <b>not photometric</b>. Definitions: docs/retroreflection.md.</p>\n<table>\n\
+        "<h2>Coefficients of retroreflection</h2>\n<p>Each value says what it rests on. <b>measured</b>: a sample of this \
+         scan at the geometry, carried from the head's apertures (a collimated laser, a 0.39° detector field) to the \
+         standard's with the samples' own curvature; <b>interpolated</b>: between samples on every side at most 1° \
+         away; <b>extrapolated</b> (shaded): no sample there (an entrance angle not measured, or the plate's shadow): the \
+         best model ({}) carries it, scaled to the data at the nearest measured incidences, and its uncertainty holds \
+         half the spread of every model within {}× its RMSE. ± the standard uncertainty (k = 1{}). Spectral values at \
+         the laser's wavelength ({} nm), <b>not photometric</b>. Definitions: docs/retroreflection.md.</p>\n<table>\n\
          <tr><th class=\"l\">R_A (cd·lx⁻¹·m⁻²)</th>",
-        best.material.model.name(),
-        if best.covariance.is_some() { "" } else { ", none: no covariance" },
+        fits.iter()
+            .min_by(|a, b| a.aic.total_cmp(&b.aic))
+            .map_or("", |f| f.material.model.name()),
+        coefficients::ADEQUATE_RMSE_RATIO,
+        if fits.iter().all(|f| f.covariance.is_some()) {
+            ": the samples' budgets, the fit's covariance with the plate and the stage zeros"
+        } else {
+            "; a fit without covariance adds no parameter term"
+        },
         coefficients::WAVELENGTH_NM
     );
     for a in coefficients::ASTM_ALPHAS {
@@ -57,7 +95,7 @@ fn coefficients_section(best: &Fit) -> Result<String> {
             .iter()
             .filter(|c| c.request.kind == Kind::Ra && c.request.geometry.beta1_deg == b)
         {
-            let _ = write!(html, "<td>{:.4e} ± {:.1e}</td>", c.estimate.value, c.estimate.u);
+            html.push_str(&coefficient_cell(&c.estimate));
         }
         html.push_str("</tr>\n");
     }
@@ -65,13 +103,19 @@ fn coefficients_section(best: &Fit) -> Result<String> {
     if let Some(rl) = values.iter().find(|c| c.request.kind == Kind::Rl) {
         let _ = writeln!(
             html,
-            "<p>R_L at the 30 m geometry (EN 1436: entrance {}°, observation {}°): {:.4e} ± {:.1e} mcd·m⁻²·lx⁻¹.</p>",
+            "<p>R_L at the 30 m geometry (EN 1436: entrance {}°, observation {}°, mcd·m⁻²·lx⁻¹):</p>\n<table><tr>{}</tr></table>",
             coefficients::EN1436_ENTRANCE_DEG,
             coefficients::EN1436_OBSERVATION_DEG,
-            rl.estimate.value,
-            rl.estimate.u
+            coefficient_cell(&rl.estimate)
         );
     }
+    let picture = plot::coefficients::render(&source, &dir.join("plots"))?;
+    let _ = writeln!(
+        html,
+        "<figure><img src=\"plots/{}\" alt=\"R_A against α\"><figcaption>R_A against the observation angle α per entrance \
+         angle β: solid where measured or interpolated, dashed where extrapolated (k = 2 band shaded).</figcaption></figure>",
+        picture.file_name().and_then(|n| n.to_str()).unwrap_or_default()
+    );
     Ok(html)
 }
 
@@ -158,6 +202,7 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
          td, th {{ border: 1px solid #bbb; padding: 0.3em 0.6em; text-align: right; vertical-align: top; }}\n\
          td.l, th.l {{ text-align: left; }}\n\
          tr.best {{ background: #eef6ee; }}\n\
+         td.ex {{ background: #f3eee2; font-style: italic; }}\n\
          figure {{ display: inline-block; margin: 0.5em; max-width: 48%; vertical-align: top; }}\n\
          figure img {{ max-width: 100%; }}\n\
          </style>\n</head>\n<body>\n<h1>{t}</h1>\n<table>\n",
@@ -190,9 +235,10 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         let f = &r.fits[i];
         let name = f.material.model.name();
         let json = fits_dir.join(format!("{name}.json"));
-        fit::file::write(
+        fit::file::write_with_support(
             &json,
             &fit::file::to_json(f, r.data.units, r.holdout.get(i).and_then(Option::as_ref)),
+            r.data,
         )?;
         let brdf = fits_dir.join(format!("{name}.brdf"));
         let text = brdf_explorer::write(
@@ -227,8 +273,8 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         );
     }
     html.push_str("</table>\n");
-    if let Some(&best) = order.first() {
-        html.push_str(&coefficients_section(&r.fits[best])?);
+    if !r.fits.is_empty() {
+        html.push_str(&coefficients_section(r.fits, r.data, dir)?);
     }
     if !r.budget.is_empty() {
         html.push_str(&budget_section(r.budget));

@@ -205,7 +205,8 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
         summary["measured"].as_u64().unwrap(),
         summary["skipped"].as_u64().unwrap(),
     );
-    assert_eq!(points, 3 * 31 * 37);
+    // The grid and, at each incidence, its lobe patterns (docs/optics.md).
+    assert_eq!(points, 3 * (31 * 37 + 400));
     assert_eq!(measured + skipped, points);
     // θo = 90° is behind the sample for every (θi, Δφ): 3 × 37 points at least.
     assert!(skipped >= 111, "{summary}");
@@ -287,10 +288,7 @@ fn a_scan_killed_at_a_random_point_resumes_to_exactly_the_grid() {
         idx.len(),
         "a point was measured twice (killed after {kill_after} rows)"
     );
-    let spec = gonio_shared::ScanSpec::belcour();
-    let reachable: BTreeSet<u32> = (0..spec.len())
-        .filter(|&i| gonio_firmware::kinematics::inverse(&gonio_firmware::config::REFERENCE, &spec.point(i).unwrap()).is_ok())
-        .collect();
+    let reachable = common::reachable(&gonio_shared::ScanSpec::belcour_with_patterns());
     assert_eq!(unique, reachable, "points missing after resuming (killed after {kill_after} rows)");
     assert!(!part.exists());
     let run: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
@@ -306,8 +304,9 @@ fn a_sweep_scan_killed_at_a_random_point_resumes_to_every_position_once_and_whol
     use rand::Rng;
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("sweep");
-    // Some 90 samples a row, 111 rows and 3 retro points (one an incidence,
-    // before its rows): killed within one of them or between.
+    // Some 90 samples a row, 111 rows, 3 retro points and 1 200 pattern
+    // points (an incidence's retro point and pattern before its rows):
+    // killed within one of them or between.
     let kill_after = rand::rng().random_range(50..9000);
     scan_killed(&out, &["--sweep"], kill_after);
     let o = gonio(&["scan", "--resume", out.to_str().unwrap(), "--json"]);
@@ -340,16 +339,17 @@ fn a_sweep_scan_killed_at_a_random_point_resumes_to_every_position_once_and_whol
     );
     assert_eq!(
         positions,
-        (0..114).collect(),
+        (0..114 + 3 * 400).collect(),
         "positions missing after resuming (killed after {kill_after} samples)"
     );
-    // Each incidence's retro point one sample, its rows many.
-    let retro = |i: u32| i % 38 == 0;
+    // Each incidence's retro point and its 400 pattern points one sample
+    // (positions 0 and 38.. of its 438), its rows many.
+    let at_rest = |i: u32| i % 438 == 0 || i % 438 >= 38;
     assert!(
-        runs.iter().all(|&(i, n)| if retro(i) { n == 1 } else { n > 20 }),
+        runs.iter().all(|&(i, n)| if at_rest(i) { n == 1 } else { n > 20 }),
         "a row cut short or a point measured twice: {runs:?}"
     );
     let run: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
-    assert_eq!(run["counts"]["measured"].as_u64(), Some(114));
-    assert_eq!(run["counts"]["swept_samples"].as_u64(), Some(idx.len() as u64 - 3));
+    assert_eq!(run["counts"]["measured"].as_u64(), Some(114 + 3 * 400));
+    assert_eq!(run["counts"]["swept_samples"].as_u64(), Some(idx.len() as u64 - 3 - 3 * 400));
 }

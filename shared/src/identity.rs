@@ -6,10 +6,12 @@ use serde::{Deserialize, Serialize};
 /// Bumped on every change of a message type or of what one means (11: a
 /// sweep scan's rows turned evenly about the laser, `row_turn`, where the same
 /// `ScanSpec` spaced them evenly at the horizon; 12: a sweep scan's retro
-/// points, [`crate::scan::SWEEP_LAYOUT_SINCE`]). Keys are schema-hashed too, so an
+/// points, [`crate::scan::SWEEP_LAYOUT_SINCE`]; 13: a scan's lobe patterns,
+/// `ScanSpec::patterns`, and the reference head's through-splitter zone out
+/// to 5°). Keys are schema-hashed too, so an
 /// old head answers new requests with `UnknownKey`; the identify endpoint keeps
 /// its types stable so the host can always tell *why*.
-pub const PROTOCOL_VERSION: u16 = 12;
+pub const PROTOCOL_VERSION: u16 = 13;
 
 /// USB identity of the head (pid.codes test range until a PID is assigned).
 pub const USB_VID: u16 = 0x1209;

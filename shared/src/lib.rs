@@ -14,6 +14,7 @@ pub mod fault;
 pub mod geometry;
 pub mod icd;
 pub mod identity;
+pub mod lobe_pattern;
 pub mod mechanics;
 pub mod models;
 pub mod row_turn;
@@ -29,6 +30,7 @@ pub use detection::{CalibrateRequest, CalibrationReport, DetectionReport, Detect
 pub use fault::{Axis, Fault, Field, Unreachable};
 pub use geometry::{AxisAngles, Geometry};
 pub use identity::{Capabilities, Identity, PROTOCOL_VERSION};
+pub use lobe_pattern::{LobePatterns, Rings};
 pub use mechanics::{AxisMechanics, Mechanics};
 pub use models::{ModelSpec, MODELS};
 pub use safety::SafetySettings;

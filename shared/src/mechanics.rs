@@ -27,6 +27,8 @@ pub struct Mechanics {
     pub retro_max_deg: f32,
     /// From `retro_max_deg` up to this |ψ| the splitter plate cuts the beam.
     pub blind_max_deg: f32,
+    /// Solid angle (sr) of the detector's field seen from the sample.
+    pub detector_sr: f32,
 }
 
 impl Mechanics {
@@ -44,7 +46,12 @@ impl Mechanics {
                 && a.max_deg.is_finite()
                 && a.min_deg < a.max_deg
         });
-        axes_ok && self.retro_max_deg >= 0.0 && self.retro_max_deg <= self.blind_max_deg && self.blind_max_deg.is_finite()
+        axes_ok
+            && self.retro_max_deg >= 0.0
+            && self.retro_max_deg <= self.blind_max_deg
+            && self.blind_max_deg.is_finite()
+            && self.detector_sr.is_finite()
+            && self.detector_sr >= 0.0
     }
 }
 
@@ -63,17 +70,19 @@ mod tests {
         };
         let good = Mechanics {
             axes: [axis; 3],
-            retro_max_deg: 0.25,
-            blind_max_deg: 5.0,
+            retro_max_deg: 5.0,
+            blind_max_deg: 11.5,
+            detector_sr: 3.6e-5,
         };
         assert!(good.is_plausible());
-        let mut bad = [good; 6];
+        let mut bad = [good; 7];
         bad[0].axes[1].max_speed_dps = 0.0;
         bad[1].axes[2].max_accel_dps2 = f32::NAN;
         bad[2].axes[0].microsteps_per_rev = 0;
         bad[3].axes[0].min_deg = 100.0;
-        bad[4].retro_max_deg = 6.0;
+        bad[4].retro_max_deg = 12.0;
         bad[5].blind_max_deg = f32::INFINITY;
+        bad[6].detector_sr = -1.0;
         for (k, m) in bad.iter().enumerate() {
             assert!(!m.is_plausible(), "case {k}");
         }

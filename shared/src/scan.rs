@@ -15,6 +15,7 @@
 
 use crate::fault::{Fault, Field};
 use crate::geometry::Geometry;
+use crate::lobe_pattern::LobePatterns;
 use crate::row_turn;
 use crate::sample::Sample;
 use crate::sweep::{SweepLobe, SweptSample};
@@ -79,6 +80,11 @@ pub struct ScanSpec {
     /// at every point (absent in a scan.json of an earlier gonio).
     #[serde(default)]
     pub sweep: Option<SweepScan>,
+    /// Rings about the retro and the mirror direction of every incidence,
+    /// measured at rest besides the grid or the rows ([`LobePatterns`];
+    /// absent in a scan.json of an earlier gonio).
+    #[serde(default)]
+    pub patterns: Option<LobePatterns>,
 }
 
 /// How a sweep scan sweeps its rows.
@@ -128,12 +134,27 @@ pub enum Visit {
     Row(SweepRow),
 }
 
-/// The shape of a validated grid.
+/// The shape of a validated grid: per incidence, `n_to × n_dp` grid
+/// positions (a sweep scan's: its retro point and its rows, `1 × (rows + 1)`)
+/// and then `n_pat` pattern points.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 struct Dims {
     n_ti: u32,
     n_to: u32,
     n_dp: u32,
+    n_pat: u32,
+}
+
+impl Dims {
+    /// Grid positions of one incidence.
+    fn base(&self) -> u32 {
+        self.n_to * self.n_dp
+    }
+
+    /// Positions of one incidence, its patterns' included.
+    fn block(&self) -> u32 {
+        self.base() + self.n_pat
+    }
 }
 
 impl ScanSpec {
@@ -151,6 +172,17 @@ impl ScanSpec {
             dphi: AngleRange::new(-180.0, 180.0, 10.0),
             first_order: 0,
             sweep: None,
+            patterns: None,
+        }
+    }
+
+    /// The Belcour grid with the reference lobe patterns
+    /// ([`LobePatterns::cea`]) at each incidence: what `gonio scan` and
+    /// `gonio demo` measure by default.
+    pub fn belcour_with_patterns() -> Self {
+        Self {
+            patterns: Some(LobePatterns::cea()),
+            ..Self::belcour()
         }
     }
 
@@ -163,13 +195,20 @@ impl ScanSpec {
             return bad;
         };
         let n_ti = self.theta_i_deg.len() as u32;
+        let n_pat = match &self.patterns {
+            Some(p) => match p.count() {
+                Some(n) => n,
+                None => return bad,
+            },
+            None => 0,
+        };
         // Bounded so every index fits in u32 with room to spare (a sweep
         // scan's with its θo span counted too: one bound for every scan).
-        if (n_ti as u64) * (n_to as u64) * (n_dp as u64) > 10_000_000 {
+        if (n_ti as u64) * ((n_to as u64) * (n_dp as u64) + n_pat as u64) > 10_000_000 {
             return bad;
         }
         if self.sweep.is_none() {
-            return Ok(Dims { n_ti, n_to, n_dp });
+            return Ok(Dims { n_ti, n_to, n_dp, n_pat });
         }
         // A sweep scan's positions are, per incidence, its retro point
         // (column 0) and its rows (one θo "column" each, columns 1..), and a
@@ -181,6 +220,7 @@ impl ScanSpec {
             n_ti,
             n_to: 1,
             n_dp: n_dp + 1,
+            n_pat,
         })
     }
 
@@ -188,7 +228,7 @@ impl ScanSpec {
     /// positions (points, or a sweep scan's retro points and rows).
     pub fn validate(&self) -> Result<u32, Fault> {
         let d = self.dims()?;
-        let n = d.n_ti * d.n_to * d.n_dp;
+        let n = d.n_ti * d.block();
         if self.first_order > n {
             return Err(Fault::InvalidValue(Field::ScanStart));
         }
@@ -204,6 +244,19 @@ impl ScanSpec {
         }
     }
 
+    /// The lobe patterns' points among its positions, every incidence's.
+    pub fn pattern_points(&self) -> u32 {
+        self.dims().map_or(0, |d| d.n_ti * d.n_pat)
+    }
+
+    /// A sweep scan's rows among its positions (0 for a grid).
+    pub fn rows(&self) -> u32 {
+        match self.sweep {
+            Some(_) => self.len().saturating_sub(self.retro_points() + self.pattern_points()),
+            None => 0,
+        }
+    }
+
     /// Number of positions (0 for an invalid spec).
     pub fn len(&self) -> u32 {
         self.validate().unwrap_or(0)
@@ -213,45 +266,56 @@ impl ScanSpec {
         self.len() == 0
     }
 
-    /// Splits `i` into the incidence (outermost) and the row and column of a
-    /// `rows × cols` block, for an `i` inside the grid.
-    fn locate(&self, i: u32, cols: impl Fn(&Dims) -> u32) -> Option<(Dims, u32, u32, u32)> {
+    /// Splits `i` into the incidence (outermost) and the position within
+    /// its block, for an `i` inside the scan.
+    fn locate(&self, i: u32) -> Option<(Dims, u32, u32)> {
         let d = self.dims().ok()?;
-        let block = d.n_to * d.n_dp;
+        let block = d.block();
         if i >= d.n_ti * block {
             return None;
         }
-        let (a, rest) = (i / block, i % block);
-        let c = cols(&d);
-        Some((d, a, rest / c, rest % c))
+        Some((d, i / block, i % block))
     }
 
-    /// The geometry of canonical index `index` (`None` in a sweep scan,
-    /// whose positions are mostly rows: [`ScanSpec::visit`]).
+    /// The pattern point `k` of incidence `a`.
+    fn pattern_point(&self, a: u32, k: u32) -> Option<Geometry> {
+        self.patterns.as_ref()?.point(self.theta_i_deg[a as usize], k)
+    }
+
+    /// The geometry of canonical index `index`: a grid point, or a pattern
+    /// point after its incidence's grid (`None` in a sweep scan, whose
+    /// positions are mostly rows: [`ScanSpec::visit`]).
     pub fn point(&self, index: u32) -> Option<Geometry> {
         if self.sweep.is_some() {
             return None;
         }
-        let (_, a, b, c) = self.locate(index, |d| d.n_dp)?;
+        let (d, a, rest) = self.locate(index)?;
+        if rest >= d.base() {
+            return self.pattern_point(a, rest - d.base());
+        }
+        let (b, c) = (rest / d.n_dp, rest % d.n_dp);
         Some(Geometry::new(self.theta_i_deg[a as usize], self.theta_o.at(b), self.dphi.at(c)))
     }
 
     /// What canonical index `index` is when visited at position `order`: a
     /// point, or in a sweep scan an incidence's retro point (measured at
     /// rest through the beam splitter, where no row reaches: rows begin
-    /// beyond the blind zone around it) or one of its rows (θi of the grid,
-    /// its rows turned evenly about the laser across the Δφ span,
-    /// [`crate::row_turn`], out to θo's last value short of 90°). An
-    /// incidence's retro point is visited first, then its rows, the first
-    /// outward from the retro direction and each next one back the other
-    /// way, so consecutive rows join near the retro direction or near the
-    /// horizon ([`ScanSpec::index_at_order`]).
+    /// beyond the blind zone around it), a pattern point (measured at rest)
+    /// or one of its rows (θi of the grid, its rows turned evenly about the
+    /// laser across the Δφ span, [`crate::row_turn`], out to θo's last value
+    /// short of 90°). An incidence's retro point is visited first, then its
+    /// pattern, then its rows, the first outward from the retro direction
+    /// and each next one back the other way, so consecutive rows join near
+    /// the retro direction or near the horizon ([`ScanSpec::index_at_order`]).
     pub fn visit(&self, index: u32, order: u32) -> Option<Visit> {
         let Some(how) = self.sweep else {
             return self.point(index).map(Visit::Point);
         };
-        let (d, a, _, c) = self.locate(index, |d| d.n_dp)?;
+        let (d, a, c) = self.locate(index)?;
         let stop = self.row_stop()?;
+        if c >= d.base() {
+            return self.pattern_point(a, c - d.base()).map(Visit::Point);
+        }
         let ti = self.theta_i_deg[a as usize];
         let Some(row) = c.checked_sub(1) else {
             return Some(Visit::Point(Geometry::new(ti, ti, 0.0)));
@@ -261,8 +325,8 @@ impl ScanSpec {
             theta_i_deg: ti,
             dphi_deg: row_turn::row_dphi_deg(ti, self.dphi.at(0), self.dphi.at(rows - 1), row, rows),
             theta_o_stop_deg: stop,
-            // The position among the incidence's, the retro point's first.
-            outward: order % d.n_dp % 2 == 1,
+            // The row's rank among the incidence's rows in visit order.
+            outward: (order % d.block()).saturating_sub(d.n_pat) % 2 == 1,
             speed_dps: how.speed_dps,
             periods_per_sample: how.periods_per_sample,
             lobe: how.lobe,
@@ -287,22 +351,31 @@ impl ScanSpec {
     }
 
     /// Canonical index of the point visited at position `order`: a grid's
-    /// points row by row of θo, Δφ's way back on every other one; a sweep
-    /// scan's retro point first at each incidence, then its rows, Δφ's way
-    /// back at every other incidence.
+    /// points row by row of θo, Δφ's way back on every other one, then the
+    /// incidence's pattern ring by ring; a sweep scan's retro point first at
+    /// each incidence, then its pattern, then its rows, Δφ's way back at
+    /// every other incidence.
     pub fn index_at_order(&self, order: u32) -> Option<u32> {
-        let (d, a, row, col) = self.locate(order, |d| d.n_to)?;
+        let (d, a, p) = self.locate(order)?;
+        let first = a * d.block();
         if self.sweep.is_some() {
-            let c = match row {
+            let c = match p {
                 0 => 0,
-                r if a % 2 == 0 => r,
-                r => d.n_dp - r,
+                p if p <= d.n_pat => d.base() + p - 1,
+                p => match p - d.n_pat {
+                    r if a % 2 == 0 => r,
+                    r => d.n_dp - r,
+                },
             };
-            return Some(a * d.n_dp + c);
+            return Some(first + c);
         }
+        if p >= d.base() {
+            return Some(first + p);
+        }
+        let (row, col) = (p / d.n_to, p % d.n_to);
         let c = if a % 2 == 0 { row } else { d.n_dp - 1 - row };
         let b = if row % 2 == 0 { col } else { d.n_to - 1 - col };
-        Some((a * d.n_to + b) * d.n_dp + c)
+        Some(first + b * d.n_dp + c)
     }
 }
 

@@ -18,7 +18,7 @@ pub use board::SimBoard;
 pub use frames::{Cue, FrameHead, Sent};
 pub use imperfections::Imperfections;
 pub use inproc::spawn_in_process;
-pub use optics::Photodiode;
+pub use optics::{seen_brdf, Photodiode};
 pub use pty::serve_pty;
 pub use world::World;
 

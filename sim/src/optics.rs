@@ -4,6 +4,7 @@
 //! ambient light, mains pickup, amplifier bandwidth, noise, offset,
 //! quantisation and saturation.
 
+use gonio_brdf::aperture::{diameter_deg, disc, DiscRule};
 use gonio_brdf::{Directions, Specimen};
 use gonio_firmware::config::HeadConfig;
 use rand::Rng;
@@ -14,8 +15,6 @@ pub struct Photodiode {
     /// Laser power on the sample (W).
     pub laser_w: f64,
     pub responsivity_a_per_w: f64,
-    /// Solid angle of the detector seen from the sample (sr); Belcour et al.'s head: 3.6e-5.
-    pub solid_angle_sr: f64,
     /// Reflectance × transmission of the 70/30 splitter on the retro path.
     pub splitter_factor: f64,
     /// Photocurrent of room light (A), not chopped.
@@ -45,7 +44,6 @@ impl Default for Photodiode {
         Photodiode {
             laser_w: 0.01,
             responsivity_a_per_w: 0.4,
-            solid_angle_sr: 3.6e-5,
             splitter_factor: 0.7 * 0.3,
             ambient_a: 2.0e-9,
             mains_v: 0.002,
@@ -64,8 +62,9 @@ impl Default for Photodiode {
 
 impl Photodiode {
     /// Signal photocurrent (A) with the laser on, at stage angles `(ω, τ, ψ)` in degrees:
-    /// `P·R·f_r·cosθo·Ω`, times the splitter factor in the retro zone, zero in
-    /// the blind zone or behind the sample; `defect` scales the material's
+    /// `P·R·f̄·cosθo·Ω` with `f̄` the BRDF the detector's field `Ω` sees
+    /// ([`seen_brdf`]), times the splitter factor in the retro zone, zero in
+    /// the plate's shadow or behind the sample; `defect` scales the material's
     /// reflection at a direction pair (a dust speck).
     pub fn signal_a(&self, material: &Specimen, cfg: &HeadConfig, angles: [f64; 3], defect: impl Fn(&Directions) -> f64) -> f64 {
         let psi_abs = angles[2].abs();
@@ -81,7 +80,10 @@ impl Photodiode {
         } else {
             1.0
         };
-        self.laser_w * self.responsivity_a_per_w * material.eval(&d) * defect(&d) * d.cos_o() * self.solid_angle_sr * splitter
+        let field = optics.detector_sr as f64;
+        // A dust speck marks a direction pair (within 0.05°), the nominal one.
+        let f = field_average(field, &d, |d| material.eval(d)) * defect(&d);
+        self.laser_w * self.responsivity_a_per_w * f * d.cos_o() * field * splitter
     }
 
     /// Laser power at time `t` relative to its nominal value.
@@ -97,4 +99,25 @@ impl Photodiode {
         let offset = self.offset_v + self.offset_wander_v * (tau * t / self.offset_wander_s).sin();
         offset + self.mains_v * (w.sin() + self.mains_h3 * (3.0 * w + 0.4).sin()) + self.noise_v * noise
     }
+}
+
+/// The BRDF (sr⁻¹) a detector of field `detector_sr` reads at nominal
+/// directions `d`: the flux `f·cosθ` it collects over its field (taken as a
+/// disc of that solid angle about the view: 0.39° across for the reference
+/// head's 3.6e-5 sr) over the nominal `cosθo` and the field's solid angle,
+/// which is what a calibration divides by. Near a retro lobe narrower than a
+/// degree it is percents off the value at the nominal view; it is what a
+/// simulated scan's values are to be checked against.
+pub fn seen_brdf(material: &Specimen, detector_sr: f64, d: &Directions) -> f64 {
+    field_average(detector_sr, d, |d| material.eval(d))
+}
+
+fn field_average(detector_sr: f64, d: &Directions, f: impl Fn(&Directions) -> f64) -> f64 {
+    let views = disc(d.v, diameter_deg(detector_sr), DiscRule::DETECTOR);
+    let flux: f64 = views
+        .iter()
+        .filter(|v| v[2] > 0.0)
+        .map(|&v| f(&Directions { l: d.l, v }) * v[2])
+        .sum();
+    flux / views.len() as f64 / d.cos_o()
 }

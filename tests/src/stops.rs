@@ -155,6 +155,7 @@ pub fn small_scan() -> ScanSpec {
         theta_i_deg: heapless::Vec::from_slice(&[30.0]).expect("one incidence"),
         first_order: 0,
         sweep: None,
+        patterns: None,
     }
 }
 

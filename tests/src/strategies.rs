@@ -149,6 +149,7 @@ pub fn scan_spec() -> impl Strategy<Value = ScanSpec> {
                     extent_fraction,
                 }),
             }),
+            patterns: None,
         })
 }
 

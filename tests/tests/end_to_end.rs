@@ -28,6 +28,7 @@ fn small_grid() -> ScanSpec {
         dphi: AngleRange::new(0.0, 180.0, 90.0),
         first_order: 0,
         sweep: None,
+        patterns: None,
     }
 }
 
@@ -62,8 +63,11 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
     assert_eq!(measured, reachable);
 
     // Photocurrent / (f_r · cosθo) is one instrument constant over the whole
-    // scan, once the beam splitter's factor is divided out of the retro point.
+    // scan, once the beam splitter's factor is divided out of the retro
+    // zone's points, f_r as the detector's field sees it (on the tape's
+    // retro peak 15 % below the value at the nominal view).
     let m = &sim.material;
+    let field = sim.machine.optics.detector_sr as f64;
     let ratios: Vec<f64> = rows
         .iter()
         .map(|r| {
@@ -75,7 +79,7 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
                 1.0
             };
             assert!(!r.sample_flags().doubtful(), "unexpected flags on {r:?}");
-            r.amplitude_v as f64 / r.gain_v_per_a as f64 / (m.eval(&d) * d.cos_o() * splitter)
+            r.amplitude_v as f64 / r.gain_v_per_a as f64 / (gonio_sim::seen_brdf(m, field, &d) * d.cos_o() * splitter)
         })
         .collect();
     let mut sorted = ratios.clone();
@@ -83,8 +87,12 @@ async fn a_scan_stores_one_calibratable_sample_per_reachable_point() {
     let median = sorted[sorted.len() / 2];
     for (r, k) in rows.iter().zip(&ratios) {
         // Within 2 % (the amplifier's lag differs slightly between gains)
-        // plus four standard errors of the sample's own noise.
-        let tol = 0.02 + 4.0 * (r.noise_v / r.amplitude_v) as f64;
+        // plus five standard errors of the sample's own noise: the noise is
+        // estimated from 23 periods, so the deviation over it is Student's
+        // t with 22 degrees of freedom, beyond 4 once in 1 700 (at the
+        // grazing points, where noise dominates, 180 points made that a
+        // one-in-ten failure) and beyond 5 once in 20 000.
+        let tol = 0.02 + 5.0 * (r.noise_v / r.amplitude_v) as f64;
         assert!(
             (k / median - 1.0).abs() < tol,
             "point {:?} off the instrument constant by {:.3} (tolerance {tol:.3})",
@@ -172,7 +180,7 @@ async fn refused_commands_move_nothing() {
     head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
     let before = head.request::<StatusEndpoint>(&()).await.unwrap();
     for (g, why) in [
-        (Geometry::new(30.0, 33.0, 0.0), "blind zone"),
+        (Geometry::new(30.0, 38.0, 0.0), "blind zone"),
         (Geometry::new(30.0, 95.0, 0.0), "behind the sample"),
         (Geometry::new(f32::NAN, 10.0, 0.0), "invalid theta_i"),
         (Geometry::new(87.0, 87.0, 180.0), "travel of the arm"),
@@ -313,6 +321,7 @@ async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before
         theta_i_deg: heapless::Vec::from_slice(&[0.0, 80.0]).unwrap(),
         first_order: 0,
         sweep: None,
+        patterns: None,
     };
     let [a, b] = [0, 1].map(|i| {
         let axes = kinematics::inverse(&REFERENCE, &spec.point(i).unwrap()).unwrap();

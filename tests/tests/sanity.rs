@@ -21,6 +21,7 @@ async fn dust_is_flagged_and_clean_data_is_not() {
         dphi: AngleRange::new(0.0, 180.0, 45.0),
         first_order: 0,
         sweep: None,
+        patterns: None,
     };
     let dust = [
         Geometry::new(30.0, 45.0, 90.0),

@@ -6,7 +6,7 @@ use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::{target_steps, PARK};
 use gonio_host::scan_order::{lower_bound, scan_time, visit_order, ScanTime};
-use gonio_shared::{row_turn, AngleRange, Geometry, ScanSpec, SweepScan, Visit};
+use gonio_shared::{row_turn, AngleRange, Geometry, LobePatterns, Rings, ScanSpec, SweepScan, Visit};
 use proptest::prelude::*;
 use std::collections::BTreeSet;
 
@@ -17,6 +17,7 @@ fn grid() -> impl Strategy<Value = ScanSpec> {
         dphi: AngleRange::new(-180.0, -180.0 + 10.0 * (n_dp - 1) as f32, 10.0),
         first_order: 0,
         sweep: None,
+        patterns: None,
     })
 }
 
@@ -54,6 +55,7 @@ proptest! {
             dphi: AngleRange::new(-180.0, -180.0 + 10.0 * (n_dp - 1) as f32, 10.0),
             first_order: 0,
             sweep: Some(SweepScan { speed_dps: 30.0, periods_per_sample: 8, lobe: None }),
+            patterns: None,
         };
         let (n, rows) = (spec.len(), spec.dphi.count().unwrap());
         prop_assert_eq!(n, spec.theta_i_deg.len() as u32 * (rows + 1));
@@ -106,6 +108,7 @@ fn small_grid() -> impl Strategy<Value = ScanSpec> {
         dphi: AngleRange::new(-170.0, -170.0 + dp_step * (n_dp - 1) as f32, dp_step),
         first_order: 0,
         sweep: None,
+        patterns: None,
     })
 }
 
@@ -166,4 +169,64 @@ fn the_belcour_plan_is_within_four_percent_of_the_bound() {
     let plan = scan_time(cfg, &spec, visit_order(cfg, &spec, PARK), PARK, 0.05, 0.1);
     let ratio = (plan.total_s() - plan.planning_s) / bound.total_s();
     assert!(ratio < 1.04, "plan / bound = {ratio}");
+}
+
+proptest! {
+    /// A scan with lobe patterns visits every position once, grid or sweep:
+    /// at each incidence its grid points (or its retro point, then its
+    /// pattern, then its rows), then its pattern points, each the view of
+    /// its ring at the incidence, and the rows keep their order and their
+    /// alternation outward and back as without a pattern.
+    #[test]
+    fn a_patterned_scan_visits_each_position_once_and_its_rings_where_they_are(
+        n_ti in 1usize..=3, n_dp in 2u32..=8, rings in 1usize..=4, azimuths in 1u16..=12, sweep in any::<bool>(),
+    ) {
+        let radii: Vec<f32> = (0..rings).map(|k| 0.5 + k as f32).collect();
+        let patterns = LobePatterns {
+            retro: Rings { radii_deg: heapless::Vec::from_slice(&radii).unwrap(), azimuths },
+            mirror: Rings { radii_deg: heapless::Vec::from_slice(&[2.0]).unwrap(), azimuths: 4 },
+        };
+        let per_incidence = patterns.count().unwrap();
+        let bare = ScanSpec {
+            theta_i_deg: heapless::Vec::from_slice(&[20.0, 40.0, 60.0][..n_ti]).unwrap(),
+            theta_o: AngleRange::new(0.0, 87.0, 3.0),
+            dphi: AngleRange::new(-180.0, -180.0 + 30.0 * (n_dp - 1) as f32, 30.0),
+            first_order: 0,
+            sweep: sweep.then_some(SweepScan { speed_dps: 30.0, periods_per_sample: 8, lobe: None }),
+            patterns: None,
+        };
+        let spec = ScanSpec { patterns: Some(patterns.clone()), ..bare.clone() };
+        let n = spec.len();
+        prop_assert_eq!(n, bare.len() + n_ti as u32 * per_incidence);
+        prop_assert_eq!(spec.pattern_points(), n_ti as u32 * per_incidence);
+        let order: Vec<u32> = (0..n).map(|o| spec.index_at_order(o).unwrap()).collect();
+        prop_assert_eq!(order.iter().collect::<BTreeSet<_>>().len() as u32, n);
+        prop_assert!(spec.index_at_order(n).is_none() && spec.visit(n, n).is_none());
+        let block = n / n_ti as u32;
+        let base = block - per_incidence;
+        let mut bare_rows = Vec::new();
+        let mut rows = Vec::new();
+        for (o, &i) in order.iter().enumerate() {
+            let (a, c) = (i / block, i % block);
+            let ti = spec.theta_i_deg[a as usize];
+            let v = spec.visit(i, o as u32).unwrap();
+            if c >= base {
+                // A pattern point: the ring's view, at rest.
+                prop_assert_eq!(v, Visit::Point(patterns.point(ti, c - base).unwrap()));
+            } else if let Visit::Row(r) = v {
+                rows.push(r);
+            } else if !sweep {
+                prop_assert_eq!(v, Visit::Point(bare.point(a * base + c).unwrap()));
+            }
+        }
+        if sweep {
+            for o in 0..bare.len() {
+                let i = bare.index_at_order(o).unwrap();
+                if let Some(Visit::Row(r)) = bare.visit(i, o) {
+                    bare_rows.push(r);
+                }
+            }
+            prop_assert_eq!(rows, bare_rows);
+        }
+    }
 }

@@ -1,7 +1,7 @@
 //! `gonio coefficients`: R_A and R_L (CIE 54.2, ASTM E810, EN 1436) from a
 //! fit, a model, or measured data, with standard uncertainties.
 
-use crate::coefficients::{self, Apertures, Coefficient, Kind, Request, Set, Source, WAVELENGTH_NM};
+use crate::coefficients::{self, Apertures, Coefficient, Fitted, Kind, Provenance, Request, Set, Source, Support, WAVELENGTH_NM};
 use crate::fit;
 use anyhow::{bail, Context, Result};
 use gonio_brdf::{Material, ModelId};
@@ -10,19 +10,30 @@ use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
 pub struct CoefficientsArgs {
-    /// A fit (FIT.json from `gonio fit --out`): its covariance gives the
-    /// uncertainty (with the plate and the stage zeros when the fitted data
-    /// came from `gonio calibrate`).
-    #[arg(long, value_name = "FIT.json", conflicts_with_all = ["model", "data"])]
-    pub fit: Option<PathBuf>,
+    /// Fits (FIT.json from `gonio fit --out`, or a report's fits/*.json),
+    /// each of the same data: where the data hold a geometry its value is
+    /// measured (or interpolated) from them; beyond, the best fit (lowest
+    /// AIC) carries it, scaled to the data at the nearest measured
+    /// incidences, and the spread of the fits within 2× its RMSE
+    /// widens the uncertainty (docs/retroreflection.md). The covariance gives
+    /// the parameters' part (with the plate and the stage zeros when the
+    /// fitted data came from `gonio calibrate`).
+    #[arg(long, value_name = "FIT.json", num_args = 1.., conflicts_with_all = ["model", "data"])]
+    pub fit: Vec<PathBuf>,
     /// A model id of models.md, with --params (no uncertainty).
-    #[arg(long, requires = "params", conflicts_with = "data")]
+    #[arg(long, requires = "params", conflicts_with_all = ["data", "material"])]
     pub model: Option<String>,
-    /// The model's parameters, NAME=V,...
+    /// The model's parameters, NAME=V,... (with --material: a model's, as `gonio scan --sim` takes them).
     #[arg(long)]
     pub params: Option<String>,
+    /// A simulated head's material (`glass-beads`, or a model id as `gonio
+    /// scan --sim --material` takes it): its own coefficients through the
+    /// same apertures, the truth a simulated scan's are checked against.
+    #[arg(long, conflicts_with_all = ["fit", "data"])]
+    pub material: Option<String>,
     /// Measured data (calibrated CSV or ALTA .dat), interpolated between the
-    /// nearest measured geometries, which are named.
+    /// nearest measured geometries, which are named; a geometry the data do
+    /// not hold is refused (fit models and give --fit).
     #[arg(long, value_name = "FILE")]
     pub data: Option<PathBuf>,
     /// Named sets of geometries (repeatable).
@@ -52,12 +63,11 @@ pub struct CoefficientsArgs {
 
 impl CoefficientsArgs {
     fn source(&self) -> Result<Source> {
-        if let Some(path) = &self.fit {
-            let f = fit::file::read(path)?;
-            return Ok(Source::Model {
-                material: f.material,
-                covariance: f.covariance,
-            });
+        if !self.fit.is_empty() {
+            return fits_source(&self.fit);
+        }
+        if let Some(name) = &self.material {
+            return Ok(Source::Truth(super::material::specimen(name, self.params.as_deref())?));
         }
         if let (Some(m), Some(p)) = (&self.model, &self.params) {
             return Ok(Source::model(Material::parse(ModelId::parse(m)?, p)?));
@@ -66,7 +76,7 @@ impl CoefficientsArgs {
             let data = super::load_data(path, None)?;
             return Source::data(&data).with_context(|| format!("{}", path.display()));
         }
-        bail!("give a BRDF: --fit FIT.json, --model M --params ..., or --data FILE")
+        bail!("give a BRDF: --fit FIT.json, --model M --params ..., --data FILE or --material NAME")
     }
 
     fn requests(&self) -> Result<Vec<Request>> {
@@ -100,6 +110,47 @@ impl CoefficientsArgs {
     }
 }
 
+/// The source of `--fit FILE...`: the fits and their data's support, or
+/// (one fit of an earlier gonio, which kept no support) the model alone.
+fn fits_source(paths: &[PathBuf]) -> Result<Source> {
+    let files: Vec<fit::file::FitFile> = paths.iter().map(|p| fit::file::read(p)).collect::<Result<_>>()?;
+    if files.iter().all(|f| f.support.is_none()) && files.len() == 1 {
+        eprintln!(
+            "warning: {} keeps no support of its data (a fit of an earlier gonio): what each value rests on is not known",
+            paths[0].display()
+        );
+        let f = files.into_iter().next().context("one fit")?;
+        return Ok(Source::Model {
+            material: f.material,
+            covariance: f.covariance,
+        });
+    }
+    let mut support: Option<Support> = None;
+    let mut fits = Vec::new();
+    for (f, path) in files.into_iter().zip(paths) {
+        let (Some(s), Some(rmse), Some(aic)) = (f.support, f.rmse, f.aic) else {
+            bail!(
+                "{}: a fit without its data's support, RMSE and AIC cannot be weighed against the others",
+                path.display()
+            );
+        };
+        match &support {
+            Some(first) if first.points.len() != s.points.len() || first.incidences_deg != s.incidences_deg => {
+                bail!("{}: fitted to other data than {}", path.display(), paths[0].display())
+            }
+            Some(_) => {}
+            None => support = Some(s),
+        }
+        fits.push(Fitted {
+            material: f.material,
+            covariance: f.covariance,
+            rmse,
+            aic,
+        });
+    }
+    Source::measured(fits, support.context("no fit")?)
+}
+
 /// The JSON of the issue's contract: `ra` (a list) and `rl` (the last R_L, or null).
 pub fn to_json(values: &[Coefficient]) -> Value {
     let entry = |c: &Coefficient| {
@@ -117,6 +168,25 @@ pub fn to_json(values: &[Coefficient]) -> Value {
         if !c.estimate.nearest.is_empty() {
             v["nearest"] = json!(c.estimate.nearest);
         }
+        let e = &c.estimate;
+        if let Some(b) = &e.basis {
+            v["provenance"] = json!(b.provenance);
+            v["basis"] = json!(b.why);
+        }
+        for (key, part) in [
+            ("u_params", e.u_params),
+            ("u_model", e.u_model),
+            ("u_aperture", e.u_aperture),
+            ("u_arm_zero", e.u_arm_zero),
+        ] {
+            if let Some(x) = part {
+                v[key] = json!(x);
+            }
+        }
+        if let Some(m) = e.model {
+            v["model"] = json!(m);
+            v["models"] = json!(e.models);
+        }
         v
     };
     let ra: Vec<Value> = values.iter().filter(|c| c.request.kind == Kind::Ra).map(entry).collect();
@@ -131,7 +201,9 @@ pub fn to_json(values: &[Coefficient]) -> Value {
         "ra": ra, "rl": rl,
         "units": {"ra": Kind::Ra.unit(), "rl": Kind::Rl.unit()},
         "wavelength_nm": WAVELENGTH_NM,
-        "note": "spectral values at the laser's wavelength (633 nm), not photometric; u is the standard uncertainty (k = 1)",
+        "note": "spectral values at the laser's wavelength (633 nm), not photometric; u is the standard uncertainty (k = 1); \
+                 provenance: measured (a sample at the geometry), interpolated (between samples on every side) or extrapolated \
+                 (a model carries it: u holds the adequate models' spread, u_model); value null: refused (no data there)",
     })
 }
 
@@ -145,8 +217,8 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
     }
     println!("at {WAVELENGTH_NM} nm (the laser's wavelength), not photometric; u: standard uncertainty (k = 1)");
     println!(
-        "{:<4} {:>6} {:>7} {:>6} {:>8} {:>8} {:>8} {:>13} {:>11}  unit",
-        "", "α°", "β°", "ε°", "θi°", "θo°", "Δφ°", "value", "u"
+        "{:<4} {:>6} {:>7} {:>6} {:>8} {:>8} {:>8} {:>13} {:>11}  {:<12} unit",
+        "", "α°", "β°", "ε°", "θi°", "θo°", "Δφ°", "value", "u", "rests on"
     );
     for c in &values {
         let g = &c.request.geometry;
@@ -155,15 +227,42 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
             Kind::Ra => "R_A",
             Kind::Rl => "R_L",
         };
-        println!(
-            "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>13.5e} {:>11.3e}  {}",
-            g.alpha_deg,
-            g.beta_deg(),
-            g.epsilon_deg,
-            c.estimate.value,
-            c.estimate.u,
-            c.request.kind.unit()
-        );
+        let rests_on = match &c.estimate.basis {
+            Some(b) if b.provenance == Provenance::Extrapolated => "EXTRAPOLATED",
+            Some(b) => b.provenance.name(),
+            None => "",
+        };
+        if c.estimate.value.is_nan() {
+            println!(
+                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>13} {:>11}  {rests_on:<12} {}",
+                g.alpha_deg,
+                g.beta_deg(),
+                g.epsilon_deg,
+                "refused",
+                "",
+                c.request.kind.unit()
+            );
+        } else {
+            println!(
+                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>13.5e} {:>11.3e}  {rests_on:<12} {}",
+                g.alpha_deg,
+                g.beta_deg(),
+                g.epsilon_deg,
+                c.estimate.value,
+                c.estimate.u,
+                c.request.kind.unit()
+            );
+        }
+        if let Some(b) = c.estimate.basis.as_ref().filter(|b| b.provenance == Provenance::Extrapolated) {
+            match (c.estimate.model, c.estimate.u_model) {
+                (Some(m), Some(um)) => println!(
+                    "       {}: carried by {m}; {} adequate models, their spread ±{um:.2e}",
+                    b.why,
+                    c.estimate.models.len()
+                ),
+                _ => println!("       {}: no data there to interpolate", b.why),
+            }
+        }
         if let Some(n) = c.estimate.nearest.first() {
             let names: Vec<String> = c
                 .estimate

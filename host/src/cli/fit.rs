@@ -212,7 +212,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         v["warnings"] = serde_json::json!(d.train.warnings);
     }
     if let Some(out) = &a.out {
-        fit::file::write(out, &v)?;
+        fit::file::write_with_support(out, &v, &d.train)?;
     }
     if let Some(out) = &a.brdf {
         super::export::write_brdf(&f.material, &a.file.display().to_string(), out)?;

@@ -2,7 +2,8 @@
 
 use crate::{fit, lobe};
 use anyhow::{bail, Context, Result};
-use gonio_shared::{AngleRange, ScanSpec, SweepLobe, SweepRequest, SweepScan};
+use gonio_shared::lobe_pattern::{AZIMUTHS_MAX, RADIUS_MAX_DEG, RINGS_MAX};
+use gonio_shared::{AngleRange, LobePatterns, Rings, ScanSpec, SweepLobe, SweepRequest, SweepScan};
 use std::path::PathBuf;
 
 #[derive(Debug, Clone, clap::Args)]
@@ -33,6 +34,74 @@ pub struct GridArgs {
     pub sweep_periods: u16,
     #[command(flatten)]
     pub lobe: LobeArgs,
+    #[command(flatten)]
+    pub patterns: PatternArgs,
+}
+
+/// The rings measured about the retro and the mirror direction of each
+/// incidence besides the grid (`docs/optics.md`): the retro rings within the
+/// head's through-splitter zone (5° on the reference head) are what a
+/// coefficient of retroreflection at α ≤ 5° rests on.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PatternArgs {
+    /// Radii α of the rings about the retro direction (degrees, at most 10).
+    #[arg(
+        long,
+        value_name = "LIST",
+        value_delimiter = ',',
+        default_value = "0.1,0.2,0.33,0.5,1,1.5,2,3,4,4.75"
+    )]
+    pub retro_rings: Vec<f32>,
+    /// Views on each retro ring, evenly around the laser.
+    #[arg(long, value_name = "N", default_value_t = 32)]
+    pub retro_azimuths: u16,
+    /// Radii of the rings about the mirror direction (degrees, at most 10).
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "1,2,3,4.5,6")]
+    pub mirror_rings: Vec<f32>,
+    /// Views on each mirror ring.
+    #[arg(long, value_name = "N", default_value_t = 16)]
+    pub mirror_azimuths: u16,
+    /// The grid (or the rows) alone, without the rings.
+    #[arg(long, conflicts_with_all = ["retro_rings", "retro_azimuths", "mirror_rings", "mirror_azimuths"])]
+    pub no_patterns: bool,
+}
+
+impl Default for PatternArgs {
+    fn default() -> Self {
+        let p = LobePatterns::cea();
+        PatternArgs {
+            retro_rings: p.retro.radii_deg.to_vec(),
+            retro_azimuths: p.retro.azimuths,
+            mirror_rings: p.mirror.radii_deg.to_vec(),
+            mirror_azimuths: p.mirror.azimuths,
+            no_patterns: false,
+        }
+    }
+}
+
+impl PatternArgs {
+    /// The patterns asked for, checked.
+    pub fn patterns(&self) -> Result<Option<LobePatterns>> {
+        if self.no_patterns {
+            return Ok(None);
+        }
+        let rings = |radii: &[f32], azimuths: u16, what: &str| -> Result<Rings> {
+            let r = Rings {
+                radii_deg: heapless::Vec::from_slice(radii)
+                    .ok()
+                    .with_context(|| format!("--{what}-rings: at most {RINGS_MAX} rings"))?,
+                azimuths,
+            };
+            if r.count().is_none() {
+                bail!("--{what}-rings / --{what}-azimuths: radii in (0°, {RADIUS_MAX_DEG}°] and 1–{AZIMUTHS_MAX} views a ring");
+            }
+            Ok(r)
+        };
+        Ok(Some(LobePatterns {
+            retro: rings(&self.retro_rings, self.retro_azimuths, "retro")?,
+            mirror: rings(&self.mirror_rings, self.mirror_azimuths, "mirror")?,
+        }))
+    }
 }
 
 /// How a sweep slows down across the material's narrow lobes
@@ -129,6 +198,7 @@ impl GridArgs {
             dphi: range(&self.dphi, "--dphi")?,
             first_order: 0,
             sweep,
+            patterns: self.patterns.patterns()?,
         };
         spec.validate().map_err(|f| anyhow::anyhow!("grid refused: {f}"))?;
         Ok(spec)
@@ -149,9 +219,11 @@ mod tests {
             sweep_speed: 30.0,
             sweep_periods: 8,
             lobe: LobeArgs::default(),
+            patterns: PatternArgs::default(),
         };
-        assert_eq!(g.spec().unwrap(), ScanSpec::belcour());
+        assert_eq!(g.spec().unwrap(), ScanSpec::belcour_with_patterns());
         assert_eq!(ScanSpec::belcour().len(), 3 * 31 * 37);
+        assert_eq!(ScanSpec::belcour_with_patterns().len(), 3 * (31 * 37 + 400));
     }
 
     #[test]
@@ -165,6 +237,7 @@ mod tests {
                 sweep_speed: 30.0,
                 sweep_periods: 8,
                 lobe: LobeArgs::default(),
+                patterns: PatternArgs::default(),
             }
             .spec()
         };
@@ -173,5 +246,24 @@ mod tests {
         assert!(g("x", "0:90:3").is_err());
         assert!(g("1,2,3,4,5,6,7,8,9", "0:90:3").is_err());
         assert!(g("nan", "0:90:3").is_err());
+    }
+
+    #[test]
+    fn bad_patterns_are_refused() {
+        let p = |radii: Vec<f32>, az: u16| PatternArgs {
+            retro_rings: radii,
+            retro_azimuths: az,
+            ..PatternArgs::default()
+        };
+        assert!(p(vec![0.0], 8).patterns().is_err());
+        assert!(p(vec![1.0], 0).patterns().is_err());
+        assert!(p(vec![1.0; 11], 8).patterns().is_err());
+        assert!(p(vec![40.0], 8).patterns().is_err());
+        assert_eq!(p(vec![1.0, 2.0], 8).patterns().unwrap().unwrap().count(), Some(16 + 80));
+        let none = PatternArgs {
+            no_patterns: true,
+            ..PatternArgs::default()
+        };
+        assert_eq!(none.patterns().unwrap(), None);
     }
 }

@@ -44,21 +44,27 @@ pub struct SimHeadArgs {
     pub imperfect: bool,
 }
 
+/// A simulated head's material by name: `glass-beads` (no parameters: a
+/// physical retroreflector none of the models is) or a model id with its
+/// parameters (retro-phong's default: a retroreflective tape).
+pub fn specimen(material: &str, params: Option<&str>) -> Result<Specimen> {
+    if material == "glass-beads" {
+        if params.is_some() {
+            bail!("--material glass-beads takes no --params (its parameters are fixed: docs/architecture.md#the-simulated-head)");
+        }
+        return Ok(Specimen::default());
+    }
+    let model = ModelId::parse(material).context("--material: glass-beads or a model id")?;
+    Ok(Specimen::Model(match params {
+        Some(p) => Material::parse(model, p)?,
+        None if model == ModelId::RetroPhong => Material::tape(),
+        None => bail!("--params is required for --material {}", model.name()),
+    }))
+}
+
 impl SimHeadArgs {
     pub fn config(&self) -> Result<SimConfig> {
-        let material = if self.material == "glass-beads" {
-            if self.params.is_some() {
-                bail!("--material glass-beads takes no --params (its parameters are fixed: docs/architecture.md#the-simulated-head)");
-            }
-            Specimen::default()
-        } else {
-            let model = ModelId::parse(&self.material).context("--material: glass-beads or a model id")?;
-            Specimen::Model(match &self.params {
-                Some(p) => Material::parse(model, p)?,
-                None if model == ModelId::RetroPhong => Material::tape(),
-                None => bail!("--params is required for --material {}", model.name()),
-            })
-        };
+        let material = specimen(&self.material, self.params.as_deref())?;
         if !(0.0..0.5).contains(&self.laser_drift) {
             bail!("--laser-drift {} must be in [0, 0.5)", self.laser_drift);
         }

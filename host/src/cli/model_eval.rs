@@ -2,28 +2,45 @@
 //! geometry, and its directional-hemispherical reflectance.
 
 use super::fit::ParamArg;
+use super::material;
 use anyhow::{bail, Result};
-use gonio_brdf::{dhr, retro_phong_energy_sum, Directions, Material, ModelId};
+use gonio_brdf::{dhr, retro_phong_energy_sum, Directions, Material, ModelId, Specimen};
+use gonio_firmware::config::REFERENCE;
+use gonio_sim::seen_brdf;
 use serde_json::json;
 
 #[derive(Debug, Clone, clap::Args)]
+#[command(group(clap::ArgGroup::new("brdf").required(true).args(["model", "material"])))]
 pub struct ModelArgs {
-    /// Model id (models.md).
+    /// Model id (models.md), with --params.
+    #[arg(long, requires = "params")]
+    pub model: Option<String>,
+    /// Every parameter, NAME=V,NAME=V,... (with --material: a model's, as `gonio scan --sim` takes them).
     #[arg(long)]
-    pub model: String,
-    /// Every parameter, NAME=V,NAME=V,...
-    #[arg(long)]
-    pub params: String,
-    /// Cosine of the retro lobes.
+    pub params: Option<String>,
+    /// A simulated head's material (`glass-beads`, or a model id as `gonio
+    /// scan --sim --material` takes it): its own values, the truth a
+    /// simulated scan is checked against.
+    #[arg(long, conflicts_with = "model")]
+    pub material: Option<String>,
+    /// Cosine of the retro lobes (a model's).
     #[arg(long, value_enum, default_value = "view")]
     pub param: ParamArg,
 }
 
 impl ModelArgs {
-    fn material(&self) -> Result<Material> {
-        let mut m = Material::parse(ModelId::parse(&self.model)?, &self.params)?;
+    /// What is evaluated, and its name.
+    fn specimen(&self) -> Result<(Specimen, String)> {
+        if let Some(name) = &self.material {
+            return Ok((material::specimen(name, self.params.as_deref())?, name.clone()));
+        }
+        let (Some(model), Some(params)) = (&self.model, &self.params) else {
+            bail!("give --model M --params ... or --material NAME");
+        };
+        let mut m = Material::parse(ModelId::parse(model)?, params)?;
         m.param = self.param.into();
-        Ok(m)
+        let name = m.model.name().to_string();
+        Ok((Specimen::Model(m), name))
     }
 }
 
@@ -53,17 +70,28 @@ pub struct EvalArgs {
 }
 
 pub fn eval_cmd(a: EvalArgs) -> Result<()> {
-    let m = a.model.material()?;
+    let (m, name) = a.model.specimen()?;
     let (ti, to) = (polar("theta-i", a.theta_i)?, polar("theta-o", a.theta_o)?);
     if !a.dphi.is_finite() {
         bail!("--dphi must be finite");
     }
     let d = Directions::from_degrees(ti, to, a.dphi);
     let f = m.eval(&d);
+    // What the reference head's detector reads there: the average over its
+    // field (a 0.39° disc), which a simulated scan's values are.
+    let field = REFERENCE.optics.detector_sr as f64;
+    let seen = seen_brdf(&m, field, &d);
     if a.json {
-        println!("{}", json!({"model": m.model.name(), "fr": f, "fr_cos": f * d.cos_o()}));
+        println!(
+            "{}",
+            json!({"model": name, "fr": f, "fr_cos": f * d.cos_o(), "fr_seen": seen, "detector_field_sr": field})
+        );
     } else {
         println!("f_r = {f:.9e} sr⁻¹  (f_r·cosθo = {:.9e})", f * d.cos_o());
+        println!(
+            "seen by the reference head's detector ({:.2}° field): {seen:.9e} sr⁻¹",
+            gonio_brdf::aperture::diameter_deg(field)
+        );
     }
     Ok(())
 }
@@ -80,14 +108,17 @@ pub struct DhrArgs {
 }
 
 pub fn dhr_cmd(a: DhrArgs) -> Result<()> {
-    let m = a.model.material()?;
+    let (m, name) = a.model.specimen()?;
     let ti = polar("theta-i", a.theta_i)?;
-    let rho = dhr::dhr(&m, ti.to_radians());
+    let rho = dhr::dhr(|d| m.eval(d), ti.to_radians());
     // Spieringhs §8's check for RetroPhong: kd + ks(θi) + kr(θi) < 1.
-    let sum = (m.model == ModelId::RetroPhong).then(|| retro_phong_energy_sum(&m.params, ti.to_radians().cos()));
+    let sum = m
+        .model()
+        .filter(|m| m.model == ModelId::RetroPhong)
+        .map(|m| retro_phong_energy_sum(&m.params, ti.to_radians().cos()));
     let conserving = rho <= 1.0;
     if a.json {
-        let mut v = json!({"model": m.model.name(), "theta_i_deg": ti, "dhr": rho, "energy_conserving": conserving});
+        let mut v = json!({"model": name, "theta_i_deg": ti, "dhr": rho, "energy_conserving": conserving});
         if let Some(s) = sum {
             v["kd_ks_kr"] = json!(s);
         }

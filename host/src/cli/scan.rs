@@ -103,7 +103,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ..SimConfig::default()
     };
     let truth = sim.material.clone();
-    let belcour = ScanSpec::belcour();
+    let belcour = ScanSpec::belcour_with_patterns();
     let sweep = match a.sweep {
         true => Some(SweepScan {
             lobe: a.lobe.lobe(&belcour.theta_i_deg)?,
@@ -132,9 +132,10 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
             "scan".to_string(),
             if a.sweep {
                 format!(
-                    "{} rows of the Belcour grid swept and {} retro points measured at rest: {} of them measured ({} swept samples), {} refused, {} flagged",
-                    outcome.points.saturating_sub(retro),
+                    "{} rows of the Belcour grid swept, {} retro points and {} pattern points measured at rest: {} of them measured ({} swept samples), {} refused, {} flagged",
+                    spec.rows(),
                     retro,
+                    spec.pattern_points(),
                     outcome.measured,
                     outcome.swept_samples,
                     outcome.skipped,
@@ -314,10 +315,11 @@ async fn scan_to_dir(plan: &ScanPlan, dir: &Path, output: &OutputArgs, resume: O
     let estimate = estimate_s(&config, spec, &detection);
     if !json {
         if spec.sweep.is_some() {
-            let retro = spec.retro_points();
             eprintln!(
-                "{} rows to sweep and {retro} retro points to measure at rest; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
-                spec.len().saturating_sub(retro),
+                "{} rows to sweep, {} retro points and {} pattern points to measure at rest; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
+                spec.rows(),
+                spec.retro_points(),
+                spec.pattern_points(),
                 hms(estimate),
                 detection.settings.settle_s * 1e3,
             );

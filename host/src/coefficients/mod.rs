@@ -7,11 +7,13 @@
 
 pub mod angles;
 pub mod aperture;
+pub mod provenance;
 mod source;
 
 pub use angles::Cie;
 pub use aperture::Apertures;
-pub use source::{Estimate, Nearest, Source};
+pub use provenance::{Basis, Provenance, Support};
+pub use source::{head_apertures, Estimate, Fitted, ModelValue, Nearest, Source, ADEQUATE_RMSE_RATIO};
 
 use anyhow::{bail, Result};
 use serde::Serialize;

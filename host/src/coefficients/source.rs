@@ -1,13 +1,18 @@
 //! Where a coefficient's BRDF comes from, and how its uncertainty follows:
 //! a model with its parameters' covariance (linear propagation; a Monte
-//! Carlo check of it), or measured data interpolated on the sphere.
+//! Carlo check of it), measured data interpolated on the sphere, or both:
+//! the data where they hold the geometry, the models fitted to them beyond
+//! (with a term for how much models that fit alike disagree there).
 
-use super::aperture;
-use super::Request;
-use crate::fit::{Dataset, Units};
+use super::provenance::{Basis, Point, Provenance, Support};
+use super::{aperture, Apertures, Cie, Request};
+use crate::fit::Dataset;
+use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Result};
+use gonio_brdf::aperture::diameter_deg;
 use gonio_brdf::frame::angle_between;
-use gonio_brdf::{Directions, Material};
+use gonio_brdf::{Directions, Material, Specimen};
+use gonio_firmware::config::REFERENCE;
 use nalgebra::{DMatrix, DVector};
 use rand::SeedableRng;
 use rand_distr::{Distribution, StandardNormal};
@@ -23,17 +28,44 @@ pub enum Source {
         material: Material,
         covariance: Option<DMatrix<f64>>,
     },
-    /// Measured values (`f_r`), interpolated between the nearest geometries.
-    Data { points: Vec<Point> },
+    /// Measured values (`f_r`), interpolated between the nearest
+    /// geometries; a geometry they do not hold is refused.
+    Data { support: Support },
+    /// Measured values and the models fitted to them (`gonio fit --out`
+    /// files keep their data's support): where the data hold the geometry
+    /// (measured, interpolated) the value is theirs, corrected from the
+    /// head's apertures to the standard's with the best model; beyond, the
+    /// best model's, its uncertainty widened by the adequate models' spread.
+    Measured { fits: Vec<Fitted>, support: Support },
+    /// A simulated head's material itself (`gonio coefficients --material`):
+    /// the truth a simulated scan's coefficients are checked against,
+    /// through the same apertures, without uncertainty.
+    Truth(Specimen),
 }
 
-/// A measured value with its directions folded onto `Δφ ≥ 0` (isotropic).
+/// A model fitted to the data, and how well.
 #[derive(Debug, Clone)]
-pub struct Point {
-    d: Directions,
-    angles_deg: [f64; 3],
-    value: f64,
-    sigma: f64,
+pub struct Fitted {
+    pub material: Material,
+    pub covariance: Option<DMatrix<f64>>,
+    /// Root mean square residual, in the data's units.
+    pub rmse: f64,
+    pub aic: f64,
+}
+
+/// A model fits the data comparably when its RMSE is within this factor
+/// of the best one's (`docs/retroreflection.md`, *Provenance*): where the
+/// data end, what these models say is what the data cannot tell apart.
+pub const ADEQUATE_RMSE_RATIO: f64 = 2.0;
+
+/// The reference head's apertures: a collimated laser (a point source) and
+/// a detector field of `ArmOptics::detector_sr` (a disc 0.39° across),
+/// which a measured value is the average over.
+pub fn head_apertures() -> Apertures {
+    Apertures {
+        source_deg: 0.0,
+        receiver_deg: diameter_deg(REFERENCE.optics.detector_sr as f64),
+    }
 }
 
 /// A measured geometry a data-interpolated coefficient leaned on.
@@ -46,19 +78,52 @@ pub struct Nearest {
     pub distance_deg: f64,
     pub weight: f64,
     pub brdf_sr: f64,
+    /// How much it moves with the arm's zero (the calibration's estimate).
+    #[serde(skip)]
+    pub shift_psi: f64,
 }
 
 /// A value, its standard uncertainty, and what the uncertainty is made of.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Default, Serialize)]
 pub struct Estimate {
+    /// NaN where the data cannot give one (a geometry they do not hold,
+    /// with no model): printed as refused, `null` in JSON.
     pub value: f64,
     pub u: f64,
     /// Part of `u` from the model's parameters (linear propagation).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub u_params: Option<f64>,
+    /// Part of `u` from the models' disagreement (half the range of the
+    /// adequate models' values) where a model carries the value.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub u_model: Option<f64>,
+    /// Part of `u` from carrying a measured value from the head's
+    /// apertures to the standard's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub u_aperture: Option<f64>,
+    /// Part of `u` from the arm's zero, from the measured samples' own slope.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub u_arm_zero: Option<f64>,
+    /// What the value rests on, when the source has data.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub basis: Option<Basis>,
+    /// The model that carries an extrapolated value, and every adequate
+    /// model's value there.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub model: Option<&'static str>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub models: Vec<ModelValue>,
     /// The measured geometries behind a value interpolated from data.
     #[serde(skip_serializing_if = "Vec::is_empty")]
     pub nearest: Vec<Nearest>,
+}
+
+/// One adequate model's value of a coefficient.
+#[derive(Debug, Clone, Serialize)]
+pub struct ModelValue {
+    pub model: &'static str,
+    pub value: f64,
+    pub rmse: f64,
 }
 
 /// How many measured geometries an interpolated value leans on.
@@ -83,24 +148,20 @@ impl Source {
 
     /// Measured values. Values in `f_r·cosθo` are converted to `f_r`.
     pub fn data(data: &Dataset) -> Result<Self> {
-        let data = data.in_units(Units::Fr)?;
         if data.observations.is_empty() {
             bail!("no measured values to interpolate");
         }
-        let points = data
-            .observations
-            .iter()
-            .map(|o| {
-                let d = folded(&o.directions());
-                Point {
-                    angles_deg: super::angles::sample_angles_deg(&d),
-                    d,
-                    value: o.value,
-                    sigma: o.sigma.unwrap_or(0.0),
-                }
-            })
-            .collect();
-        Ok(Source::Data { points })
+        Ok(Source::Data {
+            support: Support::of(data)?,
+        })
+    }
+
+    /// Measured values and the models fitted to them (at least one).
+    pub fn measured(fits: Vec<Fitted>, support: Support) -> Result<Self> {
+        if fits.is_empty() {
+            bail!("no fitted model");
+        }
+        Ok(Source::Measured { fits, support })
     }
 
     /// The coefficient and its standard uncertainty.
@@ -113,10 +174,29 @@ impl Source {
                     value,
                     u: u_params.unwrap_or(0.0),
                     u_params,
-                    nearest: Vec::new(),
+                    ..Estimate::default()
                 })
             }
-            Source::Data { points } => Ok(interpolate(points, r)),
+            Source::Data { support } => {
+                let basis = support.classify(&r.geometry.directions());
+                if basis.provenance == Provenance::Extrapolated {
+                    return Ok(Estimate {
+                        value: f64::NAN,
+                        u: f64::NAN,
+                        basis: Some(basis),
+                        ..Estimate::default()
+                    });
+                }
+                Ok(Estimate {
+                    basis: Some(basis),
+                    ..carried(support, r, interpolate(&support.points, r))
+                })
+            }
+            Source::Measured { fits, support } => Ok(measured(fits, support, r)),
+            Source::Truth(specimen) => Ok(Estimate {
+                value: averaged(|d| specimen.eval(d), r),
+                ..Estimate::default()
+            }),
         }
     }
 
@@ -126,12 +206,16 @@ impl Source {
     /// them. `None` without a covariance (or one that is not positive
     /// semi-definite).
     pub fn monte_carlo_u(&self, r: &Request, draws: usize, seed: u64) -> Option<f64> {
-        let Source::Model {
-            material,
-            covariance: Some(c),
-        } = self
-        else {
-            return None;
+        let (material, c) = match self {
+            Source::Model {
+                material,
+                covariance: Some(c),
+            } => (material, c),
+            Source::Measured { fits, .. } => {
+                let best = best(fits);
+                (&best.material, best.covariance.as_ref()?)
+            }
+            _ => return None,
         };
         let free: Vec<usize> = (0..c.nrows()).filter(|&i| c[(i, i)] > 0.0).collect();
         let sub = DMatrix::from_fn(free.len(), free.len(), |a, b| c[(free[a], free[b])]);
@@ -153,9 +237,169 @@ impl Source {
     }
 }
 
+/// The fit with the lowest AIC.
+fn best(fits: &[Fitted]) -> &Fitted {
+    fits.iter().min_by(|a, b| a.aic.total_cmp(&b.aic)).unwrap_or(&fits[0])
+}
+
+/// A coefficient from the data where they hold its geometry, else from the
+/// best model with the adequate models' spread.
+fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
+    let top = best(fits);
+    let basis = support.classify(&r.geometry.directions());
+    if basis.provenance != Provenance::Extrapolated {
+        return Estimate {
+            basis: Some(basis),
+            ..carried(support, r, interpolate(&support.points, r))
+        };
+    }
+    // The data where they are nearest: the same geometry at the measured
+    // incidences about the requested one, each model scaled to them.
+    let anchors: Vec<(f64, Request, Estimate)> = anchors(support, r)
+        .into_iter()
+        .filter(|(_, a)| support.classify(&a.geometry.directions()).provenance != Provenance::Extrapolated)
+        .map(|(w, a)| (w, a, carried(support, &a, interpolate(&support.points, &a))))
+        .filter(|(_, _, e)| e.value > 0.0)
+        .collect();
+    let total: f64 = anchors.iter().map(|(w, _, _)| w).sum();
+    let scaled = |m: &Material| {
+        let at_q = model_value(m, r);
+        if total <= 0.0 {
+            return at_q;
+        }
+        let ratio: f64 = anchors
+            .iter()
+            .map(|(w, a, e)| {
+                let at_anchor = model_value(m, a);
+                w / total * if at_anchor > 0.0 { e.value / at_anchor } else { 1.0 }
+            })
+            .sum();
+        at_q * ratio
+    };
+    let limit = ADEQUATE_RMSE_RATIO * top.rmse;
+    let models: Vec<ModelValue> = fits
+        .iter()
+        .filter(|f| f.rmse <= limit)
+        .map(|f| ModelValue {
+            model: f.material.model.name(),
+            value: scaled(&f.material),
+            rmse: f.rmse,
+        })
+        .collect();
+    let value = scaled(&top.material);
+    // Between two measured incidences the data themselves interpolate too
+    // (linearly in the entrance angle): a way across that no model shapes,
+    // whose disagreement with the models' belongs in the spread.
+    let between = (anchors.len() == 2).then(|| anchors.iter().map(|(w, _, e)| w * e.value).sum::<f64>());
+    let (lo, hi) = models
+        .iter()
+        .map(|m| m.value)
+        .chain(between)
+        .fold((value, value), |(lo, hi), v| (lo.min(v), hi.max(v)));
+    let u_model = (hi - lo) / 2.0;
+    let u_params = top.covariance.as_ref().map(|c| linear_u(&top.material, c, r));
+    // The level the anchors set is known to their own relative uncertainty.
+    let u_anchor = match total > 0.0 {
+        true => value * anchors.iter().map(|(w, _, e)| w / total * e.u / e.value).sum::<f64>(),
+        false => 0.0,
+    };
+    Estimate {
+        value,
+        u: u_params.unwrap_or(0.0).hypot(u_model).hypot(u_anchor),
+        u_params,
+        u_model: Some(u_model),
+        basis: Some(basis),
+        model: Some(top.material.model.name()),
+        models,
+        ..Estimate::default()
+    }
+}
+
+/// The same geometry at the measured incidences nearest the request's
+/// entrance angle, with the weights of a linear interpolation in it: the
+/// two about it, or the nearest one beyond the measured range. The entrance
+/// angle's components are scaled together, so the tilt keeps its direction
+/// (in the coplanar geometry, β keeps its sign and the observer its side).
+fn anchors(support: &Support, r: &Request) -> Vec<(f64, Request)> {
+    let g = r.geometry;
+    let beta = g.beta_deg().abs();
+    let at = |theta: f64, w: f64| {
+        let k = if beta > 0.0 { theta / beta } else { 0.0 };
+        let geometry = Cie {
+            beta1_deg: g.beta1_deg * k,
+            beta2_deg: g.beta2_deg * k,
+            ..g
+        };
+        (w, Request { geometry, ..*r })
+    };
+    let inc = &support.incidences_deg;
+    let below = inc.iter().copied().filter(|t| *t <= beta).fold(f64::NAN, f64::max);
+    let above = inc.iter().copied().filter(|t| *t >= beta).fold(f64::NAN, f64::min);
+    match (below.is_nan(), above.is_nan()) {
+        (false, false) if above > below => {
+            let w = (beta - below) / (above - below);
+            vec![at(below, 1.0 - w), at(above, w)]
+        }
+        (false, _) => vec![at(below, 1.0)],
+        (true, false) => vec![at(above, 1.0)],
+        (true, true) => Vec::new(),
+    }
+}
+
+/// A value the data hold (the head's reading: the BRDF averaged over a
+/// point source and the detector's field, at the stages' reported angles)
+/// carried to the request's apertures, with what the data's own shape says
+/// of its uncertainty ([`Support::local`]):
+///
+/// - **apertures**: to second order a disc of radius ρ reads `f + (ρ²/8)∇²f`,
+///   and moving the source is, on a retro lobe, moving the view the other
+///   way: so the standard reads `(ρ_s² + ρ_r² − ρ_d²)/8 · ∇²f` more than the
+///   head, `∇²f` the samples' own curvature, no model's. Its uncertainty:
+///   the curvature's standard error, and the neglected higher orders taken
+///   as within half the correction (rectangular: `|Δ|/(2√3)`).
+/// - **the arm's zero**: its error moves every sample's observation angle
+///   alike. The calibration weighs it with a smooth model's slope, which on
+///   a lobe of structure no model has (the glass beads' ring, whose inner
+///   flank rises 2 % per 0.01°) can be a fraction of the truth; here the
+///   samples' own slope along α takes its place.
+///
+/// Where the samples do not surround the view well enough for a quadratic,
+/// neither (`u_aperture` is `None`).
+fn carried(support: &Support, r: &Request, data: Estimate) -> Estimate {
+    let want = r.geometry.directions();
+    let Some(local) = support.local(&want) else {
+        return data;
+    };
+    let k = r.kind.factor(want.l[2], want.v[2]);
+    let rho2 = |diameter_deg: f64| (diameter_deg / 2.0).powi(2);
+    let head = head_apertures();
+    let reach = (rho2(r.apertures.source_deg) + rho2(r.apertures.receiver_deg) - rho2(head.receiver_deg)) / 8.0;
+    let delta = reach * local.laplacian * k;
+    let u_aperture = (reach.abs() * local.laplacian_se * k).hypot(delta.abs() / (2.0 * 3f64.sqrt()));
+    // The arm's zero: the calibration's part of it (the nearest sample's
+    // shift, zero and backlash) out, the samples' own slope in.
+    let u = HeadUncertainty::default();
+    let u_psi = u.zero_deg[2].hypot(u.backlash_deg[2] / 2.0);
+    let model_part = data.nearest.first().map_or(0.0, |n| n.shift_psi.abs()) * k * u_psi / u.zero_deg[2];
+    let data_part = local.slope_alpha.abs() * u_psi * k;
+    let u_data = (data.u * data.u - model_part * model_part).max(0.0).sqrt().hypot(data_part);
+    Estimate {
+        value: data.value + delta,
+        u: u_data.hypot(u_aperture),
+        u_aperture: Some(u_aperture),
+        u_arm_zero: Some(data_part),
+        ..data
+    }
+}
+
 /// The coefficient of a model, averaged over the apertures.
 fn model_value(m: &Material, r: &Request) -> f64 {
-    aperture::average(&r.geometry, r.apertures, |d| m.eval(d) * r.kind.factor(d.l[2], d.v[2]))
+    averaged(|d| m.eval(d), r)
+}
+
+/// The coefficient of a BRDF `f_r(directions)`, averaged over the apertures.
+fn averaged(f_r: impl Fn(&Directions) -> f64, r: &Request) -> f64 {
+    aperture::average(&r.geometry, r.apertures, |d| f_r(d) * r.kind.factor(d.l[2], d.v[2]))
 }
 
 /// `sqrt(gᵀ C g)`, `g` the coefficient's gradient in the parameters by
@@ -189,7 +433,10 @@ fn interpolate(points: &[Point], r: &Request) -> Estimate {
     let want = folded(&r.geometry.directions());
     let mut near: Vec<(f64, &Point)> = points
         .iter()
-        .map(|p| (angle_between(p.d.l, want.l).hypot(angle_between(p.d.v, want.v)), p))
+        .map(|p| {
+            let d = folded(&p.d);
+            (angle_between(d.l, want.l).hypot(angle_between(d.v, want.v)), p)
+        })
         .collect();
     near.sort_by(|a, b| a.0.total_cmp(&b.0));
     near.truncate(NEIGHBOURS);
@@ -212,7 +459,6 @@ fn interpolate(points: &[Point], r: &Request) -> Estimate {
     Estimate {
         value: f * k,
         u: own.hypot(spread) * k,
-        u_params: None,
         nearest: near
             .iter()
             .zip(&weights)
@@ -223,7 +469,9 @@ fn interpolate(points: &[Point], r: &Request) -> Estimate {
                 distance_deg: d.to_degrees(),
                 weight: *w,
                 brdf_sr: p.value,
+                shift_psi: p.shift_psi,
             })
             .collect(),
+        ..Estimate::default()
     }
 }

@@ -2,7 +2,8 @@
 //! parametrization, params, stderr, metrics), and a material read back from
 //! one, for `gonio plot --fit` and `gonio export`.
 
-use super::{Fit, Metrics, Units};
+use super::{Dataset, Fit, Metrics, Units};
+use crate::coefficients::Support;
 use anyhow::{bail, Context, Result};
 use gonio_brdf::{Material, ModelId, Param};
 use serde_json::{json, Map, Value};
@@ -37,6 +38,21 @@ pub struct FitFile {
     pub material: Material,
     /// Covariance of the parameters, `models.md` order (`None` if the file has none).
     pub covariance: Option<nalgebra::DMatrix<f64>>,
+    pub rmse: Option<f64>,
+    pub aic: Option<f64>,
+    /// The measured samples about the retro direction the fit saw (`None`
+    /// in a file of an earlier gonio): what its coefficients may rest on.
+    pub support: Option<Support>,
+}
+
+/// Writes a fit's JSON with the support of the data it was fitted to
+/// (`coefficients::Support`: the samples within 12° of the retro direction
+/// and the incidences), so that `gonio coefficients --fit` can say what
+/// each value rests on.
+pub fn write_with_support(path: &Path, v: &Value, data: &Dataset) -> Result<()> {
+    let mut v = v.clone();
+    v["support"] = Support::of(data)?.to_json();
+    write(path, &v)
 }
 
 /// Reads a fit file whole.
@@ -56,7 +72,17 @@ pub fn read(path: &Path) -> Result<FitFile> {
             Some(nalgebra::DMatrix::from_fn(n, n, |i, k| rows[i][k]))
         }
     };
-    Ok(FitFile { material, covariance })
+    let support = match &v["support"] {
+        Value::Null => None,
+        s => Some(Support::from_json(s).with_context(|| format!("{}", path.display()))?),
+    };
+    Ok(FitFile {
+        material,
+        covariance,
+        rmse: v["rmse"].as_f64(),
+        aic: v["aic"].as_f64(),
+        support,
+    })
 }
 
 /// Writes a fit's JSON (pretty, one object).

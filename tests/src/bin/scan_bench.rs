@@ -7,6 +7,11 @@
 //!   bound of any stop-and-go visit of its points from any start
 //!   (`scan_order::lower_bound`), beside the old nearest-neighbour plan's
 //!   figure (`old_plan_s`, replayed here).
+//! - `patterns`: the same for the default grid with its lobe patterns (the
+//!   rings about the retro and the mirror direction, `docs/optics.md`):
+//!   points, plan and bound, their ratio, the head time the patterns add to
+//!   the bare grid's plan, and the reachable positions per incidence within
+//!   5° of the laser (`retro_zone_points`).
 //! - `sweep`: arcs of θo in the plane of incidence measured while moving, on
 //!   the simulated head driven directly, at two speeds, each beside the same
 //!   arc measured stop-and-go on its 3° grid (head times on the simulated
@@ -53,6 +58,7 @@ use anyhow::Result;
 use gonio_brdf::frame::Directions;
 use gonio_brdf::{Material, ModelId, Specimen};
 use gonio_firmware::config::{HeadConfig, REFERENCE};
+use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
 use gonio_host::cli::calibrate::{calibrate, CalibrateArgs};
 use gonio_host::cli::grid::SWEEP_EXTENT;
@@ -344,6 +350,50 @@ fn fit_agreement(material: &Specimen) -> Result<Value> {
     }))
 }
 
+/// The default grid with its lobe patterns: plan against bound, and what
+/// the patterns cost over the bare grid's plan (`bare_plan_s`).
+fn patterns(cfg: &HeadConfig, bare_plan_s: f64) -> Value {
+    let spec = ScanSpec::belcour_with_patterns();
+    let order: Vec<u32> = visit_order(cfg, &spec, PARK).collect();
+    let plan = scan_time(cfg, &spec, order.into_iter(), PARK, SETTLE_S, INTEGRATION_S);
+    let Some((bound, _)) = lower_bound(cfg, &spec, SETTLE_S, INTEGRATION_S) else {
+        return json!({"error": "more points than the bound takes"});
+    };
+    let per_block = spec.len() / spec.theta_i_deg.len() as u32;
+    let retro_zone: Vec<Value> = spec
+        .theta_i_deg
+        .iter()
+        .enumerate()
+        .map(|(b, ti)| {
+            let near = (b as u32 * per_block..(b as u32 + 1) * per_block)
+                .filter_map(|i| spec.point(i))
+                .filter_map(|g| kinematics::inverse(cfg, &g).ok())
+                .filter(|a| kinematics::through_splitter(cfg, a))
+                .count();
+            json!({"theta_i_deg": ti, "points": near})
+        })
+        .collect();
+    let out = json!({
+        "points": spec.len(),
+        "measured_points": plan.measured,
+        "plan_s": plan.total_s(),
+        "lower_bound_s": bound.total_s(),
+        "plan_over_lower_bound": plan.total_s() / bound.total_s(),
+        "added_head_s": plan.total_s() - bare_plan_s,
+        "retro_zone_points": retro_zone,
+    });
+    eprintln!(
+        "Default grid with its lobe patterns ({} points, {} measured): plan {:.0} s, bound {:.0} s, plan/bound {:.3} (≤ 1.15); the patterns add {:.0} s",
+        spec.len(),
+        plan.measured,
+        plan.total_s(),
+        bound.total_s(),
+        plan.total_s() / bound.total_s(),
+        plan.total_s() - bare_plan_s
+    );
+    out
+}
+
 fn main() {
     let cfg = REFERENCE;
     let spec = ScanSpec::belcour();
@@ -397,6 +447,7 @@ fn main() {
         "plan_over_lower_bound": plan.total_s() / bound.total_s(),
         "old_plan_over_lower_bound": old.total_s() / bound.total_s(),
         "host_planning_wall_s": planning_wall_s,
+        "patterns": patterns(&cfg, plan.total_s()),
         "sweep": sweep,
         "sweep_scan": sweep_scan(),
         "fit_agreement": agreements,

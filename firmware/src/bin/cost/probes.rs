@@ -205,9 +205,10 @@ fn inverse() {
 }
 
 /// The head's next point of a scan: the index from the plan's queue, its
-/// geometry and its stage targets, over the Belcour grid and over a
-/// 4 096-point incidence (`plan_next`); the order is the host's, so the cost
-/// does not grow with the incidence.
+/// geometry and its stage targets, over the Belcour grid with its lobe
+/// patterns (a ring point's geometry is a few f64 trigonometric calls) and
+/// over a 4 096-point incidence (`plan_next`); the order is the host's, so
+/// the cost does not grow with the incidence.
 #[inline(never)]
 fn plan_next() {
     let big = ScanSpec {
@@ -216,8 +217,9 @@ fn plan_next() {
         dphi: AngleRange::new(-180.0, 180.0, 360.0 / 63.0),
         first_order: 0,
         sweep: None,
+        patterns: None,
     };
-    for spec in [ScanSpec::belcour(), big] {
+    for spec in [ScanSpec::belcour_with_patterns(), big] {
         let mut queue: heapless::Deque<u32, PLAN_QUEUE> = heapless::Deque::new();
         for o in (0..spec.len()).step_by(13) {
             let _ = queue.push_back(spec.index_at_order(o).unwrap_or(0));
@@ -239,7 +241,7 @@ fn plan_next() {
 #[inline(never)]
 fn sweep_path() {
     let req = SweepRequest {
-        from: Geometry::new(30.0, 40.0, 0.0),
+        from: Geometry::new(30.0, 42.0, 0.0),
         to: Geometry::new(60.0, 75.0, 40.0),
         speed_dps: 4.0,
         periods_per_sample: 8,

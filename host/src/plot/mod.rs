@@ -4,6 +4,8 @@
 //! marked, a projected-hemisphere map `(θo·cosΔφ, θo·sinΔφ)` of the
 //! measured values, and a map of the first fit's relative residuals.
 
+pub mod coefficients;
+
 use crate::fit::{data::theta_in, Dataset, Observation};
 use anyhow::{anyhow, Context, Result};
 use gonio_brdf::{Directions, Material};
@@ -14,9 +16,9 @@ use std::path::{Path, PathBuf};
 
 /// The font every picture's text is set in, shipped with the tool
 /// (`host/assets`, DejaVu licence) so the PNGs render the same everywhere.
-static FONT: &[u8] = include_bytes!("../assets/DejaVuSans.ttf");
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
 
-fn register_font() -> Result<()> {
+pub(crate) fn register_font() -> Result<()> {
     static ONCE: std::sync::Once = std::sync::Once::new();
     let mut result = Ok(());
     ONCE.call_once(|| {
@@ -27,7 +29,7 @@ fn register_font() -> Result<()> {
 
 /// Samples within this of Δφ = 0 or 180° are in the incidence plane.
 const IN_PLANE_DEG: f64 = 5.0;
-const PALETTE: [RGBColor; 5] = [
+pub(crate) const PALETTE: [RGBColor; 5] = [
     RGBColor(214, 39, 40),
     RGBColor(31, 119, 180),
     RGBColor(44, 160, 44),
@@ -35,7 +37,7 @@ const PALETTE: [RGBColor; 5] = [
     RGBColor(255, 127, 14),
 ];
 
-fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
+pub(crate) fn err<E: std::fmt::Debug>(e: E) -> anyhow::Error {
     anyhow!("drawing: {e:?}")
 }
 
