@@ -93,6 +93,18 @@ impl Rings {
         Some(self.radii_deg.len() as u32 * self.azimuths as u32)
     }
 
+    /// The ring-major index of the `k`-th view visited: azimuth by
+    /// azimuth, the rings of each in turn, outward at one azimuth and back
+    /// inward at the next. Around a ring the sample turns its normal a whole
+    /// turn about the direction, so ring by ring would take that turn once a
+    /// ring; this takes it once.
+    fn visited(&self, k: u32) -> u32 {
+        let n = self.radii_deg.len().max(1) as u32;
+        let (azimuth, step) = (k / n, k % n);
+        let ring = if azimuth % 2 == 0 { step } else { n - 1 - step };
+        ring * self.azimuths as u32 + azimuth
+    }
+
     fn at(&self, about: About, k: u32) -> RingPoint {
         let n = self.azimuths.max(1) as u32;
         RingPoint {
@@ -137,6 +149,18 @@ impl LobePatterns {
         }
         let k = k - retro;
         (k < self.mirror.count()?).then(|| self.mirror.at(About::Mirror, k))
+    }
+
+    /// The index ([`LobePatterns::ring_point`]'s) of the `k`-th view
+    /// visited: the retro rings' views first, azimuth by azimuth, then the
+    /// mirror rings' alike.
+    pub fn visited(&self, k: u32) -> Option<u32> {
+        let retro = self.retro.count()?;
+        if k < retro {
+            return Some(self.retro.visited(k));
+        }
+        let k = k - retro;
+        (k < self.mirror.count()?).then(|| retro + self.mirror.visited(k))
     }
 
     /// The geometry of the `k`-th view at incidence `theta_i_deg`.
@@ -232,6 +256,29 @@ mod tests {
         assert_eq!(p.retro.count(), Some(320));
         assert_eq!(p.count(), Some(400));
         assert!(p.retro.radii_deg.iter().all(|r| *r < 5.0));
+    }
+
+    /// The visit order holds every view once, and goes around each
+    /// direction once: consecutive views on one azimuth or the next.
+    #[test]
+    fn the_views_are_visited_once_azimuth_by_azimuth() {
+        let p = LobePatterns::cea();
+        let n = p.count().unwrap();
+        let order: Vec<u32> = (0..n).map(|k| p.visited(k).unwrap()).collect();
+        let mut sorted = order.clone();
+        sorted.sort_unstable();
+        assert_eq!(sorted, (0..n).collect::<Vec<_>>());
+        assert!(p.visited(n).is_none());
+        for w in order.windows(2) {
+            let (a, b) = (p.ring_point(w[0]).unwrap(), p.ring_point(w[1]).unwrap());
+            if a.about == b.about {
+                let step = (b.azimuth_deg - a.azimuth_deg).abs();
+                assert!(
+                    step < 1e-3 || (step - 11.25).abs() < 1e-3 || (step - 22.5).abs() < 1e-3,
+                    "{a:?} → {b:?}"
+                );
+            }
+        }
     }
 
     #[test]

@@ -352,16 +352,17 @@ impl ScanSpec {
 
     /// Canonical index of the point visited at position `order`: a grid's
     /// points row by row of θo, Δφ's way back on every other one, then the
-    /// incidence's pattern ring by ring; a sweep scan's retro point first at
-    /// each incidence, then its pattern, then its rows, Δφ's way back at
-    /// every other incidence.
+    /// incidence's pattern azimuth by azimuth ([`LobePatterns::visited`]); a
+    /// sweep scan's retro point first at each incidence, then its pattern,
+    /// then its rows, Δφ's way back at every other incidence.
     pub fn index_at_order(&self, order: u32) -> Option<u32> {
         let (d, a, p) = self.locate(order)?;
         let first = a * d.block();
+        let pattern = |k: u32| self.patterns.as_ref().and_then(|pat| pat.visited(k)).map(|k| d.base() + k);
         if self.sweep.is_some() {
             let c = match p {
                 0 => 0,
-                p if p <= d.n_pat => d.base() + p - 1,
+                p if p <= d.n_pat => pattern(p - 1)?,
                 p => match p - d.n_pat {
                     r if a % 2 == 0 => r,
                     r => d.n_dp - r,
@@ -370,7 +371,7 @@ impl ScanSpec {
             return Some(first + c);
         }
         if p >= d.base() {
-            return Some(first + p);
+            return pattern(p - d.base()).map(|c| first + c);
         }
         let (row, col) = (p / d.n_to, p % d.n_to);
         let c = if a % 2 == 0 { row } else { d.n_dp - 1 - row };

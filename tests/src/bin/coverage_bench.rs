@@ -3,11 +3,13 @@
 //! gain ranges, stray light, a plate off its certificate) drawn from the
 //! head's stated uncertainties, calibrated by `gonio calibrate`'s code; the
 //! share of samples whose truth (the virtual material at the reported
-//! geometry) lies inside the k = 2 interval, per incidence angle and near /
-//! far from the retro peak. Then retro-phong fitted to each scan with 1/σ
-//! weights, and R_A (ASTM E810 set, ε = 0) and R_L (EN 1436) from the fit
-//! against the material's own: their coverage, and linear propagation of
-//! the fit's covariance against Monte Carlo. Then `coefficients_nonmodel`:
+//! geometry, as the detector's field sees it) lies inside the k = 2
+//! interval, per incidence angle and near / far from the retro peak. Then
+//! retro-phong fitted to each scan with 1/σ weights, and R_A (ASTM E810 set,
+//! ε = 0) and R_L (EN 1436) as `gonio coefficients --fit` gives them from
+//! the fit and its data's support, against the material's own: their
+//! coverage, and linear propagation of the fit's covariance against Monte
+//! Carlo (on the extrapolated values, which the fit carries). Then `coefficients_nonmodel`:
 //! scans of the glass-bead material (none of the models) and of the tape on
 //! imperfect heads, every model fitted, and R_A on the ASTM E810 grid and
 //! R_L as `gonio coefficients --fit fits/*.json` gives them (the data where
@@ -96,10 +98,15 @@ fn main() -> anyhow::Result<()> {
             ..FitSpec::new(ModelId::RetroPhong)
         };
         let f = fit::fit(&data, &spec)?;
-        let src = Source::Model {
+        // As `gonio coefficients --fit fit.json` takes it: the fit and its
+        // data's support (measured values from the data, the rest from the fit).
+        let fitted = Fitted {
             material: f.material.clone(),
             covariance: f.covariance.clone(),
+            rmse: f.metrics.rmse,
+            aic: f.aic,
         };
+        let src = Source::measured(vec![fitted], Support::of(&data)?)?;
         let mut scan_coef = Tally::default();
         for (k, (got, want)) in coefficients::compute(&src, &reqs)?
             .iter()
