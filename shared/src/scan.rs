@@ -7,11 +7,19 @@
 //! retro direction, which no row reaches, measured at rest.
 //!
 //! Two orders matter. The *canonical index* enumerates the grid θi-major,
-//! then θo, then Δφ (a sweep scan's: θi-major, then the retro point, then
-//! the rows); files and resumption use it. The *visit order* is what
-//! the head follows: a serpentine that reverses the θo sweep on every other
-//! Δφ row and the Δφ sweep on every other incidence, so the arm and the
-//! sample never swing back across the whole range between neighbours.
+//! then θo, then Δφ, each incidence's pattern points after its grid (a
+//! sweep scan's: θi-major, then the retro point, the rows, the pattern);
+//! files and resumption use it. The *visit order* is the order
+//! the head visits positions in: the host plans it and sends it in chunks of
+//! canonical indices (below); the head takes any order. The host's
+//! planner (`scan_order` in gonio-acquire) puts each incidence's unreachable
+//! points first and the reachable ones along a short path of move times;
+//! where it does not search (a sweep scan's positions, an incidence too large
+//! for the search) it sends [`ScanSpec::index_at_order`]: a serpentine that
+//! reverses the θo sweep on every other Δφ row and the Δφ sweep on every
+//! other incidence, so the arm and the sample never swing back across the
+//! whole range between neighbours (where the patterns and a sweep scan's
+//! rows come: [`ScanSpec::index_at_order`]).
 
 use crate::fault::{Fault, Field};
 use crate::geometry::Geometry;
@@ -63,6 +71,46 @@ impl AngleRange {
     /// The k-th value.
     pub fn at(&self, k: u32) -> f32 {
         self.start_deg + k as f32 * self.step_deg
+    }
+}
+
+/// Why a text is not an [`AngleRange`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RangeTextError {
+    /// Not three fields separated by colons.
+    Shape,
+    /// A field is not a finite number.
+    Number,
+    /// The range is empty or malformed ([`AngleRange::count`]).
+    Empty,
+}
+
+impl core::fmt::Display for RangeTextError {
+    fn fmt(&self, f: &mut core::fmt::Formatter<'_>) -> core::fmt::Result {
+        f.write_str(match self {
+            RangeTextError::Shape => "not START:STOP:STEP",
+            RangeTextError::Number => "START, STOP and STEP must be finite numbers (degrees)",
+            RangeTextError::Empty => "empty or malformed (STEP > 0, START ≤ STOP, span ≤ 360°)",
+        })
+    }
+}
+
+impl core::error::Error for RangeTextError {}
+
+/// `START:STOP:STEP` in degrees, STOP included (the command line's form).
+impl core::str::FromStr for AngleRange {
+    type Err = RangeTextError;
+
+    fn from_str(s: &str) -> Result<Self, Self::Err> {
+        let mut fields = s.split(':').map(|x| x.trim().parse::<f32>().ok().filter(|v| v.is_finite()));
+        let (Some(a), Some(b), Some(c), None) = (fields.next(), fields.next(), fields.next(), fields.next()) else {
+            return Err(RangeTextError::Shape);
+        };
+        let (Some(a), Some(b), Some(c)) = (a, b, c) else {
+            return Err(RangeTextError::Number);
+        };
+        let r = AngleRange::new(a, b, c);
+        r.count().map(|_| r).ok_or(RangeTextError::Empty)
     }
 }
 
@@ -425,7 +473,8 @@ pub const PLAN_CHUNK: usize = 32;
 pub const PLAN_QUEUE: usize = 256;
 
 /// The next stretch of a scan's visit order, from the host (which plans it:
-/// f64 at GHz, where the head would spend seconds; `docs/architecture.md`).
+/// f64 at GHz, where the head would spend seconds;
+/// `docs/decisions/001-host-plans-the-visit-order.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct PlanChunk {

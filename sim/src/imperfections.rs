@@ -1,5 +1,5 @@
 //! What the simulated head gets wrong, to match the uncertainty budget's
-//! components (`gonio_host::uncertainty`; the host's command line draws a
+//! components (`gonio_analysis::uncertainty`; the host's command line draws a
 //! head from them): each stage's zero off by a drawn angle, backlash (the load lags the motor after a reversal), gain ranges
 //! off their nominal value, chopped stray light, and a reference plate whose
 //! true reflectance differs from its certificate's value. The firmware knows

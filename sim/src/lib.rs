@@ -9,6 +9,7 @@ pub mod faults;
 mod faulty_link;
 mod frames;
 mod imperfections;
+#[cfg(feature = "in-process")]
 mod inproc;
 mod optics;
 mod pty;
@@ -17,6 +18,7 @@ mod world;
 pub use board::SimBoard;
 pub use frames::{Cue, FrameHead, Sent};
 pub use imperfections::Imperfections;
+#[cfg(feature = "in-process")]
 pub use inproc::spawn_in_process;
 pub use optics::{seen_brdf, Photodiode};
 pub use pty::serve_pty;

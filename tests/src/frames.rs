@@ -2,10 +2,10 @@
 //! that drive the firmware frame by frame (`gonio_sim::FrameHead`):
 //! requests encoded and sealed, the head's scan events and replies decoded.
 
+use gonio_acquire::scan_order::visit_order;
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::dispatch;
 use gonio_firmware::motion::PARK;
-use gonio_host::scan_order::visit_order;
 use gonio_shared::icd::{PlanEndpoint, ScanEndpoint, ScanEventTopic};
 use gonio_shared::wire::{check, framing};
 use gonio_shared::{PlanChunk, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};

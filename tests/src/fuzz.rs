@@ -4,8 +4,8 @@
 //! (tests/tests/fuzz_seeds.rs), and `fuzz-seeds` writes those seeds.
 
 use crate::frames::{request, sealed};
+use gonio_analysis::formats::{alta, brdf_csv};
 use gonio_firmware::dispatch;
-use gonio_host::formats::{alta, brdf_csv};
 use gonio_shared::icd::{
     AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
     MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,

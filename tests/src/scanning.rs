@@ -1,11 +1,12 @@
 //! One scan of a grid into a fresh sample file in a directory, read back:
 //! the step every end-to-end test on the simulated head shares.
 
-use gonio_host::operator::Operator;
-use gonio_host::samples_csv::{self, Row, SampleWriter};
-use gonio_host::scan::{self, ScanOutcome};
-use gonio_host::session::{Session, Setup};
-use gonio_host::target::Target;
+use gonio_acquire::operator::Operator;
+use gonio_acquire::scan;
+use gonio_acquire::session::{Session, Setup};
+use gonio_acquire::target::Target;
+use gonio_scan_dir::run::ScanOutcome;
+use gonio_scan_dir::samples::{self, Row, SampleWriter};
 use gonio_shared::{DetectionSettings, ScanSpec};
 use std::path::Path;
 use std::sync::Arc;
@@ -17,7 +18,7 @@ pub async fn scan_and_read(session: &mut Session, spec: &ScanSpec, dir: &Path) -
     let outcome = scan::run(session, spec, &mut out, &Operator::Silent.bar(0, "scanning", "points"), None)
         .await
         .unwrap();
-    let rows = samples_csv::read(&out.finish().unwrap()).unwrap();
+    let rows = samples::read(&out.finish().unwrap()).unwrap();
     (outcome, rows)
 }
 

@@ -2,8 +2,8 @@
 //! the Belcour grid (θi 15/30/60°, θo 0–87° step 3°, Δφ step 10°; θo = 90°
 //! is grazing and left out), values of a known material times `1 + noise·N(0,1)`.
 
+use gonio_analysis::fit::{Dataset, Observation, Units};
 use gonio_brdf::{Directions, Material, ModelId, Param};
-use gonio_host::fit::{Dataset, Observation, Units};
 use rand::{Rng, SeedableRng};
 use rand_distr::StandardNormal;
 

@@ -8,8 +8,8 @@
 //! header with junk lines still give the same samples or an error that
 //! names the line.
 
-use gonio_host::fit::{Dataset, Units};
-use gonio_host::formats::alta;
+use gonio_analysis::fit::{Dataset, Units};
+use gonio_analysis::formats::alta;
 use proptest::prelude::*;
 use std::f64::consts::PI;
 

@@ -11,8 +11,8 @@
 //! `cargo test`) the steps whose tool is missing are skipped and said so on
 //! stderr, while the parameter blocks and naga's check still run.
 
+use gonio_analysis::formats::brdf_explorer;
 use gonio_brdf::{Directions, Material, ModelId, Param};
-use gonio_host::formats::brdf_explorer;
 use gonio_tests::synthetic;
 use rand::{Rng, SeedableRng};
 use std::fmt::Write as _;

@@ -2,15 +2,15 @@
 //! on a link, the firmware's dispatcher, motion, auto-range and demodulation,
 //! and the virtual photodiode.
 
+use gonio::cli::simulated::Simulated;
+use gonio_acquire::client::HeadClient;
+use gonio_acquire::scan;
+use gonio_acquire::scan_order::{dwell_s, scan_time, visit_order};
+use gonio_acquire::target::{Port, Target};
 use gonio_brdf::{Directions, Material, Specimen};
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
-use gonio_host::cli::simulated::Simulated;
-use gonio_host::client::Head;
-use gonio_host::scan;
-use gonio_host::scan_order::{dwell_s, scan_time, visit_order};
-use gonio_host::target::{Port, Target};
 use gonio_shared::icd::{
     AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint, StatusEndpoint,
 };
@@ -32,8 +32,8 @@ fn small_grid() -> ScanSpec {
     }
 }
 
-async fn homed(target: &dyn Target) -> Head {
-    let head = Head::connect(target).await.unwrap();
+async fn homed(target: &dyn Target) -> HeadClient {
+    let head = HeadClient::connect(target).await.unwrap();
     head.request::<DetectionEndpoint>(&DetectionSettings::default()).await.unwrap();
     head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
     head
@@ -155,7 +155,7 @@ async fn a_protocol_version_mismatch_is_named() {
         protocol_version: PROTOCOL_VERSION + 1,
         ..SimConfig::default()
     };
-    let err = Head::connect(&Simulated(sim)).await.err().expect("connecting must fail");
+    let err = HeadClient::connect(&Simulated(sim)).await.err().expect("connecting must fail");
     let msg = format!("{err:#}");
     assert!(msg.contains("protocol version mismatch"), "{msg}");
     assert!(msg.contains(&format!("v{}", PROTOCOL_VERSION + 1)), "{msg}");
@@ -163,7 +163,7 @@ async fn a_protocol_version_mismatch_is_named() {
 
 #[tokio::test]
 async fn refused_commands_move_nothing() {
-    let head = Head::connect(&Simulated::default()).await.unwrap();
+    let head = HeadClient::connect(&Simulated::default()).await.unwrap();
     let err = head
         .request::<MeasureEndpoint>(&MeasureRequest {
             at: Some(Geometry::new(30.0, 30.0, 0.0)),
@@ -263,7 +263,7 @@ async fn the_simulated_head_on_a_pseudo_terminal_is_driven_like_a_real_one() {
     assert_eq!(outcome.measured + outcome.skipped, small_grid().len());
     session.close().await;
     // A second session on the same head works too.
-    let again = Head::connect(&target).await.unwrap();
+    let again = HeadClient::connect(&target).await.unwrap();
     assert!(again.request::<StatusEndpoint>(&()).await.unwrap().homed);
     again.close().await;
 }
@@ -329,7 +329,7 @@ async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before
     });
     let move_s = gonio_firmware::motion::move_time(&REFERENCE, [0, 1, 2].map(|i| b[i] - a[i]));
     assert!(move_s > 8.0, "the move between the points takes {move_s} s");
-    let head = Head::connect(&target).await.unwrap();
+    let head = HeadClient::connect(&target).await.unwrap();
     head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
     let (accepted, mut events) = head.start_scan(&spec).await.unwrap();
     scan::feed(&head, accepted.run, &[0, 1], 0).await.unwrap();
@@ -345,7 +345,7 @@ async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before
     // The operator plugs the cable back a little later (the terminal's
     // hang-up is a level, not an edge: the head must see it).
     tokio::time::sleep(Duration::from_millis(50)).await;
-    let again = Head::connect(&target).await.unwrap();
+    let again = HeadClient::connect(&target).await.unwrap();
     let st = again.request::<StatusEndpoint>(&()).await.unwrap();
     assert!(matches!(st.state, HeadState::Paused { next_order: 1, .. }), "{:?}", st.state);
     assert!(!st.laser_on, "laser on after the link was pulled");

@@ -4,7 +4,7 @@
 //! with its code, and when it is reported the laser is off and every motor
 //! driver disabled (checked on the virtual pins at the moment the report
 //! leaves). The host's half (recovery, no sample lost or duplicated,
-//! resumption) is host/tests/fault_recovery.rs.
+//! resumption) is host/gonio/tests/fault_recovery.rs.
 
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, MoveEndpoint, SafetyEndpoint, ScanEndpoint};
 use gonio_shared::{AngleRange, Axis, Fault, Geometry, SafetySettings, SampleFlags, ScanEvent, ScanSpec};

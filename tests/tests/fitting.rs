@@ -2,9 +2,9 @@
 //! of known parameters, every model on data from itself, the global search
 //! without starting points, weights, units, and the ALTA round trip.
 
+use gonio_analysis::fit::{self, Dataset, FitSpec, Units, Weighting};
+use gonio_analysis::formats::alta;
 use gonio_brdf::{ModelId, Param};
-use gonio_host::fit::{self, Dataset, FitSpec, Units, Weighting};
-use gonio_host::formats::alta;
 use gonio_tests::synthetic;
 
 /// Issue #6: retro-phong's parameters within 5 % (or 2 standard errors) of

@@ -7,14 +7,14 @@ use embedded_hal::digital::{ErrorType, InputPin};
 use embedded_hal_async::delay::DelayNs;
 use embedded_hal_mock::eh1::digital::{Mock as PinMock, State, Transaction as Pin};
 use futures::executor::block_on;
+use gonio::cli::simulated::Simulated;
+use gonio_acquire::client::HeadClient;
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::hw::{Board, Hardware, QueueFull, StepBlock, StepTimer};
 use gonio_firmware::motion::blocks::profile_blocks;
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::motion::{move_by, trapezoid, Position};
 use gonio_firmware::units;
-use gonio_host::cli::simulated::Simulated;
-use gonio_host::client::Head;
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, MoveEndpoint, StatusEndpoint};
 use gonio_shared::{Axis, Geometry};
 use gonio_tests::doubles::{FixedClock, ScriptedAdc};
@@ -227,7 +227,7 @@ proptest! {
     fn no_axis_leaves_its_soft_limits(cmds in proptest::collection::vec(command(), 1..12)) {
         let rt = tokio::runtime::Builder::new_current_thread().enable_all().build().unwrap();
         rt.block_on(async {
-            let head = Head::connect(&Simulated::default()).await.unwrap();
+            let head = HeadClient::connect(&Simulated::default()).await.unwrap();
             head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
             for g in cmds {
                 let _ = head.request::<MoveEndpoint>(&g).await;

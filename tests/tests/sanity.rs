@@ -2,10 +2,10 @@
 //! loaded and a 3σ band, dust specks (five times the model value at a few
 //! points) are flagged and measured again, and clean points are not flagged.
 
+use gonio::cli::simulated::Simulated;
+use gonio_acquire::operator::Operator;
+use gonio_acquire::session::{Session, Setup};
 use gonio_brdf::{Directions, Material, Specimen};
-use gonio_host::cli::simulated::Simulated;
-use gonio_host::operator::Operator;
-use gonio_host::session::{Session, Setup};
 use gonio_shared::icd::{MeasureEndpoint, MeasureRequest, SanityEndpoint, StatusEndpoint};
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, SampleFlags, SanityConfig, ScanSpec};
 use gonio_sim::SimConfig;

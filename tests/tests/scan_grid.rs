@@ -2,10 +2,10 @@
 //! serpentine visit order (a sweep scan's too), and the host's plan against
 //! its lower bound.
 
+use gonio_acquire::scan_order::{lower_bound, scan_time, visit_order, ScanTime};
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::{target_steps, PARK};
-use gonio_host::scan_order::{lower_bound, scan_time, visit_order, ScanTime};
 use gonio_shared::{row_turn, AngleRange, Geometry, LobePatterns, Rings, ScanSpec, SweepScan, Visit};
 use proptest::prelude::*;
 use std::collections::BTreeSet;

@@ -5,13 +5,13 @@
 //! duplicated and reordered frames and a pulled cable are recovered by
 //! sweeping the row again.
 
+use gonio::cli::simulated::Simulated;
 use gonio_brdf::{Material, Specimen};
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::motion::{self, executor::QUEUE};
 use gonio_firmware::sweep;
-use gonio_host::cli::simulated::Simulated;
-use gonio_host::samples_csv::Row;
-use gonio_host::scan::ScanOutcome;
+use gonio_scan_dir::run::ScanOutcome;
+use gonio_scan_dir::samples::Row;
 use gonio_shared::{AngleRange, SampleFlags, ScanSpec, SweepLobe, SweepRow, SweepScan, Visit};
 use gonio_sim::faults::Faults;
 use gonio_sim::SimConfig;

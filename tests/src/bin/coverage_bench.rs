@@ -22,16 +22,16 @@
 //! `cargo run --release -p tests --bin coverage-bench [-- SCANS [NONMODEL_SCANS]]`
 //! (default 100 and 20).
 
+use gonio::cli::calibrate::{self, CalibrateArgs, Calibrated};
+use gonio::cli::fit::{compare, domain, FitOptions};
+use gonio::cli::scan::{demo_scan, OutputArgs};
+use gonio_analysis::calibration;
+use gonio_analysis::coefficients::{self, Cie, Fitted, Provenance, Request, Source, Support};
+use gonio_analysis::fit::{self, FitSpec, Weighting};
+use gonio_analysis::uncertainty::{HeadUncertainty, K_COVERAGE};
 use gonio_brdf::frame::angle_between;
 use gonio_brdf::{Directions, Material, ModelId, Param, Specimen};
 use gonio_firmware::config::REFERENCE;
-use gonio_host::calibration;
-use gonio_host::cli::calibrate::{self, CalibrateArgs, Calibrated};
-use gonio_host::cli::fit::{compare, domain, FitOptions};
-use gonio_host::cli::scan::{demo_scan, OutputArgs};
-use gonio_host::coefficients::{self, Cie, Fitted, Provenance, Request, Source, Support};
-use gonio_host::fit::{self, FitSpec, Weighting};
-use gonio_host::uncertainty::{HeadUncertainty, K_COVERAGE};
 use gonio_shared::ScanSpec;
 use gonio_sim::{seen_brdf, Imperfections, SimConfig, PLATE_RHO_U};
 use serde_json::json;
@@ -267,7 +267,7 @@ fn imperfect_scan(
     material: &Specimen,
 ) -> anyhow::Result<(tempfile::TempDir, Imperfections, Calibrated)> {
     let dir = tempfile::tempdir()?;
-    let imperfections = gonio_host::cli::material::drawn_imperfections(seed, &HeadUncertainty::default(), PLATE_RHO_U);
+    let imperfections = gonio::cli::material::drawn_imperfections(seed, &HeadUncertainty::default(), PLATE_RHO_U);
     let sim = SimConfig {
         seed,
         imperfections: Box::new(imperfections.clone()),
@@ -285,7 +285,7 @@ fn imperfect_scan(
 }
 
 /// The name of the fit with the lowest AIC.
-fn source_best(outcomes: &[gonio_host::cli::fit::Outcome]) -> &'static str {
+fn source_best(outcomes: &[gonio::cli::fit::Outcome]) -> &'static str {
     outcomes
         .iter()
         .min_by(|a, b| a.fit.aic.total_cmp(&b.fit.aic))

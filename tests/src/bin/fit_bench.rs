@@ -37,8 +37,8 @@
 //! Installs scipy (pinned) with pip if it is missing or another version;
 //! prints one JSON object, with the peer's versions and BLAS.
 
+use gonio_analysis::fit::{self, transform, FitSpec, Problem};
 use gonio_brdf::{Directions, GeometryTerms, GlassBeads, ModelId};
-use gonio_host::fit::{self, transform, FitSpec, Problem};
 use gonio_tests::synthetic;
 use rand::{Rng, SeedableRng};
 use serde_json::{json, Map, Value};

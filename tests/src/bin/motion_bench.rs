@@ -19,13 +19,13 @@
 //!   order (`scan-bench` compares it with its lower bound) and in raster order (θi, θo, Δφ loops, Δφ innermost), moves under
 //!   the reference axis limits plus 50 ms settle and 100 ms integration per point.
 
+use gonio_acquire::scan_order::{scan_time, visit_order};
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::hw::StepBlock;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::blocks::profile_blocks;
 use gonio_firmware::motion::{target_steps, trapezoid, Position, PARK};
 use gonio_firmware::units;
-use gonio_host::scan_order::{scan_time, visit_order};
 use gonio_shared::{Axis, Geometry, ScanSpec};
 use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
 use gonio_tests::step_log::{executor, run, Scope};

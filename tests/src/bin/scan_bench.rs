@@ -55,19 +55,19 @@
 //!   slowing down bought.
 
 use anyhow::Result;
+use gonio::cli::calibrate::{calibrate, CalibrateArgs};
+use gonio::cli::grid::SWEEP_EXTENT;
+use gonio::cli::scan::{demo_scan, OutputArgs, DEMO_SWEEP};
+use gonio::cli::simulated::Simulated;
+use gonio_acquire::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
+use gonio_analysis::fit::{fit, Fit, FitSpec, Weighting};
+use gonio_analysis::lobe;
 use gonio_brdf::frame::Directions;
 use gonio_brdf::{Material, ModelId, Specimen};
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
-use gonio_host::cli::calibrate::{calibrate, CalibrateArgs};
-use gonio_host::cli::grid::SWEEP_EXTENT;
-use gonio_host::cli::scan::{demo_scan, OutputArgs, DEMO_SWEEP};
-use gonio_host::cli::simulated::Simulated;
-use gonio_host::fit::{fit, Fit, FitSpec, Weighting};
-use gonio_host::lobe;
-use gonio_host::scan::ScanOutcome;
-use gonio_host::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
+use gonio_scan_dir::run::ScanOutcome;
 use gonio_shared::{AngleRange, DetectionSettings, Geometry, ScanSpec, SweepLobe, SweepRequest, SweepScan};
 use gonio_sim::SimConfig;
 use gonio_tests::scanning::{scan_and_read, session};
@@ -221,7 +221,7 @@ fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<Fitted> {
     let (outcome, _) = rt.block_on(demo_scan(sim, spec, dir.path(), &quiet))?;
     let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
     let blind = (SimConfig::default().machine.optics.blind_max_deg as f64).to_radians();
-    let mut data = gonio_host::formats::load(&calibrated.csv)?.filter(|o| {
+    let mut data = gonio_analysis::formats::load(&calibrated.csv)?.filter(|o| {
         let d = o.directions();
         gonio_brdf::frame::angle_between(d.l, d.v) > blind
     });

@@ -1,0 +1,209 @@
+//! A scan into a scan directory, new or resumed: connect, set the detector
+//! up, record the scan (`scan.json`), measure the plate if asked, run it,
+//! and write its `run.json`. Connects first, so a head that cannot be
+//! reached leaves no files behind.
+
+use super::run;
+use crate::operator::Operator;
+use crate::plate;
+use crate::scan_order::{dwell_s, lower_bound, scan_time, sweep_time, visit_order};
+use crate::session::{Session, Setup};
+use crate::target::Target;
+use anyhow::{bail, Context, Result};
+use gonio_firmware::config::HeadConfig;
+use gonio_firmware::motion::PARK;
+use gonio_scan_dir::record::ScanRecord;
+use gonio_scan_dir::run::{RunRecord, ScanOutcome};
+use gonio_scan_dir::samples::{self, drop_last_position, stored_rows, SampleWriter};
+use gonio_scan_dir::ScanDir;
+use gonio_shared::{DetectionReport, ScanSpec};
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Length of the detector's reference learning (s).
+const LEARNING_S: f32 = 1.0;
+
+/// Where a scan goes and how it starts.
+pub struct Destination<'a> {
+    pub dir: &'a Path,
+    /// The first visit position to measure, for a resumed scan
+    /// ([`resume_from`]); `None` for a new one.
+    pub resume: Option<u32>,
+    /// Overwrite a completed scan in `dir`.
+    pub force: bool,
+}
+
+/// Runs `record` on the head at `target` into `to`. Returns the counts and
+/// the samples file.
+pub async fn scan_into(
+    record: &ScanRecord,
+    target: Arc<dyn Target>,
+    to: Destination<'_>,
+    operator: Operator,
+) -> Result<(ScanOutcome, PathBuf)> {
+    let (dir, resume) = (to.dir, to.resume);
+    let det = &record.detector;
+    let spec = &ScanSpec {
+        first_order: resume.unwrap_or(0),
+        ..record.spec.clone()
+    };
+    let settings = det.settings();
+    let setup = Setup {
+        settings,
+        calibrate_at: det.calibrate_at,
+        calibration_periods: settings.periods_for(LEARNING_S),
+    };
+    let mut session = Session::connect(target.clone(), setup, operator).await?;
+    let id = session.head().identity().clone();
+    operator.notice(format_args!(
+        "head: {} (serial {}, firmware {}, protocol v{}{})",
+        id.board,
+        id.serial,
+        id.firmware_version,
+        id.protocol_version,
+        if id.simulated { ", simulated" } else { "" }
+    ));
+    if resume.is_none() {
+        prepare_dir(dir, to.force)?;
+        record.write(dir)?;
+    }
+    session.start().await?;
+    let reconnected_before_scan = session.reconnections;
+    let detection = session.detection.context("the head's detection settings")?;
+    if record.reference_plate && resume.is_none() {
+        plate::measure_plate(session.head(), target.as_ref(), dir, operator).await?;
+    }
+    let config = *session.head().config();
+    let estimate = estimate_s(&config, spec, &detection);
+    if spec.sweep.is_some() {
+        operator.notice(format_args!(
+            "{} rows to sweep, {} retro points and {} pattern points to measure at rest; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
+            spec.rows(),
+            spec.retro_points(),
+            spec.pattern_points(),
+            hms(estimate),
+            detection.settings.settle_s * 1e3,
+        ));
+    } else {
+        operator.notice(format_args!(
+            "{} points; estimated duration {} (moves, {:.0} ms settle and {:.0} ms integration per point)",
+            spec.len(),
+            hms(estimate),
+            detection.settings.settle_s * 1e3,
+            detection.integration_s * 1e3
+        ));
+    }
+    let mut writer = match resume {
+        Some(first) => {
+            operator.notice(format_args!("resuming at position {first} of {}", spec.len()));
+            if spec.sweep.is_some() {
+                // The row resuming sweeps again (`resume_from`).
+                drop_last_position(dir)?;
+            }
+            SampleWriter::append(dir)?
+        }
+        None => SampleWriter::create(dir)?,
+    };
+    let pb = operator.bar(spec.len() as u64, "scanning", positions(spec));
+    let mut outcome = run(&mut session, spec, &mut writer, &pb, record.monitor.as_ref())
+        .await
+        .with_context(|| {
+            format!(
+                "scan interrupted; every sample so far is on disk: finish it with `gonio scan --resume {}`",
+                dir.display()
+            )
+        })?;
+    if reconnected_before_scan > 0 {
+        outcome
+            .recoveries
+            .insert("link lost while preparing the head".into(), reconnected_before_scan);
+    }
+    let samples = writer.finish()?;
+    if resume.is_none() && record.monitor.is_none() {
+        outcome.lower_bound_s = lower_bound_s(&config, spec, &detection);
+    }
+    if resume.is_some() {
+        // Counts of the whole scan, not only of this session.
+        let rows = samples::read(&samples)?;
+        outcome.measured = rows.iter().filter_map(|r| r.order).collect::<BTreeSet<_>>().len() as u32;
+        outcome.swept_samples = rows.iter().filter(|r| r.extent_deg.is_some()).count() as u32;
+        outcome.skipped = outcome.points - outcome.measured;
+    }
+    let mut run_record = RunRecord::new(&id, record.material(), spec, &detection, session.calibration, outcome.clone());
+    run_record.estimated_s = Some(estimate);
+    run_record.write(dir)?;
+    session.close().await;
+    Ok((outcome, samples))
+}
+
+/// The first visit position an interrupted scan of `spec` in `dir` has not
+/// stored. A sweep scan's last stored row may have been cut short while it
+/// was written: it is swept again (and its stored samples dropped once the
+/// head is found, [`scan_into`]).
+pub fn resume_from(dir: &Path, spec: &ScanSpec) -> Result<u32> {
+    if ScanDir::new(dir).samples().exists() {
+        bail!("{} holds a complete scan; nothing to resume", dir.display());
+    }
+    let last = stored_rows(dir)?.iter().filter_map(|r| r.order).max();
+    Ok(match (last, spec.sweep) {
+        (Some(o), Some(_)) => o,
+        (Some(o), None) => o + 1,
+        (None, _) => 0,
+    })
+}
+
+/// Refuses to mix a new scan into a directory that holds one.
+fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
+    std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    for p in ScanDir::new(dir).finished_files() {
+        if p.exists() {
+            if !force {
+                let f = p.file_name().unwrap_or_default().to_string_lossy();
+                bail!("{} already holds a scan ({f}); choose another --out or pass --force", dir.display());
+            }
+            std::fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
+        }
+    }
+    Ok(())
+}
+
+/// The scan replayed from the park position under the head's reported axis
+/// limits, from the scan's first position on: moves, settle and acquisition,
+/// or a sweep scan's moves, settling, ranging and sweeps (s).
+fn estimate_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
+    let (settle, acquire) = dwell_s(det);
+    let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
+    if spec.sweep.is_some() {
+        let ranging = acquire - det.integration_s as f64;
+        return sweep_time(cfg, spec, rest, PARK, (settle, acquire, ranging), det.settings.chop_hz).total_s();
+    }
+    scan_time(cfg, spec, rest, PARK, settle, acquire).total_s()
+}
+
+/// The least head time any stop-and-go order of the whole scan could take
+/// (s), for a sweep scan of its grid's points; `None` for a scan too large
+/// to bound.
+fn lower_bound_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> Option<f64> {
+    let (settle, acquire) = dwell_s(det);
+    let grid = ScanSpec {
+        sweep: None,
+        ..spec.clone()
+    };
+    lower_bound(cfg, &grid, settle, acquire).map(|(t, _)| t.total_s())
+}
+
+/// Seconds as h:mm:ss.
+pub fn hms(s: f64) -> String {
+    let s = s.round() as u64;
+    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+}
+
+/// What a scan's visit positions are called: a grid's points, or a sweep
+/// scan's positions (rows and retro points).
+pub fn positions(spec: &ScanSpec) -> &'static str {
+    match spec.sweep {
+        Some(_) => "positions",
+        None => "points",
+    }
+}

@@ -1,0 +1,136 @@
+//! Measured BRDF values as the fitting engine sees them, whatever file they
+//! came from: geometry in radians, a value in the file's units, and an
+//! optional standard uncertainty.
+
+use crate::uncertainty::SHARED;
+use anyhow::{bail, Result};
+use gonio_brdf::{Directions, GeometryTerms};
+use serde::{Deserialize, Serialize};
+
+/// Units of a value (`models.md` §1, ALTA's `#PARAM_OUT`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+#[serde(rename_all = "kebab-case")]
+pub enum Units {
+    /// `f_r` in sr⁻¹ (`INV_STERADIAN`).
+    Fr,
+    /// `f_r·cosθo` in sr⁻¹ (`INV_STERADIAN_COSINE_FACTOR`).
+    FrCos,
+}
+
+/// One measured value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Observation {
+    pub theta_i: f64,
+    pub theta_o: f64,
+    pub dphi: f64,
+    pub value: f64,
+    pub sigma: Option<f64>,
+    /// How much `value` moves when each input shared by the whole data set
+    /// (`uncertainty::SHARED`) is off by one standard uncertainty; zeros
+    /// where the source says nothing of them.
+    pub shared: [f64; SHARED.len()],
+}
+
+impl Observation {
+    pub fn directions(&self) -> Directions {
+        Directions::from_angles(self.theta_i, self.theta_o, self.dphi)
+    }
+
+    pub fn geometry(&self) -> GeometryTerms {
+        GeometryTerms::new(&self.directions())
+    }
+
+    /// The factor from `f_r` to `units`.
+    pub fn unit_factor(&self, units: Units) -> f64 {
+        match units {
+            Units::Fr => 1.0,
+            Units::FrCos => self.theta_o.cos(),
+        }
+    }
+
+    /// In the retro half-space `cosΔφ ≥ 0` (`Δφ = 0` is the retro half-plane).
+    pub fn on_retro_side(&self) -> bool {
+        self.dphi.cos() >= 0.0
+    }
+}
+
+/// A set of observations in one unit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Dataset {
+    pub units: Units,
+    pub observations: Vec<Observation>,
+    /// Header lines of the source kept as metadata (ALTA comments, …).
+    pub metadata: Vec<String>,
+    /// False where the source did not say what its values are (ALTA's
+    /// `UNKNOWN_OUTPUT`): `units` is then an assumption, which `--units`
+    /// replaces.
+    pub units_stated: bool,
+    /// What the reader assumed or found doubtful, for the user.
+    pub warnings: Vec<String>,
+}
+
+/// Whether `theta` (rad) is one of `list` (degrees), within 0.05°.
+pub fn theta_in(theta: f64, list_deg: &[f64]) -> bool {
+    list_deg.iter().any(|t| (theta.to_degrees() - t).abs() < 0.05)
+}
+
+impl Dataset {
+    /// The same values in other units.
+    pub fn in_units(&self, units: Units) -> Result<Dataset> {
+        let mut out = self.clone();
+        out.units = units;
+        for o in &mut out.observations {
+            let k = o.unit_factor(units) / o.unit_factor(self.units);
+            if !k.is_finite() {
+                bail!("θo = {:.3}° is grazing: cannot convert to {units:?}", o.theta_o.to_degrees());
+            }
+            o.value *= k;
+            o.sigma = o.sigma.map(|s| s * k);
+            o.shared = o.shared.map(|s| s * k);
+        }
+        Ok(out)
+    }
+
+    /// Keeps the observations `keep` accepts.
+    pub fn filter(&self, keep: impl Fn(&Observation) -> bool) -> Dataset {
+        Dataset {
+            observations: self.observations.iter().copied().filter(|o| keep(o)).collect(),
+            ..self.clone()
+        }
+    }
+
+    /// What makes the data doubtful as a fitting input, for a warning:
+    /// negative values, every value zero, a single incidence angle.
+    pub fn doubts(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        let n = self.observations.len();
+        let negative = self.observations.iter().filter(|o| o.value < 0.0).count();
+        if negative > 0 {
+            out.push(format!(
+                "{negative} of {n} values are negative (noise about zero, or an offset?); a BRDF is not"
+            ));
+        }
+        if n > 0 && self.observations.iter().all(|o| o.value == 0.0) {
+            out.push("every value is zero".into());
+        }
+        if let [one] = self.incidence_angles_deg()[..] {
+            out.push(format!(
+                "one incidence angle only (θi = {one}°): how the BRDF changes with θi is not measured, and a fit extrapolates it"
+            ));
+        }
+        out
+    }
+
+    /// The distinct incidence angles, in degrees, rounded to 0.01°.
+    pub fn incidence_angles_deg(&self) -> Vec<f64> {
+        let mut t: Vec<f64> = self
+            .observations
+            .iter()
+            .map(|o| (o.theta_i.to_degrees() * 100.0).round() / 100.0)
+            .collect();
+        t.sort_by(f64::total_cmp);
+        t.dedup();
+        t
+    }
+}

@@ -1,0 +1,317 @@
+//! The fitting engine: every model of `models.md`, bounded least squares
+//! seeded by a global search (no starting point needed), per-sample weights,
+//! domain restriction, fixed parameters, fitting in `f_r` or `f_r·cosθo`,
+//! standard errors, and cross-validation by held-out incidence angles.
+
+mod area;
+pub mod data;
+pub mod file;
+mod global;
+mod local;
+pub mod metrics;
+mod problem;
+pub mod transform;
+
+pub use data::{Dataset, Observation, Units};
+pub use metrics::Metrics;
+pub use problem::Problem;
+
+use anyhow::{bail, Result};
+use gonio_brdf::{Material, ModelId, Param};
+use nalgebra::DMatrix;
+use std::time::Instant;
+
+/// How the samples are weighted in the least-squares sum.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
+pub enum Weighting {
+    /// Every sample alike (the metrics' own weighting).
+    Uniform,
+    /// `1/σ` from each sample's uncertainty (the head's noise estimate).
+    Sigma,
+    /// `1/|y|`: relative errors, for data spanning decades.
+    Relative,
+    /// `√Ω`: each sample counted for the solid angle it stands for among
+    /// those of its incidence ([`area::solid_angles`]), so scans that sample
+    /// the hemisphere differently (a grid, a sweep scan's rows) fit the same
+    /// integral.
+    Area,
+}
+
+/// What to fit and how.
+#[derive(Debug, Clone)]
+pub struct FitSpec {
+    pub model: ModelId,
+    pub param: Param,
+    /// Units the residuals are taken in.
+    pub units: Units,
+    pub weighting: Weighting,
+    /// Parameters held at a value: `(index, value)`.
+    pub fixed: Vec<(usize, f64)>,
+    /// Search boxes given by the user: `(index, lo, hi)`, replacing the
+    /// defaults (`ModelId::bounds_for` the data's median).
+    pub bounds: Vec<(usize, f64, f64)>,
+    /// Seed of the global search.
+    pub seed: u64,
+    /// Start here with a local fit only, instead of the global search.
+    pub start: Option<Vec<f64>>,
+}
+
+impl FitSpec {
+    pub fn new(model: ModelId) -> Self {
+        FitSpec {
+            model,
+            param: Param::View,
+            units: Units::Fr,
+            weighting: Weighting::Uniform,
+            fixed: Vec::new(),
+            bounds: Vec::new(),
+            seed: 1,
+            start: None,
+        }
+    }
+}
+
+/// A fitted model and how well it fits.
+#[derive(Debug, Clone)]
+pub struct Fit {
+    pub material: Material,
+    /// Standard error of each parameter; `None` for fixed ones or where the
+    /// normal matrix is singular.
+    pub stderr: Vec<Option<f64>>,
+    /// Metrics on the fitted samples, in the data's units.
+    pub metrics: Metrics,
+    pub samples: usize,
+    pub seconds: f64,
+    /// Akaike's and Bayes' information criteria of the least-squares fit,
+    /// `N·ln(S/N) + 2k` and `N·ln(S/N) + k·ln N` (`S` the weighted sum of
+    /// squares, `k` the free parameters): lower is better, and each extra
+    /// coefficient must earn its place.
+    pub aic: f64,
+    pub bic: f64,
+    /// Free parameters that ended on (within 1e-6 of the box's width of) a
+    /// bound of their search box: the optimum may lie outside it.
+    pub at_bound: Vec<&'static str>,
+    /// Weighted sum of squared residuals at the optimum.
+    pub cost: f64,
+    /// Covariance of the parameters (every parameter, in `models.md` order;
+    /// rows and columns of fixed ones are zero): the samples' scatter and
+    /// the inputs they share; `None` where the normal matrix is singular.
+    pub covariance: Option<DMatrix<f64>>,
+}
+
+/// Builds the least-squares problem of a data set.
+pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
+    let model = spec.model;
+    let n = model.param_names().len();
+    if data.observations.is_empty() {
+        bail!("no samples to fit (after the domain restriction)");
+    }
+    let mut values: Vec<f64> = data
+        .observations
+        .iter()
+        .map(|o| (o.value / o.unit_factor(data.units)).abs())
+        .filter(|v| v.is_finite())
+        .collect();
+    values.sort_by(f64::total_cmp);
+    let mut bounds_all = model.bounds_for(values.get(values.len() / 2).copied().unwrap_or(0.0));
+    for &(i, lo, hi) in &spec.bounds {
+        if i >= n || !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            bail!(
+                "a search box must be one of {}, with finite lo < hi",
+                model.param_names().join(", ")
+            );
+        }
+        let d = model.bounds()[i];
+        if d.spread == gonio_brdf::Spread::Log && lo <= 0.0 {
+            bail!(
+                "the box of {} must stay above 0 (it is searched in its logarithm)",
+                model.param_names()[i]
+            );
+        }
+        bounds_all[i] = gonio_brdf::Bound { lo, hi, ..d };
+    }
+    let mut template: Vec<f64> = bounds_all.iter().map(|b| (b.lo + b.hi) / 2.0).collect();
+    for &(i, v) in &spec.fixed {
+        if i >= n || !v.is_finite() {
+            bail!("a fixed parameter must be one of {} and finite", model.param_names().join(", "));
+        }
+        let b = bounds_all[i];
+        if !(b.lo..=b.hi).contains(&v) {
+            bail!(
+                "{} = {v} is outside its range [{}, {}] (widen it with --bounds)",
+                model.param_names()[i],
+                b.lo,
+                b.hi
+            );
+        }
+        template[i] = v;
+    }
+    let free: Vec<usize> = (0..n).filter(|i| !spec.fixed.iter().any(|(j, _)| j == i)).collect();
+    if free.is_empty() {
+        bail!("every parameter of {} is fixed: nothing to fit", model.name());
+    }
+    if data.observations.len() < free.len() {
+        bail!(
+            "{} samples for {} free parameters of {}: too few to fit",
+            data.observations.len(),
+            free.len(),
+            model.name()
+        );
+    }
+    if data.observations.iter().all(|o| o.value == 0.0) {
+        bail!("every value is zero: there is nothing to fit");
+    }
+    let data = data.in_units(spec.units)?;
+    let y: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
+    let floor = 1e-3 * y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let solid = match spec.weighting {
+        Weighting::Area => area::solid_angles(&data.observations),
+        _ => Vec::new(),
+    };
+    let mut weight = Vec::with_capacity(y.len());
+    for (k, o) in data.observations.iter().enumerate() {
+        weight.push(match spec.weighting {
+            Weighting::Uniform => 1.0,
+            Weighting::Area => solid[k].sqrt(),
+            Weighting::Relative => 1.0 / y[k].abs().max(floor).max(f64::MIN_POSITIVE),
+            Weighting::Sigma => match o.sigma {
+                Some(s) if s > 0.0 && s.is_finite() => 1.0 / s,
+                _ => bail!(
+                    "--weights sigma needs a positive uncertainty on every sample (sample {} has none)",
+                    k + 1
+                ),
+            },
+        });
+    }
+    Ok(Problem {
+        model,
+        param: spec.param,
+        geos: data.observations.iter().map(Observation::geometry).collect(),
+        scale: data.observations.iter().map(|o| o.unit_factor(spec.units)).collect(),
+        shared: data
+            .observations
+            .iter()
+            .zip(&weight)
+            .map(|(o, w)| o.shared.map(|s| w * s))
+            .collect(),
+        y,
+        weight,
+        bounds_all,
+        template,
+        free,
+    })
+}
+
+/// Fits a model to a data set.
+pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
+    let t0 = Instant::now();
+    let problem = problem(data, spec)?;
+    let x = solve(&problem, spec.start.as_deref(), spec.seed);
+    let material = Material {
+        model: spec.model,
+        params: problem.full(&x),
+        param: spec.param,
+    };
+    let covariance = covariance(&problem, &x);
+    let stderr = (0..material.params.len())
+        .map(|i| {
+            let v = covariance.as_ref()?[(i, i)];
+            (problem.free.contains(&i) && v.is_finite() && v >= 0.0).then(|| v.sqrt())
+        })
+        .collect();
+    let cost = problem.cost(&x);
+    let names = spec.model.param_names();
+    let at_bound = problem
+        .free
+        .iter()
+        .filter(|&&i| {
+            let b = problem.bounds_all[i];
+            let (v, tol) = (material.params[i], 1e-6 * (b.hi - b.lo));
+            (v - b.lo).abs() <= tol || (b.hi - v).abs() <= tol
+        })
+        .map(|&i| names[i])
+        .collect();
+    let (nf, kf) = (problem.y.len() as f64, problem.free.len() as f64);
+    let log_mean = (cost / nf).max(f64::MIN_POSITIVE).ln();
+    Ok(Fit {
+        aic: nf * log_mean + 2.0 * kf,
+        bic: nf * log_mean + kf * nf.ln(),
+        at_bound,
+        metrics: evaluate(&material, data),
+        stderr,
+        covariance,
+        samples: data.observations.len(),
+        seconds: t0.elapsed().as_secs_f64(),
+        cost,
+        material,
+    })
+}
+
+/// Threads a fit runs on: rayon's pool, one per core unless
+/// `RAYON_NUM_THREADS` says otherwise. The results do not depend on it.
+pub fn threads() -> usize {
+    rayon::current_num_threads()
+}
+
+/// The free parameters at the optimum: a local fit from `start` (every
+/// parameter, clamped into the bounds), or the seeded global search.
+pub fn solve(problem: &Problem, start: Option<&[f64]>, seed: u64) -> Vec<f64> {
+    match start {
+        Some(start) => {
+            let s: Vec<f64> = problem
+                .free
+                .iter()
+                .zip(problem.bounds())
+                .map(|(&i, b)| start[i].clamp(b.lo, b.hi))
+                .collect();
+            local::minimize(problem, &s)
+        }
+        None => global::search(problem, seed),
+    }
+}
+
+/// The metrics of a material on a data set, in the data's units.
+pub fn evaluate(material: &Material, data: &Dataset) -> Metrics {
+    let measured: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
+    let model: Vec<f64> = data
+        .observations
+        .iter()
+        .map(|o| o.unit_factor(data.units) * material.eval(&o.directions()))
+        .collect();
+    Metrics::new(&measured, &model)
+}
+
+/// `s²(JᵀJ)⁻¹ + Σ_a (JᵀJ)⁻¹Jᵀd_a·((JᵀJ)⁻¹Jᵀd_a)ᵀ`, spread over every
+/// parameter (fixed ones zero); standard errors are the roots of its
+/// diagonal. The first term is the samples' own scatter: `s² = Σr²/(N − p)`,
+/// `J` the weighted Jacobian in the parameters themselves (not the
+/// transformed ones). The second is what the samples share (the plate, the
+/// stage zeros): `d_a` the weighted shifts of the targets when shared input
+/// `a` is off by one standard uncertainty, and `(JᵀJ)⁻¹Jᵀd_a` the move of the
+/// optimum it causes (one Gauss–Newton step): errors common to every sample
+/// do not average out, however many samples there are.
+fn covariance(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
+    let n = problem.template.len();
+    let (r, j) = problem.residuals_and_jacobian(x);
+    let dof = r.len().checked_sub(x.len()).filter(|d| *d > 0)?;
+    let s2 = r.iter().map(|v| v * v).sum::<f64>() / dof as f64;
+    let normal: DMatrix<f64> = j.transpose() * &j;
+    let inv = normal.try_inverse()?;
+    let mut cov = &inv * s2;
+    for a in 0..crate::uncertainty::SHARED.len() {
+        let d = nalgebra::DVector::from_iterator(r.len(), problem.shared.iter().map(|s| s[a]));
+        if d.iter().all(|v| *v == 0.0) {
+            continue;
+        }
+        let shift = &inv * (j.transpose() * d);
+        cov += &shift * shift.transpose();
+    }
+    let mut out = DMatrix::zeros(n, n);
+    for (a, &i) in problem.free.iter().enumerate() {
+        for (b, &k) in problem.free.iter().enumerate() {
+            out[(i, k)] = cov[(a, b)];
+        }
+    }
+    Some(out)
+}

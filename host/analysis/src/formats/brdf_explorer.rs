@@ -1,0 +1,213 @@
+//! A fitted model as a Disney BRDF Explorer `.brdf` file: an `analytic`
+//! header, one `float NAME MIN MAX DEFAULT` line per parameter (the model's
+//! search bounds, the fitted value as default) and a GLSL function
+//! `vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)`.
+//!
+//! The GLSL is the host's f64 model (`gonio_brdf`) written once more, in the
+//! tool's language: it first takes `L` and `V` into the local frame `(X, Y, N)`
+//! and then follows [`gonio_brdf::GeometryTerms`] and the model's `eval` line by
+//! line, so that the tests can compile it as C++ (tests/tests/brdf_export.rs)
+//! and compare it with the Rust model at many geometries. BRDF Explorer
+//! multiplies by `n·l` itself: the function returns `f_r` (sr⁻¹), grey.
+
+use gonio_brdf::{Material, ModelId, Param};
+use std::fmt::Write;
+
+/// Helpers shared by every model: the vectors of `Directions`, Schlick's
+/// Fresnel and `max(0, base)^e` (GLSL's `pow` is undefined for a negative base).
+const PRELUDE: &str = r"const float PI = 3.14159265358979323846;
+
+vec3 unitSum(vec3 p, vec3 q)
+{
+    vec3 s = p + q;
+    float len = length(s);
+    return len < 1e-30 ? vec3(0.0, 0.0, 1.0) : s / len;
+}
+
+float posPow(float base, float e)
+{
+    return base > 0.0 ? pow(base, e) : 0.0;
+}
+
+float schlick(float u, float f0)
+{
+    float k = pow(1.0 - clamp(u, 0.0, 1.0), 5.0);
+    return f0 * (1.0 - k) + k;
+}
+
+vec2 planar(vec3 w)
+{
+    return vec2(w.x, w.y);
+}
+
+// tan θ of a direction; its sine from the in-plane part, not sqrt(1 − cos²),
+// which turns the rounding of a cosine near 1 into a sine of 1e-8.
+float tanOf(vec3 w)
+{
+    return length(planar(w)) / max(w.z, 1e-9);
+}
+";
+
+/// Local directions and the vectors every model may use.
+const FRAME: &str = r"    vec3 l = vec3(dot(L, X), dot(L, Y), dot(L, N));
+    vec3 v = vec3(dot(V, X), dot(V, Y), dot(V, N));
+    float cosI = clamp(l.z, 0.0, 1.0);
+    float cosO = clamp(v.z, 0.0, 1.0);
+    if (l.z <= 0.0 || v.z <= 0.0) {
+        return vec3(0.0);
+    }
+    vec3 hv = unitSum(l, v);
+    vec3 vRefl = vec3(-v.x, -v.y, v.z);
+    vec3 bk = unitSum(vRefl, l);
+    float lv = clamp(dot(l, v), -1.0, 1.0);
+";
+
+/// Zhang et al.'s shadowing `G` (eq. 3–4, spherical-particle constants), as
+/// `geometry::zhang_shadowing`. Where the half vector is within 1e-4 of the
+/// normal its in-plane direction is float noise, so the limit form is taken
+/// from there (the f64 code switches at 1e-9).
+const ZHANG_SHADOWING: &str = r"
+vec2 planarUnit(vec3 w)
+{
+    float r = length(planar(w));
+    return r < 1e-30 ? vec2(1.0, 0.0) : planar(w) / r;
+}
+
+float zhangShadowing(vec3 l, vec3 v, vec3 hv, float cosGamma, float cosI, float tanI, float tanO)
+{
+    float cosAlpha = clamp(hv.z, 0.0, 1.0);
+    float sinAlpha = length(planar(hv));
+    float azI = 1.0;
+    float azO = 1.0;
+    float tanGamma = tanI / 2.0;
+    if (sinAlpha >= 1e-4 && cosGamma >= 1e-12) {
+        azI = dot(planar(hv), planarUnit(l)) / sinAlpha;
+        azO = dot(planar(hv), planarUnit(v)) / sinAlpha;
+        tanGamma = abs(cosI - cosGamma) / (2.0 * sinAlpha * cosGamma);
+    }
+    float w = 0.0136 * (1.0 + 9.0 * sinAlpha / (sinAlpha + 1.0 * cosAlpha));
+    float ti = tanI * azI;
+    float to = tanO * azO;
+    return (1.0 + w * abs(ti * to) / (1.0 + 0.0141 * tanGamma)) / ((1.0 + w * ti * ti) * (1.0 + w * to * to));
+}
+";
+
+/// Smith–Beckmann `G1` in Walter et al.'s rational form, as `beckmann_retro::smith_g1`.
+const SMITH_G1: &str = r"
+float smithG1(float tanT, float alphaB)
+{
+    float at = alphaB * tanT;
+    if (at <= 1.0 / 1.6) {
+        return 1.0;
+    }
+    float q = 1.0 / at;
+    return (3.535 * q + 2.181 * q * q) / (1.0 + 2.276 * q + 2.577 * q * q);
+}
+";
+
+/// Extra helper functions and the body (after [`FRAME`]) that sets `f`.
+fn body(model: ModelId) -> (&'static str, &'static str) {
+    match model {
+        ModelId::Lambert => ("", "    float f = kd / PI;\n"),
+        ModelId::RetroPhong => (
+            "",
+            r"    float oneMinusCos = 1.0 - cosI;
+    float krT = k1 * oneMinusCos + k2;
+    float ksT = k3 * exp(k4 * oneMinusCos);
+    float norm = (n + 2.0) / (2.0 * PI);
+    float mirrorCos = dot(vec3(-l.x, -l.y, l.z), v);
+    float f = kd / PI + ksT * norm * posPow(mirrorCos, n) + krT * norm * posPow(retroCos, n);
+",
+        ),
+        ModelId::AbcRetro => (
+            "",
+            r"    float specular = ar / pow(1.0 + br * (1.0 - hv.z), cr) * schlick(dot(v, hv), r0);
+    float retro = ab / pow(1.0 + bb * (1.0 - retroCos), cb) * schlick(dot(vRefl, bk), r0);
+    float f = kd / PI + specular + retro;
+",
+        ),
+        ModelId::BeckmannRetro => (
+            SMITH_G1,
+            r"    float f = kd / PI;
+    if (retroCos >= 1e-4 && cosI > 0.0 && cosO > 0.0) {
+        float a2 = alpha * alpha;
+        float c2 = retroCos * retroCos;
+        float d = exp((c2 - 1.0) / (a2 * c2)) / (a2 * PI * c2 * c2);
+        float shadowing = smithG1(tanOf(l), alpha) * smithG1(tanOf(v), alpha);
+        f += d * schlick(dot(vRefl, bk), r0) * shadowing / (4.0 * cosI * cosO);
+    }
+",
+        ),
+        ModelId::BlinnRetro => ("", "    float f = kd / PI + posPow(hv.z, alpha_r) + posPow(retroCos, alpha_b);\n"),
+        ModelId::Lafortune => (
+            "",
+            r"    float lvXY = l.x * v.x + l.y * v.y;
+    float lvZ = l.z * v.z;
+    float f = kd / PI + posPow(cxy_s * lvXY + cz_s * lvZ, n_s) + posPow(cxy_r * lvXY + cz_r * lvZ, n_r);
+",
+        ),
+        ModelId::OrenNayar => (
+            "",
+            r"    float sinI = length(planar(l));
+    float sinO = length(planar(v));
+    float azNorm = length(planar(l)) * length(planar(v));
+    float cosDphi = azNorm < 1e-30 ? 1.0 : clamp(dot(planar(l), planar(v)) / azNorm, -1.0, 1.0);
+    float on = sinI > sinO ? max(cosDphi, 0.0) * sinI * tanOf(v) : max(cosDphi, 0.0) * sinO * tanOf(l);
+    float s2 = sigma * sigma;
+    float termA = 1.0 - 0.5 * s2 / (s2 + 0.33);
+    float termB = 0.45 * s2 / (s2 + 0.09);
+    float f = rho / PI * (termA + termB * on);
+",
+        ),
+        ModelId::FiveParam => (
+            ZHANG_SHADOWING,
+            r"    float cosGamma = sqrt((1.0 + lv) / 2.0);
+    float g = zhangShadowing(l, v, hv, cosGamma, cosI, tanOf(l), tanOf(v));
+    float kr2 = kr * kr;
+    float d = kr2 * hv.z / ((kr2 - 1.0) * hv.z * hv.z + 1.0);
+    float fresnel = exp(b * posPow(1.0 - cosGamma, a));
+    float f = kb * d * fresnel * g / max(cosO, 1e-9) + kd;
+",
+        ),
+    }
+}
+
+/// The retro cosine the fit used, as a GLSL statement.
+fn retro_cos(model: ModelId, param: Param) -> &'static str {
+    match (model.has_retro_cosine(), param) {
+        (false, _) => "",
+        (true, Param::View) => "    float retroCos = max(lv, 0.0);\n",
+        (true, Param::Back) => "    float retroCos = bk.z;\n",
+    }
+}
+
+/// The `.brdf` text of a fitted material; `comments` go into the header
+/// (source file, fit metrics), one `#` line each.
+pub fn write(m: &Material, comments: &[String]) -> String {
+    let mut s = String::from("analytic\n\n");
+    let _ = writeln!(s, "# {} fitted by gonio {}", m.model.name(), env!("CARGO_PKG_VERSION"));
+    if m.model.has_retro_cosine() {
+        let _ = writeln!(
+            s,
+            "# retro cosine: {}",
+            if m.param == Param::View { "view (l·v)" } else { "back (n·b)" }
+        );
+    }
+    for c in comments {
+        let _ = writeln!(s, "# {}", c.replace('\n', " "));
+    }
+    s.push_str("# Returns f_r in 1/sr (BRDF Explorer applies n·l itself).\n\n::begin parameters\n");
+    for ((name, b), v) in m.model.param_names().iter().zip(m.model.bounds()).zip(&m.params) {
+        let _ = writeln!(s, "float {name} {} {} {v}", b.lo.min(*v), b.hi.max(*v));
+    }
+    s.push_str("::end parameters\n\n::begin shader\n\n");
+    let (helpers, model_body) = body(m.model);
+    s.push_str(PRELUDE);
+    s.push_str(helpers);
+    s.push_str("\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)\n{\n");
+    s.push_str(FRAME);
+    s.push_str(retro_cos(m.model, m.param));
+    s.push_str(model_body);
+    s.push_str("    return vec3(f);\n}\n\n::end shader\n");
+    s
+}

@@ -1,0 +1,19 @@
+//! Analysis of stored scans: what a scan directory's files (`gonio-scan-dir`)
+//! hold, turned into BRDF values and what a physicist reads of them. Reads
+//! files only: links no tokio, serial port or simulated head.
+//!
+//! [`calibration`] scales raw samples by the reference plate, with each
+//! value's budget from [`uncertainty`]; [`fit`] fits the models of
+//! `gonio-brdf` (`docs/models.md`); [`coefficients`] gives R_A and R_L with
+//! what each rests on; [`formats`] reads and writes other tools' files;
+//! [`plot`] and [`report`] draw and tabulate; [`lobe`] places the points a
+//! narrow lobe needs.
+
+pub mod calibration;
+pub mod coefficients;
+pub mod fit;
+pub mod formats;
+pub mod lobe;
+pub mod plot;
+pub mod report;
+pub mod uncertainty;

@@ -1,0 +1,283 @@
+//! `gonio coefficients`: R_A and R_L (CIE 54.2, ASTM E810, EN 1436) from a
+//! fit, a model, or measured data, with standard uncertainties.
+
+use anyhow::{bail, Context, Result};
+use gonio_analysis::coefficients::{self, Apertures, Coefficient, Fitted, Kind, Provenance, Request, Set, Source, Support, WAVELENGTH_NM};
+use gonio_analysis::fit;
+use gonio_brdf::{Material, ModelId};
+use serde_json::{json, Value};
+use std::path::PathBuf;
+
+#[derive(Debug, clap::Args)]
+pub struct CoefficientsArgs {
+    /// Fits (FIT.json from `gonio fit --out`, or a report's fits/*.json),
+    /// each of the same data: where the data hold a geometry its value is
+    /// measured (or interpolated) from them; beyond, the best fit (lowest
+    /// AIC) carries it, scaled to the data at the nearest measured
+    /// incidences, and the spread of the fits within 2× its RMSE
+    /// widens the uncertainty (docs/retroreflection.md). The covariance gives
+    /// the parameters' part (with the plate and the stage zeros when the
+    /// fitted data came from `gonio calibrate`).
+    #[arg(long, value_name = "FIT.json", num_args = 1.., conflicts_with_all = ["model", "data"])]
+    pub fit: Vec<PathBuf>,
+    /// A model id of models.md, with --params (no uncertainty).
+    #[arg(long, requires = "params", conflicts_with_all = ["data", "material"])]
+    pub model: Option<String>,
+    /// The model's parameters, NAME=V,... (with --material: a model's, as `gonio scan --sim` takes them).
+    #[arg(long)]
+    pub params: Option<String>,
+    /// A simulated head's material (`glass-beads`, or a model id as `gonio
+    /// scan --sim --material` takes it): its own coefficients through the
+    /// same apertures, the truth a simulated scan's are checked against.
+    #[arg(long, conflicts_with_all = ["fit", "data"])]
+    pub material: Option<String>,
+    /// Measured data (calibrated CSV or ALTA .dat), interpolated between the
+    /// nearest measured geometries, which are named; a geometry the data do
+    /// not hold is refused (fit models and give --fit).
+    #[arg(long, value_name = "FILE")]
+    pub data: Option<PathBuf>,
+    /// Named sets of geometries (repeatable).
+    #[arg(long, value_enum)]
+    pub set: Vec<Set>,
+    /// R_A at these observation angles α (degrees), with --beta.
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub alpha: Vec<f64>,
+    /// ...and these entrance angles β (degrees, coplanar: β2 = 0).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true)]
+    pub beta: Vec<f64>,
+    /// ...and these rotation angles ε (degrees; no effect on an isotropic BRDF).
+    #[arg(long, value_delimiter = ',', default_value = "0")]
+    pub epsilon: Vec<f64>,
+    /// Also R_L at the 30 m road-marking geometry (as --set en1436).
+    #[arg(long)]
+    pub rl: bool,
+    /// Angular diameter of the source seen from the sample (degrees); default: each set's own.
+    #[arg(long)]
+    pub source_aperture_deg: Option<f64>,
+    /// Angular diameter of the receiver seen from the sample (degrees); default: each set's own.
+    #[arg(long)]
+    pub receiver_aperture_deg: Option<f64>,
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl CoefficientsArgs {
+    fn source(&self) -> Result<Source> {
+        if !self.fit.is_empty() {
+            return fits_source(&self.fit);
+        }
+        if let Some(name) = &self.material {
+            return Ok(Source::Truth(super::material::specimen(name, self.params.as_deref())?));
+        }
+        if let (Some(m), Some(p)) = (&self.model, &self.params) {
+            return Ok(Source::model(Material::parse(ModelId::parse(m)?, p)?));
+        }
+        if let Some(path) = &self.data {
+            let data = super::load_data(path, None)?;
+            return Source::data(&data).with_context(|| format!("{}", path.display()));
+        }
+        bail!("give a BRDF: --fit FIT.json, --model M --params ..., --data FILE or --material NAME")
+    }
+
+    fn requests(&self) -> Result<Vec<Request>> {
+        let mut out = Vec::new();
+        for s in &self.set {
+            out.extend(s.requests());
+        }
+        if self.rl {
+            out.extend(Set::En1436.requests());
+        }
+        match (self.alpha.is_empty(), self.beta.is_empty()) {
+            (false, false) => out.extend(coefficients::grid(
+                &self.alpha,
+                &self.beta,
+                &self.epsilon,
+                coefficients::ASTM_APERTURES,
+            )),
+            (true, true) => {}
+            _ => bail!("--alpha and --beta go together"),
+        }
+        if out.is_empty() {
+            bail!("no geometry: give --set astm-e810, --set en1436, --rl, or --alpha with --beta");
+        }
+        for r in &mut out {
+            r.apertures = Apertures {
+                source_deg: self.source_aperture_deg.unwrap_or(r.apertures.source_deg),
+                receiver_deg: self.receiver_aperture_deg.unwrap_or(r.apertures.receiver_deg),
+            };
+        }
+        Ok(out)
+    }
+}
+
+/// The source of `--fit FILE...`: the fits and their data's support, or
+/// (one fit of an earlier gonio, which kept no support) the model alone.
+fn fits_source(paths: &[PathBuf]) -> Result<Source> {
+    let files: Vec<fit::file::FitFile> = paths.iter().map(|p| fit::file::read(p)).collect::<Result<_>>()?;
+    if files.iter().all(|f| f.support.is_none()) && files.len() == 1 {
+        eprintln!(
+            "warning: {} keeps no support of its data (a fit of an earlier gonio): what each value rests on is not known",
+            paths[0].display()
+        );
+        let f = files.into_iter().next().context("one fit")?;
+        return Ok(Source::Model {
+            material: f.material,
+            covariance: f.covariance,
+        });
+    }
+    let mut support: Option<Support> = None;
+    let mut fits = Vec::new();
+    for (f, path) in files.into_iter().zip(paths) {
+        let (Some(s), Some(rmse), Some(aic)) = (f.support, f.rmse, f.aic) else {
+            bail!(
+                "{}: a fit without its data's support, RMSE and AIC cannot be weighed against the others",
+                path.display()
+            );
+        };
+        match &support {
+            Some(first) if first.points.len() != s.points.len() || first.incidences_deg != s.incidences_deg => {
+                bail!("{}: fitted to other data than {}", path.display(), paths[0].display())
+            }
+            Some(_) => {}
+            None => support = Some(s),
+        }
+        fits.push(Fitted {
+            material: f.material,
+            covariance: f.covariance,
+            rmse,
+            aic,
+        });
+    }
+    Source::measured(fits, support.context("no fit")?)
+}
+
+/// The JSON of the issue's contract: `ra` (a list) and `rl` (the last R_L, or null).
+pub fn to_json(values: &[Coefficient]) -> Value {
+    let entry = |c: &Coefficient| {
+        let g = &c.request.geometry;
+        let mut v = json!({
+            "alpha_deg": g.alpha_deg, "beta_deg": g.beta_deg(), "epsilon_deg": g.epsilon_deg,
+            "value": c.estimate.value, "u": c.estimate.u,
+            "theta_i_deg": c.sample_angles_deg[0], "theta_o_deg": c.sample_angles_deg[1], "dphi_deg": c.sample_angles_deg[2],
+            "source_aperture_deg": c.request.apertures.source_deg, "receiver_aperture_deg": c.request.apertures.receiver_deg,
+        });
+        if g.beta2_deg != 0.0 {
+            v["beta1_deg"] = json!(g.beta1_deg);
+            v["beta2_deg"] = json!(g.beta2_deg);
+        }
+        if !c.estimate.nearest.is_empty() {
+            v["nearest"] = json!(c.estimate.nearest);
+        }
+        let e = &c.estimate;
+        if let Some(b) = &e.basis {
+            v["provenance"] = json!(b.provenance);
+            v["basis"] = json!(b.why);
+        }
+        for (key, part) in [
+            ("u_params", e.u_params),
+            ("u_model", e.u_model),
+            ("u_aperture", e.u_aperture),
+            ("u_arm_zero", e.u_arm_zero),
+        ] {
+            if let Some(x) = part {
+                v[key] = json!(x);
+            }
+        }
+        if let Some(m) = e.model {
+            v["model"] = json!(m);
+            v["models"] = json!(e.models);
+        }
+        v
+    };
+    let ra: Vec<Value> = values.iter().filter(|c| c.request.kind == Kind::Ra).map(entry).collect();
+    let rl = values.iter().rev().find(|c| c.request.kind == Kind::Rl).map(|c| {
+        let mut v = entry(c);
+        if let Some(o) = v.as_object_mut() {
+            o.remove("epsilon_deg");
+        }
+        v
+    });
+    json!({
+        "ra": ra, "rl": rl,
+        "units": {"ra": Kind::Ra.unit(), "rl": Kind::Rl.unit()},
+        "wavelength_nm": WAVELENGTH_NM,
+        "note": "spectral values at the laser's wavelength (633 nm), not photometric; u is the standard uncertainty (k = 1); \
+                 provenance: measured (a sample at the geometry), interpolated (between samples on every side) or extrapolated \
+                 (a model carries it: u holds the adequate models' spread, u_model); value null: refused (no data there)",
+    })
+}
+
+pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
+    let source = a.source()?;
+    let requests = a.requests()?;
+    let values = coefficients::compute(&source, &requests)?;
+    if a.json {
+        println!("{}", to_json(&values));
+        return Ok(());
+    }
+    println!("at {WAVELENGTH_NM} nm (the laser's wavelength), not photometric; u: standard uncertainty (k = 1)");
+    println!(
+        "{:<4} {:>6} {:>7} {:>6} {:>8} {:>8} {:>8} {:>13} {:>11}  {:<12} unit",
+        "", "α°", "β°", "ε°", "θi°", "θo°", "Δφ°", "value", "u", "rests on"
+    );
+    for c in &values {
+        let g = &c.request.geometry;
+        let [ti, to, dp] = c.sample_angles_deg;
+        let name = match c.request.kind {
+            Kind::Ra => "R_A",
+            Kind::Rl => "R_L",
+        };
+        let rests_on = match &c.estimate.basis {
+            Some(b) if b.provenance == Provenance::Extrapolated => "EXTRAPOLATED",
+            Some(b) => b.provenance.name(),
+            None => "",
+        };
+        if c.estimate.value.is_nan() {
+            println!(
+                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>13} {:>11}  {rests_on:<12} {}",
+                g.alpha_deg,
+                g.beta_deg(),
+                g.epsilon_deg,
+                "refused",
+                "",
+                c.request.kind.unit()
+            );
+        } else {
+            println!(
+                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>13.5e} {:>11.3e}  {rests_on:<12} {}",
+                g.alpha_deg,
+                g.beta_deg(),
+                g.epsilon_deg,
+                c.estimate.value,
+                c.estimate.u,
+                c.request.kind.unit()
+            );
+        }
+        if let Some(b) = c.estimate.basis.as_ref().filter(|b| b.provenance == Provenance::Extrapolated) {
+            match (c.estimate.model, c.estimate.u_model) {
+                (Some(m), Some(um)) => println!(
+                    "       {}: carried by {m}; {} adequate models, their spread ±{um:.2e}",
+                    b.why,
+                    c.estimate.models.len()
+                ),
+                _ => println!("       {}: no data there to interpolate", b.why),
+            }
+        }
+        if let Some(n) = c.estimate.nearest.first() {
+            let names: Vec<String> = c
+                .estimate
+                .nearest
+                .iter()
+                .map(|n| format!("({:.2}°, {:.2}°, {:.1}°)", n.theta_i_deg, n.theta_o_deg, n.dphi_deg))
+                .collect();
+            println!("       from the measured geometries {}", names.join(", "));
+            if n.distance_deg > 1.0 {
+                println!(
+                    "       warning: the nearest measured geometry is {:.2}° away: extrapolated",
+                    n.distance_deg
+                );
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,28 @@
+//! `gonio export`: a fit (`gonio fit --out FIT.json`) as a Disney BRDF
+//! Explorer `.brdf` file, to look at the model in that tool.
+
+use anyhow::{Context, Result};
+use gonio_analysis::fit::file::read_material;
+use gonio_analysis::formats::brdf_explorer;
+use std::path::{Path, PathBuf};
+
+#[derive(Debug, clap::Args)]
+pub struct ExportArgs {
+    /// A fit written by `gonio fit --out FIT.json`.
+    pub fit: PathBuf,
+    /// Output `.brdf` file (GLSL `BRDF(L, V, N, X, Y)` with parameter lines).
+    pub output: PathBuf,
+}
+
+/// Writes a fitted material as `.brdf`, naming where it came from in the header.
+pub fn write_brdf(m: &gonio_brdf::Material, source: &str, out: &Path) -> Result<()> {
+    let text = brdf_explorer::write(m, &[format!("from {source}")]);
+    std::fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))
+}
+
+pub fn export_cmd(a: ExportArgs) -> Result<()> {
+    let m = read_material(&a.fit)?;
+    write_brdf(&m, &a.fit.display().to_string(), &a.output)?;
+    eprintln!("{} written to {}", m.model.name(), a.output.display());
+    Ok(())
+}

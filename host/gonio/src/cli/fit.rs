@@ -1,0 +1,365 @@
+//! `gonio fit` and `gonio compare`: models fitted to a data file (ALTA `.dat`
+//! or the calibrated sample CSV).
+
+use anyhow::{bail, Context, Result};
+use gonio_analysis::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
+use gonio_brdf::{ModelId, Param};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// Which samples a fit sees, and how they are weighed.
+#[derive(Debug, Clone, clap::Args)]
+pub struct FitOptions {
+    /// Cosine of the retro lobes: `back` (cos_B) or `view` (cos_R = l·v).
+    #[arg(long, value_enum, default_value = "view")]
+    pub param: ParamArg,
+    /// Fit the retro half-space only (|Δφ| ≤ 90°).
+    #[arg(long)]
+    pub retro_only: bool,
+    /// Fit only these incidence angles (degrees, comma-separated).
+    #[arg(long, value_delimiter = ',')]
+    pub theta_i: Vec<f64>,
+    /// Leave these incidence angles (degrees) out of the fit and report how
+    /// well the fit predicts them (cross-validation, as Zhang et al.).
+    #[arg(long, value_delimiter = ',')]
+    pub holdout_theta_i: Vec<f64>,
+    /// Sample weights in the least-squares sum.
+    #[arg(long, value_enum, default_value = "uniform")]
+    pub weights: Weighting,
+    /// Units the residuals are taken in (default: the file's own); for a file
+    /// that does not say what its values are (ALTA without #PARAM_OUT), also
+    /// what they are.
+    #[arg(long, value_enum)]
+    pub units: Option<Units>,
+    /// Seed of the global search.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Search boxes replacing the defaults, NAME=LO:HI,... (in `compare`,
+    /// each model takes the names it has).
+    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "NAME=LO:HI")]
+    pub bounds: Vec<String>,
+    /// Machine-readable output.
+    #[arg(long)]
+    pub json: bool,
+}
+
+impl Default for FitOptions {
+    /// The command line's defaults: the whole data set, uniform weights,
+    /// the view cosine, the file's units.
+    fn default() -> Self {
+        FitOptions {
+            param: ParamArg::View,
+            retro_only: false,
+            theta_i: Vec::new(),
+            holdout_theta_i: Vec::new(),
+            weights: Weighting::Uniform,
+            units: None,
+            seed: 1,
+            bounds: Vec::new(),
+            json: false,
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum ParamArg {
+    Back,
+    View,
+}
+
+impl From<ParamArg> for Param {
+    fn from(p: ParamArg) -> Param {
+        match p {
+            ParamArg::Back => Param::Back,
+            ParamArg::View => Param::View,
+        }
+    }
+}
+
+#[derive(Debug, clap::Args)]
+pub struct FitArgs {
+    /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
+    pub file: PathBuf,
+    /// Model id (models.md): lambert, retro-phong, abc-retro, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param.
+    #[arg(long)]
+    pub model: String,
+    /// Hold a parameter at a value, NAME=V (repeatable).
+    #[arg(long)]
+    pub fix: Vec<String>,
+    /// Write the fit as JSON to this file as well.
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+    /// Write the fit as a Disney BRDF Explorer shader (.brdf) as well.
+    #[arg(long)]
+    pub brdf: Option<PathBuf>,
+    /// Draw the data and the fit into this directory (PNG and SVG).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    #[command(flatten)]
+    pub options: FitOptions,
+}
+
+#[derive(Debug, clap::Args)]
+pub struct CompareArgs {
+    /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
+    pub file: PathBuf,
+    /// Write DIR/report.html: the comparison table, every fit as JSON and
+    /// BRDF Explorer shader (DIR/fits), pictures of the best fits (DIR/plots).
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
+    #[command(flatten)]
+    pub options: FitOptions,
+}
+
+/// The data a fit sees (domain restriction applied), and the held-out part.
+pub struct Domain {
+    train: Dataset,
+    holdout: Option<Dataset>,
+}
+
+pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
+    let data = super::load_data(path, o.units)?;
+    let data = data.filter(|s| (!o.retro_only || s.on_retro_side()) && (o.theta_i.is_empty() || theta_in(s.theta_i, &o.theta_i)));
+    let all_angles = data.incidence_angles_deg();
+    let (train, holdout) = if o.holdout_theta_i.is_empty() {
+        (data, None)
+    } else {
+        let h = data.filter(|s| theta_in(s.theta_i, &o.holdout_theta_i));
+        if h.observations.is_empty() {
+            bail!(
+                "no samples at the held-out incidence angles {:?}°; the data has {:?}°",
+                o.holdout_theta_i,
+                all_angles
+            );
+        }
+        (data.filter(|s| !theta_in(s.theta_i, &o.holdout_theta_i)), Some(h))
+    };
+    if train.observations.is_empty() {
+        bail!(
+            "no samples left to fit after the domain restriction (data has θi {:?}°)",
+            all_angles
+        );
+    }
+    Ok(Domain { train, holdout })
+}
+
+/// `--bounds` for one model: `(index, lo, hi)`. With `every_model`
+/// (`compare`), names the model lacks are skipped, unless no model has them.
+fn boxes(model: ModelId, given: &[String], every_model: bool) -> Result<Vec<(usize, f64, f64)>> {
+    let mut out = Vec::new();
+    for g in given {
+        let parsed = g.split_once('=').and_then(|(n, r)| {
+            let (lo, hi) = r.split_once(':')?;
+            Some((n.trim(), lo.trim().parse::<f64>().ok()?, hi.trim().parse::<f64>().ok()?))
+        });
+        let Some((name, lo, hi)) = parsed else {
+            bail!("--bounds `{g}` is not NAME=LO:HI");
+        };
+        if !(lo.is_finite() && hi.is_finite() && lo < hi) {
+            bail!("--bounds {name}: the box [{lo}, {hi}] must be finite with LO < HI");
+        }
+        match model.param_index(name) {
+            Ok(i) => out.push((i, lo, hi)),
+            Err(_) if every_model && ModelId::ALL.iter().any(|m| m.param_index(name).is_ok()) => {}
+            Err(e) => return Err(e.context("--bounds")),
+        }
+    }
+    Ok(out)
+}
+
+fn spec(model: ModelId, fixes: &[String], o: &FitOptions, data: &Dataset, every_model: bool) -> Result<FitSpec> {
+    let mut fixed = Vec::new();
+    for f in fixes {
+        let (name, v) = f.split_once('=').with_context(|| format!("--fix `{f}` is not NAME=VALUE"))?;
+        let i = model.param_index(name.trim())?;
+        let v: f64 = v.trim().parse().with_context(|| format!("--fix {name}: `{v}` is not a number"))?;
+        fixed.push((i, v));
+    }
+    Ok(FitSpec {
+        param: o.param.into(),
+        units: o.units.unwrap_or(data.units),
+        weighting: o.weights,
+        fixed,
+        bounds: boxes(model, &o.bounds, every_model)?,
+        seed: o.seed,
+        ..FitSpec::new(model)
+    })
+}
+
+pub struct Outcome {
+    pub fit: Fit,
+    pub holdout: Option<fit::Metrics>,
+    pub json: Value,
+}
+
+fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain, every_model: bool) -> Result<Outcome> {
+    let spec = spec(model, fixes, o, &d.train, every_model)?;
+    let f = fit::fit(&d.train, &spec).with_context(|| format!("fitting {}", model.name()))?;
+    let holdout = d.holdout.as_ref().map(|h| fit::evaluate(&f.material, h));
+    let json = fit::file::to_json(&f, d.train.units, holdout.as_ref());
+    Ok(Outcome { fit: f, holdout, json })
+}
+
+pub fn fit_cmd(a: FitArgs) -> Result<()> {
+    let model = ModelId::parse(&a.model)?;
+    let d = domain(&a.file, &a.options)?;
+    let Outcome {
+        fit: f,
+        holdout,
+        json: mut v,
+    } = run_one(model, &a.fix, &a.options, &d, false)?;
+    if !d.train.warnings.is_empty() {
+        v["warnings"] = serde_json::json!(d.train.warnings);
+    }
+    if let Some(out) = &a.out {
+        fit::file::write_with_support(out, &v, &d.train)?;
+    }
+    if let Some(out) = &a.brdf {
+        super::export::write_brdf(&f.material, &a.file.display().to_string(), out)?;
+    }
+    if let Some(dir) = &a.plot {
+        gonio_analysis::plot::render(&d.train, std::slice::from_ref(&f.material), dir)?;
+    }
+    if a.options.json {
+        println!("{v}");
+        return Ok(());
+    }
+    println!("{} ({} samples, {:.2} s)", model.name(), f.samples, f.seconds);
+    for ((n, p), e) in model.param_names().iter().zip(&f.material.params).zip(&f.stderr) {
+        match e {
+            Some(e) => println!("  {n:>8} = {p:<14.6e} ± {e:.2e}"),
+            None if a.fix.iter().any(|s| s.split('=').next().map(str::trim) == Some(n)) => println!("  {n:>8} = {p:<14.6e} (fixed)"),
+            None => println!("  {n:>8} = {p:<14.6e}"),
+        }
+    }
+    println!(
+        "  rmse {:.4e}  nrmse {:.4e}  ncc {:.5}  l2 {:.4e}  aic {:.1}  bic {:.1}",
+        f.metrics.rmse, f.metrics.nrmse, f.metrics.ncc, f.metrics.l2, f.aic, f.bic
+    );
+    for name in &f.at_bound {
+        eprintln!(
+            "warning: {name} ended on the edge of its search box: the optimum may lie beyond it (widen the box with --bounds {name}=LO:HI)"
+        );
+    }
+    if let Some(h) = &holdout {
+        println!(
+            "  held out θi {:?}°: rmse {:.4e}  nrmse {:.4e}  ncc {:.5}",
+            a.options.holdout_theta_i, h.rmse, h.nrmse, h.ncc
+        );
+    }
+    Ok(())
+}
+
+/// Every model fitted to the same data, in catalogue order.
+pub fn compare(d: &Domain, o: &FitOptions) -> Result<Vec<Outcome>> {
+    let bar = gonio_acquire::operator::Operator::for_json(o.json).bar(ModelId::ALL.len() as u64, "fitting", "models");
+    let mut rows = Vec::new();
+    for model in ModelId::ALL {
+        bar.set_message(model.name());
+        rows.push(run_one(model, &[], o, d, true)?);
+        bar.inc(1);
+    }
+    bar.finish_and_clear();
+    Ok(rows)
+}
+
+/// Writes `dir/report.html` of a comparison.
+pub fn report(
+    dir: &Path,
+    title: String,
+    facts: Vec<(String, String)>,
+    d: &Domain,
+    rows: &[Outcome],
+    budget: &[gonio_analysis::calibration::IncidenceBudget],
+) -> Result<PathBuf> {
+    let fits: Vec<Fit> = rows.iter().map(|r| r.fit.clone()).collect();
+    let holdout: Vec<_> = rows.iter().map(|r| r.holdout).collect();
+    gonio_analysis::report::write(
+        dir,
+        &gonio_analysis::report::Report {
+            title,
+            facts,
+            data: &d.train,
+            fits: &fits,
+            holdout: &holdout,
+            budget,
+        },
+    )
+}
+
+pub fn compare_cmd(a: CompareArgs) -> Result<()> {
+    let d = domain(&a.file, &a.options)?;
+    let rows = compare(&d, &a.options)?;
+    if let Some(dir) = &a.report {
+        let mut facts = vec![("data".to_string(), a.file.display().to_string())];
+        facts.extend(d.train.metadata.iter().map(|m| ("metadata".to_string(), m.clone())));
+        let path = report(dir, format!("Model comparison: {}", a.file.display()), facts, &d, &rows, &[])?;
+        if !a.options.json {
+            eprintln!("report: {}", path.display());
+        }
+    }
+    let ranks = ranks(&rows);
+    if a.options.json {
+        let out: Vec<Value> = rows
+            .into_iter()
+            .zip(&ranks)
+            .map(|(r, k)| {
+                let mut v = r.json;
+                v["rank"] = serde_json::json!({"rmse": k[0], "aic": k[1], "bic": k[2]});
+                v
+            })
+            .collect();
+        println!("{}", Value::Array(out));
+        return Ok(());
+    }
+    println!(
+        "{} samples ({:?}); best first by RMSE, with the ranks by AIC and BIC (which charge each coefficient)",
+        d.train.observations.len(),
+        d.train.units
+    );
+    println!(
+        "{:<16} {:>6} {:>12} {:>12} {:>9} {:>13} {:>13} {:>4} {:>4} {:>8}  at bound",
+        "model", "coeffs", "RMSE", "NRMSE", "NCC", "AIC", "BIC", "#AIC", "#BIC", "s"
+    );
+    let mut order: Vec<usize> = (0..rows.len()).collect();
+    order.sort_by_key(|&i| ranks[i][0]);
+    for i in order {
+        let f = &rows[i].fit;
+        let m = &f.metrics;
+        let k = f.material.params.len();
+        println!(
+            "{:<16} {k:>6} {:>12.4e} {:>12.4e} {:>9.5} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2}  {}",
+            f.material.model.name(),
+            m.rmse,
+            m.nrmse,
+            m.ncc,
+            f.aic,
+            f.bic,
+            ranks[i][1],
+            ranks[i][2],
+            f.seconds,
+            f.at_bound.join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// Each fit's rank (1 = best) by RMSE, AIC and BIC.
+fn ranks(rows: &[Outcome]) -> Vec<[usize; 3]> {
+    let key = |f: &Fit, c: usize| match c {
+        0 => f.metrics.rmse,
+        1 => f.aic,
+        _ => f.bic,
+    };
+    let by = |c: usize| {
+        let mut order: Vec<usize> = (0..rows.len()).collect();
+        order.sort_by(|&a, &b| key(&rows[a].fit, c).total_cmp(&key(&rows[b].fit, c)));
+        let mut rank = vec![0; rows.len()];
+        for (r, i) in order.into_iter().enumerate() {
+            rank[i] = r + 1;
+        }
+        rank
+    };
+    let (rmse, aic, bic) = (by(0), by(1), by(2));
+    (0..rows.len()).map(|i| [rmse[i], aic[i], bic[i]]).collect()
+}

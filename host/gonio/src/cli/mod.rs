@@ -1,0 +1,105 @@
+//! Command-line interface. Angles on the command line are in degrees.
+
+pub mod calibrate;
+mod coefficients;
+mod convert;
+mod detector;
+mod devices;
+mod export;
+pub mod fit;
+pub mod grid;
+pub mod material;
+mod model_eval;
+mod plot;
+pub mod scan;
+mod sim;
+pub mod simulated;
+
+use anyhow::{Context, Result};
+use clap::{Parser, Subcommand};
+
+#[derive(Debug, Parser)]
+#[command(
+    name = "gonio",
+    version,
+    about = "Retroreflection BRDF measurement head: scan, store, simulate, fit"
+)]
+pub struct Cli {
+    #[command(subcommand)]
+    pub command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+pub enum Command {
+    /// Full scan of the Belcour grid on the simulated head; writes samples.csv and run.json.
+    Demo(scan::DemoArgs),
+    /// Scan a grid on a head (real or simulated) and store the samples.
+    Scan(scan::ScanArgs),
+    /// List measurement heads found on USB.
+    Devices(devices::DevicesArgs),
+    /// Run a simulated head on a pseudo-terminal, for `gonio scan --port PATH`.
+    Sim(sim::SimArgs),
+    /// Turn a scan into BRDF values with a reference-plate scan, correcting laser drift.
+    Calibrate(calibrate::CalibrateArgs),
+    /// Coefficients of retroreflection R_A and R_L (CIE 54.2, ASTM E810, EN 1436) with uncertainties.
+    Coefficients(coefficients::CoefficientsArgs),
+    /// Fit one model to a data file (ALTA .dat or calibrated CSV), no starting point needed.
+    Fit(fit::FitArgs),
+    /// Fit every model to a data file and compare them (RMSE, NRMSE, NCC).
+    Compare(fit::CompareArgs),
+    /// Pictures of a data file and fits: incidence-plane, hemisphere and residual plots.
+    Plot(plot::PlotArgs),
+    /// Write a data file (ALTA .dat or calibrated CSV) as ALTA text.
+    Convert(convert::ConvertArgs),
+    /// Write a fit (FIT.json) as a Disney BRDF Explorer .brdf shader.
+    Export(export::ExportArgs),
+    /// Evaluate a model at one geometry.
+    Eval(model_eval::EvalArgs),
+    /// Directional-hemispherical reflectance of a model, and its energy check.
+    Dhr(model_eval::DhrArgs),
+}
+
+/// Reads a data file for a command. Where the file does not say what its
+/// values are (ALTA's `UNKNOWN_OUTPUT`), `units` says it, or they are read
+/// as `f_r` with a warning; what the reader assumed or doubts goes to stderr.
+pub(crate) fn load_data(path: &std::path::Path, units: Option<gonio_analysis::fit::Units>) -> Result<gonio_analysis::fit::Dataset> {
+    let mut data = gonio_analysis::formats::load(path)?;
+    if !data.units_stated {
+        match units {
+            Some(u) => data.units = u,
+            None => data.warnings.push(
+                "the file does not say what its values are (no #PARAM_OUT): read as f_r (sr⁻¹); give --units fr-cos if they are f_r·cosθo"
+                    .into(),
+            ),
+        }
+        data.units_stated = true;
+    }
+    data.warnings.extend(data.doubts());
+    for w in &data.warnings {
+        eprintln!("warning: {}: {w}", path.display());
+    }
+    Ok(data)
+}
+
+/// Runs a command to completion.
+pub fn run(cli: Cli) -> Result<()> {
+    let rt = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .context("starting the async runtime")?;
+    match cli.command {
+        Command::Demo(a) => rt.block_on(scan::demo(a)),
+        Command::Scan(a) => rt.block_on(scan::scan(a)),
+        Command::Devices(a) => devices::devices(a),
+        Command::Sim(a) => sim::sim(a),
+        Command::Calibrate(a) => calibrate::calibrate_cmd(a),
+        Command::Coefficients(a) => coefficients::coefficients_cmd(a),
+        Command::Fit(a) => fit::fit_cmd(a),
+        Command::Compare(a) => fit::compare_cmd(a),
+        Command::Convert(a) => convert::convert_cmd(a),
+        Command::Plot(a) => plot::plot_cmd(a),
+        Command::Export(a) => export::export_cmd(a),
+        Command::Eval(a) => model_eval::eval_cmd(a),
+        Command::Dhr(a) => model_eval::dhr_cmd(a),
+    }
+}

@@ -1,0 +1,532 @@
+//! `gonio fit`, `compare`, `eval` and `dhr` as a user runs them, on ALTA and
+//! CSV files written here from a known material.
+
+use gonio_analysis::fit::{Dataset, Observation, Units};
+use gonio_analysis::formats::alta;
+use gonio_brdf::{Material, ModelId};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+mod common;
+use common::{gonio, text};
+
+/// Noise-free samples of a material on the Belcour grid (θo < 90°).
+fn dataset(m: &Material, units: Units) -> Dataset {
+    let mut observations = Vec::new();
+    for ti in [15.0f64, 30.0, 60.0] {
+        for k in 0..30 {
+            for j in 0..36 {
+                let mut o = Observation {
+                    theta_i: ti.to_radians(),
+                    theta_o: (3.0 * k as f64).to_radians(),
+                    dphi: (-180.0 + 10.0 * j as f64).to_radians(),
+                    value: 0.0,
+                    sigma: None,
+                    shared: Default::default(),
+                };
+                o.value = m.eval(&o.directions()) * o.unit_factor(units);
+                observations.push(o);
+            }
+        }
+    }
+    Dataset {
+        units,
+        observations,
+        metadata: vec!["material: synthetic".into()],
+        units_stated: true,
+        warnings: Vec::new(),
+    }
+}
+
+fn tape() -> Material {
+    Material::parse(ModelId::RetroPhong, "kd=0.62,n=24,k1=0.158,k2=0.0415,k3=0.00133,k4=5.47").unwrap()
+}
+
+fn write_alta(dir: &Path, m: &Material, units: Units) -> PathBuf {
+    let p = dir.join("data.dat");
+    std::fs::write(&p, alta::write(&dataset(m, units))).unwrap();
+    p
+}
+
+#[test]
+fn fit_json_has_the_contract_fields_and_recovers_the_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_alta(dir.path(), &tape(), Units::FrCos);
+    let o = gonio(&["fit", file.to_str().unwrap(), "--model", "retro-phong", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    for key in [
+        "model",
+        "parametrization",
+        "params",
+        "stderr",
+        "rmse",
+        "nrmse",
+        "ncc",
+        "l2",
+        "samples",
+        "seconds",
+    ] {
+        assert!(v.get(key).is_some(), "missing {key}: {v}");
+    }
+    assert_eq!(v["model"], "retro-phong");
+    assert_eq!(v["parametrization"], "view");
+    assert_eq!(v["samples"], 3240);
+    let names: Vec<&String> = v["params"].as_object().unwrap().keys().collect();
+    assert_eq!(names, ["kd", "n", "k1", "k2", "k3", "k4"]);
+    // The covariance (for `gonio coefficients`): its diagonal is the stderr squared.
+    for (i, name) in names.iter().enumerate() {
+        let var = v["covariance"][i][i].as_f64().unwrap();
+        let se = v["stderr"][name.as_str()].as_f64().unwrap();
+        assert!((var.sqrt() / se - 1.0).abs() < 1e-12, "{name}: {var} vs {se}²");
+    }
+    for (name, want) in ["kd", "n", "k1", "k2", "k3", "k4"].iter().zip(tape().params) {
+        let got = v["params"][name].as_f64().unwrap();
+        assert!((got - want).abs() <= 1e-6 * want.abs(), "{name}: {got} vs {want}");
+    }
+    assert!(v["ncc"].as_f64().unwrap() > 0.999_999);
+}
+
+#[test]
+fn fixed_parameters_stay_put_and_held_out_angles_are_predicted() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_alta(dir.path(), &tape(), Units::Fr);
+    let o = gonio(&[
+        "fit",
+        file.to_str().unwrap(),
+        "--model",
+        "retro-phong",
+        "--fix",
+        "kd=0.62",
+        "--holdout-theta-i",
+        "30",
+        "--retro-only",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["params"]["kd"], 0.62);
+    assert_eq!(v["stderr"]["kd"], Value::Null);
+    // Retro half-space (|Δφ| ≤ 90°: 19 of 36 azimuths) of θi 15° and 60°,
+    // and every sample at θo = 0 (the view along the normal has no azimuth:
+    // ALTA's projected coordinates are (0, 0) there, read as Δφ = 0).
+    assert_eq!(v["samples"], 2 * (29 * 19 + 36));
+    assert!(v["holdout"]["ncc"].as_f64().unwrap() > 0.9999, "{v}");
+}
+
+#[test]
+fn convert_writes_alta_that_reads_back_exactly() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("brdf.csv");
+    let mut w = String::from("theta_i_deg,theta_o_deg,dphi_deg,brdf_sr,brdf_sigma_sr\n");
+    for (k, v) in [0.123456789012345f64, 7.5e-3, 41.25].iter().enumerate() {
+        w.push_str(&format!("30,{},{},{v},0.001\n", 10 * k + 5, 40 * k as i32 - 40));
+    }
+    std::fs::write(&csv, w).unwrap();
+    let dat = dir.path().join("out.dat");
+    let o = gonio(&["convert", csv.to_str().unwrap(), dat.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let back = alta::parse(&std::fs::read_to_string(&dat).unwrap()).unwrap();
+    let values: Vec<f64> = back.observations.iter().map(|o| o.value).collect();
+    assert_eq!(values, [0.123456789012345, 7.5e-3, 41.25]);
+    assert!(back.metadata.iter().any(|m| m.contains("converted by gonio")));
+    let o = gonio(&["convert", csv.to_str().unwrap(), dat.to_str().unwrap(), "--units", "fr-cos"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(std::fs::read_to_string(&dat)
+        .unwrap()
+        .contains("#PARAM_OUT INV_STERADIAN_COSINE_FACTOR"));
+}
+
+/// Plot structure, not pixels: every picture in both formats, not blank, and
+/// one curve (plus its legend line) per fit in the incidence-plane plots.
+#[test]
+fn fit_and_plot_draw_every_picture() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_alta(dir.path(), &tape(), Units::Fr);
+    let f = file.to_str().unwrap();
+    let (fit_a, fit_b) = (dir.path().join("a.json"), dir.path().join("b.json"));
+    let plots = dir.path().join("fit-plots");
+    let o = gonio(&[
+        "fit",
+        f,
+        "--model",
+        "retro-phong",
+        "--out",
+        fit_a.to_str().unwrap(),
+        "--plot",
+        plots.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let o = gonio(&["fit", f, "--model", "lambert", "--out", fit_b.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    // The fit as a BRDF Explorer shader (its GLSL is checked in tests/tests/brdf_export.rs).
+    let brdf = dir.path().join("a.brdf");
+    let o = gonio(&["export", fit_a.to_str().unwrap(), brdf.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", text(&o));
+    let shader = std::fs::read_to_string(&brdf).unwrap();
+    assert!(shader.starts_with("analytic\n") && shader.contains("vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)"));
+    for name in ModelId::RetroPhong.param_names() {
+        assert!(shader.contains(&format!("\nfloat {name} ")), "parameter line of {name}");
+    }
+    let both = dir.path().join("both");
+    let o = gonio(&[
+        "plot",
+        f,
+        "--out",
+        both.to_str().unwrap(),
+        "--fit",
+        fit_a.to_str().unwrap(),
+        "--fit",
+        fit_b.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    for (d, fits) in [(&plots, 1), (&both, 2)] {
+        for ti in ["15", "30", "60"] {
+            for kind in ["plane", "hemisphere", "residuals"] {
+                let png = d.join(format!("{kind}-{ti}.png"));
+                let svg = d.join(format!("{kind}-{ti}.svg"));
+                // A blank 720×720 PNG compresses to a few kB.
+                assert!(std::fs::metadata(&png).unwrap().len() > 20_000, "{} too small", png.display());
+                assert!(std::fs::metadata(&svg).unwrap().len() > 5_000, "{}", svg.display());
+            }
+            let svg = std::fs::read_to_string(d.join(format!("plane-{ti}.svg"))).unwrap();
+            for (k, color) in ["#D62728", "#1F77B4"].iter().enumerate() {
+                let curves = svg
+                    .matches(&format!("<polyline fill=\"none\" opacity=\"1\" stroke=\"{color}\""))
+                    .count();
+                assert_eq!(curves, if k < fits { 2 } else { 0 }, "θi {ti}: curves of fit {k}");
+            }
+            assert!(
+                svg.contains("\nretro\n") && svg.contains("\nmirror\n"),
+                "retro and mirror directions marked"
+            );
+        }
+    }
+}
+
+/// The comparison as JSON, as a table, and as `report.html` (with every fit
+/// and its shader beside it).
+#[test]
+fn compare_lists_every_model() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write_alta(dir.path(), &tape(), Units::Fr);
+    let o = gonio(&["compare", file.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Vec<Value> = serde_json::from_slice(&o.stdout).unwrap();
+    let models: Vec<&str> = v.iter().map(|f| f["model"].as_str().unwrap()).collect();
+    assert_eq!(models, ModelId::ALL.map(|m| m.name()));
+    let best = v
+        .iter()
+        .min_by(|a, b| a["rmse"].as_f64().unwrap().total_cmp(&b["rmse"].as_f64().unwrap()))
+        .unwrap();
+    assert_eq!(best["model"], "retro-phong");
+    let report = dir.path().join("report");
+    let table = gonio(&["compare", file.to_str().unwrap(), "--report", report.to_str().unwrap()]);
+    assert!(
+        text(&table).contains("NRMSE") && text(&table).contains("five-param"),
+        "{}",
+        text(&table)
+    );
+    let names = ModelId::ALL.map(|m| m.name());
+    let html = common::check_report(&report, &names, &["15", "30", "60"]);
+    // Best first.
+    let models = &html[html.find("<h2>Models</h2>").unwrap()..];
+    let first_row = models.find("<td class=\"l\">").map(|i| &models[i..i + 40]).unwrap();
+    assert!(first_row.contains("retro-phong"), "{first_row}");
+}
+
+#[test]
+fn eval_and_dhr() {
+    let o = gonio(&[
+        "eval",
+        "--model",
+        "lambert",
+        "--params",
+        "kd=0.5",
+        "--theta-i",
+        "30",
+        "--theta-o",
+        "10",
+        "--dphi",
+        "-40",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["fr"].as_f64().unwrap() - 0.5 / std::f64::consts::PI).abs() < 1e-15);
+    let o = gonio(&["dhr", "--model", "lambert", "--params", "kd=0.5", "--theta-i", "45", "--json"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["dhr"].as_f64().unwrap() - 0.5).abs() < 1e-4, "{v}");
+    assert_eq!(v["energy_conserving"], true);
+    let o = gonio(&[
+        "dhr",
+        "--model",
+        "retro-phong",
+        "--params",
+        &tape().params_string(),
+        "--theta-i",
+        "60",
+        "--json",
+    ]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["kd_ks_kr"].as_f64().unwrap() < 1.0, "{v}");
+}
+
+#[test]
+fn mistakes_name_the_valid_choices_or_the_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = write_alta(dir.path(), &tape(), Units::Fr);
+    let g = good.to_str().unwrap();
+    let bad = |name: &str, content: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, content).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let header = "#DIM 3 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN\n#VS 0\n";
+    let cases: Vec<(Vec<String>, &str)> = vec![
+        (
+            vec!["fit".into(), g.into(), "--model".into(), "phong".into()],
+            "valid models: lambert, retro-phong",
+        ),
+        (
+            vec![
+                "fit".into(),
+                g.into(),
+                "--model".into(),
+                "lambert".into(),
+                "--fix".into(),
+                "ks=1".into(),
+            ],
+            "valid: kd",
+        ),
+        (
+            vec![
+                "eval".into(),
+                "--model".into(),
+                "lambert".into(),
+                "--params".into(),
+                "kd=1,q=2".into(),
+                "--theta-i".into(),
+                "1".into(),
+                "--theta-o".into(),
+                "1".into(),
+                "--dphi".into(),
+                "0".into(),
+            ],
+            "valid: kd",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad(
+                    "dim.dat",
+                    "#DIM 2 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN\n0.1 0.2 0.3\n",
+                ),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 4: #DIM says 2 inputs",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad("nan.dat", &format!("{header}0.1 0.2 0.3 0.5\n0.1 0.2 NaN 0.5\n")),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 6: `NaN` is not a finite number",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad("word.dat", &format!("{header}0.1 0.2 abc 0.5\n")),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 5: `abc` is not a number",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad("nohead.dat", "0.1 0.2 0.3 0.5\n"),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 1: data before any #PARAM_IN",
+        ),
+        (
+            vec!["fit".into(), bad("empty.dat", ""), "--model".into(), "lambert".into()],
+            "no data lines",
+        ),
+        (
+            vec!["fit".into(), bad("empty.csv", ""), "--model".into(), "lambert".into()],
+            "line 1: the file is empty",
+        ),
+        (
+            vec![
+                "fit".into(),
+                bad("bad.csv", "theta_i_deg,theta_o_deg,dphi_deg,brdf_sr\n30,10,0,0.2\n30,x,0,0.2\n"),
+                "--model".into(),
+                "lambert".into(),
+            ],
+            "line 3: column `theta_o_deg`: `x` is not a number",
+        ),
+        (
+            vec!["fit".into(), "/nonexistent.dat".into(), "--model".into(), "lambert".into()],
+            "cannot read /nonexistent.dat",
+        ),
+        (
+            vec![
+                "dhr".into(),
+                "--model".into(),
+                "lambert".into(),
+                "--params".into(),
+                "kd=1".into(),
+                "--theta-i".into(),
+                "95".into(),
+            ],
+            "must be in [0, 90)",
+        ),
+    ];
+    for (args, says) in cases {
+        let args: Vec<&str> = args.iter().map(String::as_str).collect();
+        let o = gonio(&args);
+        let msg = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{args:?}: {msg}");
+        assert!(msg.contains(says), "{args:?}: `{msg}` does not say `{says}`");
+        assert!(!msg.contains("panicked"), "{msg}");
+    }
+}
+
+/// Issue #16: an ALTA file without `#PARAM_OUT` (ALTA's UNKNOWN_OUTPUT) is
+/// fitted, with a warning that says what was assumed; `--units` says what
+/// the values are, and the fit follows it.
+#[test]
+fn a_file_that_does_not_say_its_units_is_fitted_as_told() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = Material::parse(ModelId::Lambert, "kd=0.5").unwrap();
+    let written = alta::write(&dataset(&m, Units::FrCos));
+    let bare: String = written
+        .lines()
+        .filter(|l| !l.starts_with("#PARAM_OUT"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let p = dir.path().join("bare.dat");
+    std::fs::write(&p, bare).unwrap();
+    let f = p.to_str().unwrap();
+    let o = gonio(&["fit", f, "--model", "lambert", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let stderr = String::from_utf8_lossy(&o.stderr);
+    assert!(stderr.contains("warning") && stderr.contains("--units fr-cos"), "{stderr}");
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!(v["warnings"].as_array().is_some_and(|w| !w.is_empty()));
+    assert!(
+        v["ncc"].as_f64().unwrap() < 0.999,
+        "read as f_r, cos-weighted values do not fit a Lambertian exactly"
+    );
+    let o = gonio(&["fit", f, "--model", "lambert", "--units", "fr-cos", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(!String::from_utf8_lossy(&o.stderr).contains("warning"));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["params"]["kd"].as_f64().unwrap() - 0.5).abs() < 1e-9, "{v}");
+}
+
+/// Issue #16, bad input: no data, all-zero values, fewer samples than
+/// parameters are errors; negative values and a single incidence angle are
+/// warnings that name the problem; never a panic.
+#[test]
+fn doubtful_data_is_refused_or_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let header = "#DIM 3 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN\n";
+    let write = |name: &str, body: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, format!("{header}{body}")).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let rows = |f: &dyn Fn(usize) -> f64| -> String {
+        (0..40)
+            .map(|k| format!("{} {} 0.1 {}\n", 0.2 + 0.3 * (k % 3) as f64, 0.02 * k as f64, f(k)))
+            .collect()
+    };
+    for (file, model, says) in [
+        (write("empty.dat", ""), "lambert", "no data lines"),
+        (write("zero.dat", &rows(&|_| 0.0)), "lambert", "every value is zero"),
+        (
+            write("few.dat", "0.2 0.1 0.1 1\n0.5 0.1 0.1 1\n"),
+            "retro-phong",
+            "2 samples for 6 free parameters",
+        ),
+    ] {
+        let o = gonio(&["fit", &file, "--model", model]);
+        let msg = text(&o);
+        assert_eq!(o.status.code(), Some(1), "{file}: {msg}");
+        assert!(
+            msg.contains(says) && !msg.contains("panicked"),
+            "{file}: `{msg}` does not say `{says}`"
+        );
+    }
+    for (file, says) in [
+        (
+            write("negative.dat", &rows(&|k| if k % 5 == 0 { -0.01 } else { 0.2 })),
+            "8 of 40 values are negative",
+        ),
+        (
+            write(
+                "single.dat",
+                &(0..40).map(|k| format!("0.5 {} 0.1 0.2\n", 0.02 * k as f64)).collect::<String>(),
+            ),
+            "one incidence angle only",
+        ),
+    ] {
+        let o = gonio(&["fit", &file, "--model", "lambert"]);
+        let msg = text(&o);
+        assert!(o.status.success(), "{file}: {msg}");
+        assert!(
+            msg.contains("warning") && msg.contains(says),
+            "{file}: `{msg}` does not say `{says}`"
+        );
+    }
+}
+
+/// Issue #16: the search box holds data in relative units (its amplitudes
+/// follow the data's scale), `--bounds` replaces it, and a fit that ends on
+/// its edge says so (`at_bound` in JSON, a warning in text).
+#[test]
+fn search_boxes_follow_the_data_and_say_when_they_bind() {
+    let dir = tempfile::tempdir().unwrap();
+    // A Lambertian in counts: kd = 500, far outside the calibrated box.
+    let m = Material::parse(ModelId::Lambert, "kd=500").unwrap();
+    let p = dir.path().join("counts.dat");
+    std::fs::write(&p, alta::write(&dataset(&m, Units::Fr))).unwrap();
+    let f = p.to_str().unwrap();
+    let o = gonio(&["fit", f, "--model", "lambert", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert!((v["params"]["kd"].as_f64().unwrap() / 500.0 - 1.0).abs() < 1e-9, "{v}");
+    assert_eq!(v["at_bound"], serde_json::json!([]));
+    // A box that excludes it: the fit ends on its edge and says so.
+    let o = gonio(&["fit", f, "--model", "lambert", "--bounds", "kd=0:100", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["at_bound"], serde_json::json!(["kd"]));
+    assert!((v["params"]["kd"].as_f64().unwrap() - 100.0).abs() < 1e-6);
+    let o = gonio(&["fit", f, "--model", "lambert", "--bounds", "kd=0:100"]);
+    assert!(text(&o).contains("warning: kd ended on the edge of its search box"), "{}", text(&o));
+    for (bad, says) in [
+        ("kd=1", "not NAME=LO:HI"),
+        ("kd=3:1", "LO < HI"),
+        ("zz=0:1", "unknown parameter `zz`"),
+    ] {
+        let o = gonio(&["fit", f, "--model", "lambert", "--bounds", bad]);
+        assert_eq!(o.status.code(), Some(1));
+        assert!(text(&o).contains(says), "{bad}: {}", text(&o));
+    }
+    // compare: every model takes the names it has; AIC/BIC ranks beside RMSE's.
+    let o = gonio(&["compare", f, "--bounds", "kd=0:1000,n=1:100", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let rows: Vec<Value> = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(rows.len(), 8);
+    let mut ranks: Vec<u64> = rows.iter().map(|r| r["rank"]["aic"].as_u64().unwrap()).collect();
+    ranks.sort();
+    assert_eq!(ranks, (1..=8).collect::<Vec<u64>>());
+    assert!(rows.iter().all(|r| r["at_bound"].is_array() && r["bic"].is_f64()));
+}
