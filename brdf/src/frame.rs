@@ -63,7 +63,7 @@ impl Directions {
     }
 
     /// The light and view of the head at stage angles `(ω, τ, ψ)` in degrees
-    /// (`head.md`, kinematics), in the sample frame (`z = n`, `x` along the
+    /// (the lab frame of `gonio_firmware::kinematics`), in the sample frame (`z = n`, `x` along the
     /// light's projection), computed from the lab-frame vectors: independent
     /// of the firmware's inverse kinematics. `None` when the light or the
     /// detector is behind the sample.

@@ -1,6 +1,6 @@
 //! Acquisition of one sample: auto-range the transimpedance gain, discard the
 //! periods the amplifier spends settling, integrate, flag. Also the
-//! calibration that learns the electronics' phase and the matched waveform.
+//! learning of the electronics' phase and the matched waveform.
 
 use crate::config::HeadConfig;
 use crate::demod::{Design, Estimate, Integrator, Learned, Learner, Reference, MAX_M};
@@ -10,9 +10,7 @@ use core::future::{poll_fn, Future};
 use core::pin::pin;
 use core::task::Poll;
 use embedded_hal::digital::OutputPin;
-use gonio_shared::{
-    CalibrationReport, DetectionReport, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags, Signal, SweepRequest,
-};
+use gonio_shared::{DetectionReport, DetectionSettings, Fault, Field, LearnReport, Reference as Kind, SampleFlags, Signal, SweepRequest};
 
 /// Gain up when the largest code would still sit below this fraction of full
 /// scale at ten times the gain; down when codes reach the rails. The band in
@@ -20,13 +18,13 @@ use gonio_shared::{
 const RAISE_BELOW: f32 = 0.7;
 /// Amplitudes under this many standard errors are flagged as below noise.
 const NOISE_FLOOR_K: f64 = 3.0;
-/// A calibrated phase is checked on samples at least this far above noise...
+/// A learned phase is checked on samples at least this far above noise...
 const PHASE_CHECK_SNR: f64 = 10.0;
-/// ...and flagged when it is further than this from the calibrated phase.
+/// ...and flagged when it is further than this from the learned phase.
 const PHASE_TOLERANCE_DEG: f64 = 20.0;
-/// Calibration needs at least this signal-to-noise ratio and period count.
-const CALIBRATION_SNR: f64 = 30.0;
-const CALIBRATION_MIN_PERIODS: u16 = 8;
+/// Learning needs at least this signal-to-noise ratio and period count.
+const LEARNING_SNR: f64 = 30.0;
+const LEARNING_MIN_PERIODS: u16 = 8;
 
 pub struct Detector {
     settings: DetectionSettings,
@@ -39,7 +37,7 @@ pub struct Detector {
     /// here rather than in the sweep's state, which the serve loop's future
     /// would otherwise carry (3 KiB) through every await of a scan.
     swept: Design,
-    /// The calibration and the chop timing it was taken at.
+    /// What was learned and the chop timing it was learned at.
     learned: Option<(Learned, ChopTiming)>,
     gain: u8,
     /// The gain changed during a sweep: the next swept sample first
@@ -50,7 +48,7 @@ pub struct Detector {
 
 impl Detector {
     /// Starts with `settings`; a matched reference there falls back to the
-    /// square until a calibration has learned the waveform.
+    /// square until the waveform has been learned.
     pub fn new<A: AdcStream>(settings: DetectionSettings) -> Self {
         let timing = units::chop_timing(&settings, A::TIMER_HZ);
         let chop_hz = units::chop_hz_actual(timing, A::TIMER_HZ) as f64;
@@ -77,13 +75,13 @@ impl Detector {
     }
 
     /// Applies validated settings; the ADC restarts on the next measurement.
-    /// A matched reference needs a calibration at the same chop timing.
+    /// A matched reference needs one learned at the same chop timing.
     pub fn configure<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, s: DetectionSettings) -> Result<DetectionReport, Fault> {
         s.validate()?;
         let timing = units::chop_timing(&s, <B::Adc as AdcStream>::TIMER_HZ);
-        let calibrated = self.learned.as_ref().is_some_and(|(_, t)| *t == timing);
-        if s.reference == Kind::Matched && !calibrated {
-            return Err(Fault::NotCalibrated);
+        let learned = self.learned.as_ref().is_some_and(|(_, t)| *t == timing);
+        if s.reference == Kind::Matched && !learned {
+            return Err(Fault::NotLearned);
         }
         self.settings = s;
         self.timing = timing;
@@ -362,11 +360,11 @@ impl Detector {
         }
     }
 
-    /// Refuses a calibration length out of range; called before the laser
+    /// Refuses a learning length out of range; called before the laser
     /// is switched on for it.
-    pub fn check_calibration(&self, periods: u16) -> Result<(), Fault> {
+    pub fn check_learning(&self, periods: u16) -> Result<(), Fault> {
         let chop_s = 1.0 / self.chop_hz as f32;
-        if periods < CALIBRATION_MIN_PERIODS || periods as f32 * chop_s > DetectionSettings::INTEGRATION_MAX_S * 6.0 {
+        if periods < LEARNING_MIN_PERIODS || periods as f32 * chop_s > DetectionSettings::INTEGRATION_MAX_S * 6.0 {
             return Err(Fault::InvalidValue(Field::Periods));
         }
         Ok(())
@@ -374,8 +372,8 @@ impl Detector {
 
     /// Learns the phase of the electronics and the matched waveform on the
     /// signal at the current position, which must be strong and steady.
-    pub async fn calibrate<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, periods: u16) -> Result<CalibrationReport, Fault> {
-        self.check_calibration(periods)?;
+    pub async fn learn<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, periods: u16) -> Result<LearnReport, Fault> {
+        self.check_learning(periods)?;
         let m = self.samples_per_period();
         let mut flags = SampleFlags::default();
         let mut buf = [0u16; MAX_M];
@@ -394,7 +392,7 @@ impl Detector {
             return Err(Fault::Saturated);
         }
         let snr = e.magnitude / e.std_err.max(1e-12);
-        if flags.contains(SampleFlags::OVERRUN) || snr < CALIBRATION_SNR {
+        if flags.contains(SampleFlags::OVERRUN) || snr < LEARNING_SNR {
             return Err(Fault::WeakSignal);
         }
         let learned = learner.finish().ok_or(Fault::WeakSignal)?;
@@ -405,7 +403,7 @@ impl Detector {
             Kind::Square | Kind::Matched => l.phase_square,
         });
         let volts = units::codes_to_volts(e.magnitude as f32, <B::Adc as AdcStream>::BITS, cfg.detector.adc_vref);
-        Ok(CalibrationReport {
+        Ok(LearnReport {
             phase_deg: phase.to_degrees() as f32,
             amplitude_v: volts,
             gain_index: self.gain,

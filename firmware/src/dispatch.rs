@@ -5,7 +5,7 @@
 
 use gonio_shared::icd::{AbortEndpoint, HomeRequest, MeasureRequest, PauseEndpoint};
 use gonio_shared::wire::{check, key_is};
-use gonio_shared::{CalibrateRequest, DetectionSettings, Geometry, PlanChunk, SafetySettings, SanityConfig, ScanSpec};
+use gonio_shared::{DetectionSettings, Geometry, LearnRequest, SafetySettings, SanityConfig, ScanSpec, VisitChunk};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::standard_icd::WireError;
 use postcard_rpc::{Endpoint, Key};

@@ -16,16 +16,14 @@ use crate::sanity::geometry::FixedGeometry;
 use crate::sanity::Sanity;
 use crate::scan_run::ScanRun;
 use crate::state::{self, Drivers, Event, Laser, Mode};
-use crate::sweep::Sweeping;
-use crate::{homing, sweep, units};
+use crate::{homing, units};
 use embedded_hal::digital::OutputPin;
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{HomeRequest, MeasureRequest, MoveReport};
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::{
-    Axis, AxisAngles, CalibrateRequest, CalibrationReport, Capabilities, DetectionSettings, Fault, Field, Geometry, HeadState, Identity,
-    PlanChunk, PlanQueued, Reply, SafetySettings, Sample, SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, SweepLobe,
-    SweepReport, SweepRequest, SweepRow, SweptSample,
+    Axis, Capabilities, DetectionSettings, Fault, Geometry, HeadState, Identity, LearnReport, LearnRequest, Reply, SafetySettings, Sample,
+    SampleFlags, SanityConfig, ScanAccepted, ScanSpec, Signal, Status, VisitChunk, VisitsQueued,
 };
 
 /// Who this head is; the board and the serial come from the binary.
@@ -38,45 +36,19 @@ pub struct HeadInfo {
     pub protocol_version: u16,
 }
 
-/// Consecutive scan points that may all be saturated at the lowest gain, or
-/// all below the noise floor, before the head stops the scan (stray light or
-/// a failed amplifier; a dead laser or a blocked beam). A retroreflector's
-/// scan has neither run; a black sample needs the dark watch relaxed.
-pub const SUSPECT_RUN: u32 = 8;
-
-/// What one turn of a sweep scan's row did.
-pub(crate) enum SweepTurn {
-    /// The sweep began: the stages move, the chop runs.
-    Begun,
-    /// A sample; more follow.
-    Sample(SweptSample),
-    /// The row's last sample, and how many it made.
-    Last(SweptSample, u32),
-}
-
-/// Runs of suspicious samples in the current scan.
-#[derive(Debug, Default, Clone, Copy)]
-struct SuspectRuns {
-    saturated: u32,
-    dark: u32,
-}
-
 pub struct Head<B: Board> {
     pub(crate) cfg: HeadConfig,
     pub(crate) hw: Hardware<B>,
     info: HeadInfo,
-    pos: Position,
-    detector: Detector,
+    pub(crate) pos: Position,
+    pub(crate) detector: Detector,
     sanity: Option<Sanity>,
     pub(crate) scan: Option<ScanRun>,
-    /// The row a sweep scan is sweeping, between two turns of the serve
-    /// loop; any stop ends it (the row is swept again on continuing).
-    sweeping: Option<Sweeping>,
     laser_on: bool,
-    seq: u32,
+    pub(crate) seq: u32,
     /// What the serve loop keeps of the conversation with the host.
     pub(crate) talk: Conversation,
-    samples_flagged: u32,
+    pub(crate) samples_flagged: u32,
     samples_remeasured: u32,
     pub(crate) last_fault: Option<Fault>,
     /// What the head is doing (the state table's state).
@@ -89,7 +61,6 @@ pub struct Head<B: Board> {
     pub(crate) last_heard_us: u64,
     /// When the last operation ended (µs): the idle times count from it.
     pub(crate) rest_since_us: u64,
-    suspect: SuspectRuns,
     /// Scan runs started since power-up.
     runs: u32,
 }
@@ -104,7 +75,6 @@ impl<B: Board> Head<B> {
             detector: Detector::new::<B::Adc>(DetectionSettings::default()),
             sanity: None,
             scan: None,
-            sweeping: None,
             laser_on: false,
             seq: 0,
             talk: Conversation::default(),
@@ -117,7 +87,6 @@ impl<B: Board> Head<B> {
             safety: SafetySettings::default(),
             last_heard_us: 0,
             rest_since_us: 0,
-            suspect: SuspectRuns::default(),
             runs: 0,
         };
         head.safe_state();
@@ -132,12 +101,20 @@ impl<B: Board> Head<B> {
     /// Laser off, conversions stopped, drivers disabled, step queues emptied.
     /// Pin errors are ignored here: there is nothing safer left to do.
     pub fn safe_state(&mut self) {
-        self.sweeping = None;
+        self.end_sweeping();
         self.hw.steps.clear();
         self.detector.stop(&mut self.hw);
         let _ = self.hw.laser.set_low();
         self.laser_on = false;
         self.drivers(false);
+    }
+
+    /// Drops the row a sweep scan is sweeping (its move is braked or cleared
+    /// by the caller): the row is swept again on continuing.
+    fn end_sweeping(&mut self) {
+        if let Some(run) = &mut self.scan {
+            run.sweeping = None;
+        }
     }
 
     /// Laser enable low and the chop stopped, at once.
@@ -179,7 +156,7 @@ impl<B: Board> Head<B> {
 
     /// Ends an operation in the table: done, or failed (safe state). The
     /// idle times count from here (in a pause too).
-    fn finish<T>(&mut self, r: Reply<T>) -> Reply<T> {
+    pub(crate) fn finish<T>(&mut self, r: Reply<T>) -> Reply<T> {
         self.rest_since_us = self.hw.clock.now_us();
         match &r {
             Ok(_) => {
@@ -201,12 +178,12 @@ impl<B: Board> Head<B> {
         if self.apply(e).is_err() {
             return;
         }
-        self.sweeping = None;
+        self.end_sweeping();
         motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
         let _ = self.apply(Event::Stopped);
     }
 
-    fn laser(&mut self, on: bool) -> Result<(), Fault> {
+    pub(crate) fn laser(&mut self, on: bool) -> Result<(), Fault> {
         if on && !self.mode.laser_allowed() {
             return Err(Fault::Busy);
         }
@@ -405,227 +382,9 @@ impl<B: Board> Head<B> {
         self.finish(r)
     }
 
-    /// Sweeps from `req.from` to `req.to` while the laser chops
-    /// ([`SweepRequest`], [`crate::sweep`]): every `periods_per_sample`
-    /// periods become one [`SweptSample`], handed to `emit` as it is made.
-    /// A sweep refused (an end or the path unreachable, a speed or length
-    /// out of range, the head busy or not homed) changes nothing.
-    pub async fn sweep(&mut self, req: SweepRequest, mut emit: impl FnMut(SweptSample)) -> Reply<SweepReport> {
-        if let Some(f) = state::transition(self.mode, Event::Measure).refused {
-            return Err(f);
-        }
-        let (start, end, limits) = self.sweep_path(&req).await?;
-        self.apply(Event::Measure)?;
-        let r = async {
-            let mut sw = self.begin_sweep(req.periods_per_sample, (limits, &[]), start, end, None).await?;
-            while sw.moving {
-                emit(self.swept_sample(&mut sw).await?);
-            }
-            self.end_sweep(sw).await
-        }
-        .await;
-        self.rest_laser();
-        self.finish(r)
-    }
-
-    /// Checks a sweep and works out its stage targets and axis limits;
-    /// changes nothing.
-    async fn sweep_path(&mut self, req: &SweepRequest) -> Reply<([i32; 3], [i32; 3], [motion::Limits; 3])> {
-        self.check_sweep(req.periods_per_sample, req.speed_dps, None)?;
-        // Each inverse is some 45 000 instructions on the chip (`chip-bench`):
-        // the executor runs between them.
-        let from = kinematics::inverse(&self.cfg, &req.from)?;
-        embassy_futures::yield_now().await;
-        let to = kinematics::inverse(&self.cfg, &req.to)?;
-        embassy_futures::yield_now().await;
-        sweep::check_path(&self.cfg, &from, &to)?;
-        self.stage_path(&from, &to, req.speed_dps)
-    }
-
-    /// The stage targets and axis limits of a sweep between stage angles
-    /// `from` and `to` at `speed_dps`, once the head is known to be homed.
-    fn stage_path(&self, from: &AxisAngles, to: &AxisAngles, speed_dps: f32) -> Reply<([i32; 3], [i32; 3], [motion::Limits; 3])> {
-        if !self.pos.all_homed() {
-            return Err(Fault::NotHomed);
-        }
-        let (start, end) = (motion::target_steps(&self.cfg, from), motion::target_steps(&self.cfg, to));
-        let delta = [0, 1, 2].map(|i| end[i] - start[i]);
-        Ok((start, end, sweep::limits(&self.cfg, delta, speed_dps)?))
-    }
-
-    /// Whether a sweep scan's row is under way (its arm moving, its chop
-    /// running).
-    pub(crate) fn sweeping(&self) -> bool {
-        self.sweeping.is_some()
-    }
-
-    /// Checks what a sweep asks of the detector and of its samples.
-    fn check_sweep(&self, periods_per_sample: u16, speed_dps: f32, lobe: Option<&SweepLobe>) -> Reply<()> {
-        let chop_hz = self.detector.settings().chop_hz;
-        sweep::check(&self.cfg, periods_per_sample, speed_dps, lobe, chop_hz)?;
-        if chop_hz > SweepRequest::CHOP_MAX_HZ {
-            return Err(Fault::InvalidValue(Field::ChopFrequency));
-        }
-        Ok(())
-    }
-
-    /// One turn of a sweep scan's row at scan position `at`: the first turn
-    /// works out and begins the sweep (the arm alone moves, at the row's
-    /// speed or its limit), every other one takes one sample; the last ends
-    /// the sweep. A row refused (beyond the travel) changes nothing.
-    pub(crate) async fn sweep_turn(&mut self, row: &SweepRow, at: ScanPosition) -> Reply<SweepTurn> {
-        let Some(mut sw) = self.sweeping.take() else {
-            self.check_sweep(row.periods_per_sample, row.speed_dps, row.lobe.as_ref())?;
-            let p = sweep::row_plan(&self.cfg, row, self.detector.settings().chop_hz)?;
-            if !self.pos.all_homed() {
-                return Err(Fault::NotHomed);
-            }
-            self.sweeping = Some(
-                self.begin_sweep(row.periods_per_sample, (p.limits, &p.levels), p.start, p.end, Some(at))
-                    .await?,
-            );
-            return Ok(SweepTurn::Begun);
-        };
-        // Dropped by a stop in the middle of a sample, `sw` ends the sweep.
-        let s = self.swept_sample(&mut sw).await?;
-        if s.signal.flags.doubtful() {
-            self.samples_flagged = self.samples_flagged.wrapping_add(1);
-        }
-        // The watch of a scan's points, over its samples: a run of
-        // saturated ones (8, some 8° of a row at 30 deg/s) ends the scan,
-        // and so does a row all of whose samples are below the noise (a
-        // dead laser, a blocked beam: a swept sample integrates a third of a
-        // point's periods, and a dark floor a few degrees long is no
-        // fault); the arm is braked, the sample that completed it not sent.
-        sw.lit |= !s.signal.flags.contains(SampleFlags::BELOW_NOISE);
-        let watched = self.watch(s.signal.flags.difference(SampleFlags::BELOW_NOISE));
-        let row_dark = !sw.moving && !sw.lit;
-        if let Err(f) = watched.and(if row_dark { Err(Fault::NoSignal) } else { Ok(()) }) {
-            return Err(self.abandon_sweep(f).await);
-        }
-        if sw.moving {
-            self.sweeping = Some(sw);
-            return Ok(SweepTurn::Sample(s));
-        }
-        let report = self.end_sweep(sw).await?;
-        Ok(SweepTurn::Last(s, report.samples))
-    }
-
-    /// Starts a checked sweep: the move to its start, the settle time, the
-    /// design of its samples and the plan of its move (within `limits`, in
-    /// its stretches), the laser and the chop (ranged), and the move. A
-    /// failure leaves the head safe.
-    async fn begin_sweep(
-        &mut self,
-        periods_per_sample: u16,
-        (limits, levels): ([motion::Limits; 3], &[motion::Level]),
-        start: [i32; 3],
-        end: [i32; 3],
-        scan: Option<ScanPosition>,
-    ) -> Reply<Sweeping> {
-        let r = async {
-            self.detector.stop(&mut self.hw);
-            // To the start, whose stage targets are known already.
-            motion::move_to(&mut self.hw, &self.cfg, &mut self.pos, start).await?;
-            self.hw
-                .delay
-                .delay_us(units::seconds_to_us(self.detector.settings().settle_s))
-                .await;
-            // Computed and planned before the chop starts: from then on the
-            // ADC's ring (two periods) must be read as it fills.
-            self.detector.design_sweep(periods_per_sample);
-            let delta = [0, 1, 2].map(|i| end[i] - self.pos.steps[i]);
-            let run = motion::plan(&mut self.hw, &self.cfg, delta, limits, levels).await?;
-            self.laser(true)?;
-            self.detector.prepare_sweep(&mut self.hw, &self.cfg).await?;
-            motion::start(&mut self.hw, &mut self.pos, &run);
-            let t0 = self.hw.clock.now_us();
-            Ok(Sweeping {
-                run,
-                scan,
-                t0,
-                first: [0; 3],
-                start_us: t0,
-                moving: true,
-                splitter: kinematics::through_splitter(&self.cfg, &self.pos.angles(&self.cfg)),
-                lit: false,
-                samples: 0,
-            })
-        }
-        .await;
-        if r.is_err() {
-            self.safe_state();
-        }
-        r
-    }
-
-    /// The next sample of a sweep under way (its last once `sw.moving`
-    /// turns false). A stalled move or a lost ADC block stops the sweep and
-    /// leaves the head safe.
-    async fn swept_sample(&mut self, sw: &mut Sweeping) -> Reply<SweptSample> {
-        if self.hw.clock.now_us().saturating_sub(sw.t0) > sw.run.limit_ms as u64 * 1000 {
-            let f = sw.run.stalled(&mut self.hw, &mut self.pos);
-            self.safe_state();
-            return Err(f);
-        }
-        match self.detector.resettle_moving(&mut self.hw, &self.cfg, &mut sw.moving).await {
-            Ok(Some(start)) => (sw.first, sw.start_us) = start,
-            Ok(None) => {}
-            Err(f) => return Err(self.abandon_sweep(f).await),
-        }
-        let (mut signal, last, end_us) = match self.detector.measure_moving(&mut self.hw, &self.cfg, &mut sw.moving).await {
-            Ok(m) => m,
-            Err(f) => return Err(self.abandon_sweep(f).await),
-        };
-        if sw.splitter {
-            signal.flags.insert(SampleFlags::THROUGH_SPLITTER);
-        }
-        if signal.flags.contains(SampleFlags::OVERRUN) {
-            // A lost block breaks the alignment of the ring with the
-            // chop for every sample after it: the sweep stops.
-            return Err(self.abandon_sweep(Fault::AdcOverrun).await);
-        }
-        let (axes_from, axes_to) = sweep::tag(&self.cfg, &self.pos, sw.first, last);
-        let s = SweptSample {
-            seq: self.seq,
-            scan: sw.scan,
-            start_us: sw.start_us,
-            duration_s: end_us.saturating_sub(sw.start_us) as f32 * 1e-6,
-            axes_from,
-            axes_to,
-            signal,
-        };
-        self.seq = self.seq.wrapping_add(1);
-        sw.samples += 1;
-        (sw.first, sw.start_us) = (last, end_us);
-        Ok(s)
-    }
-
-    /// Gives a sweep up for `f` in the middle of its move: the arm braked
-    /// from its speed (its steps counted in), the head made safe.
-    async fn abandon_sweep(&mut self, f: Fault) -> Fault {
-        motion::halt(&mut self.hw, &self.cfg, &mut self.pos).await;
-        self.safe_state();
-        f
-    }
-
-    /// Ends a sweep whose move is over: its steps counted in and checked.
-    async fn end_sweep(&mut self, sw: Sweeping) -> Reply<SweepReport> {
-        let emitted = self.hw.steps.emitted();
-        if let Err(f) = motion::end(&mut self.hw, &self.cfg, &mut self.pos, &sw.run, emitted).await {
-            self.safe_state();
-            return Err(f);
-        }
-        Ok(SweepReport {
-            samples: sw.samples,
-            duration_s: self.hw.clock.now_us().saturating_sub(sw.t0) as f32 * 1e-6,
-            reached: kinematics::forward(&self.pos.angles(&self.cfg)),
-        })
-    }
-
     /// After a measurement at rest: the chop stops, and the laser goes off
     /// unless it is to stay on for its idle time.
-    fn rest_laser(&mut self) {
+    pub(crate) fn rest_laser(&mut self) {
         self.detector.stop(&mut self.hw);
         if self.safety.laser_idle_s == 0.0 {
             let _ = self.laser(false);
@@ -649,7 +408,6 @@ impl<B: Board> Head<B> {
         self.drop_scan(Fault::Aborted);
         self.apply(Event::Scan)?;
         let first_order = spec.first_order;
-        self.suspect = SuspectRuns::default();
         self.last_heard_us = self.hw.clock.now_us();
         self.runs = self.runs.wrapping_add(1);
         self.scan = Some(ScanRun::new(self.runs, spec, total));
@@ -663,7 +421,7 @@ impl<B: Board> Head<B> {
     /// Queues the next stretch of the running or held scan's visit order.
     /// A chunk that does not start where the queue ends takes nothing, and
     /// what does not fit is left out: the answer says where to go on.
-    pub fn queue_plan(&mut self, chunk: &PlanChunk) -> Reply<PlanQueued> {
+    pub fn queue_visits(&mut self, chunk: &VisitChunk) -> Reply<VisitsQueued> {
         match self.scan.as_mut().filter(|r| r.is_addressed_by(chunk)) {
             Some(run) => run.queue(chunk),
             None => Err(Fault::NotScanning),
@@ -697,15 +455,15 @@ impl<B: Board> Head<B> {
     }
 
     /// Learns the detection chain at the current position (laser on).
-    pub async fn calibrate(&mut self, req: CalibrateRequest) -> Reply<CalibrationReport> {
+    pub async fn learn_reference(&mut self, req: LearnRequest) -> Reply<LearnReport> {
         // Refused before the laser goes on (found by the validation property test).
         if let Some(f) = state::transition(self.mode, Event::Measure).refused {
             return Err(f);
         }
-        self.detector.check_calibration(req.periods)?;
+        self.detector.check_learning(req.periods)?;
         self.apply(Event::Measure)?;
         let r = match self.laser(true) {
-            Ok(()) => self.detector.calibrate(&mut self.hw, &self.cfg, req.periods).await,
+            Ok(()) => self.detector.learn(&mut self.hw, &self.cfg, req.periods).await,
             Err(f) => Err(f),
         };
         self.rest_laser();
@@ -758,22 +516,6 @@ impl<B: Board> Head<B> {
         if drivers {
             let _ = self.apply(Event::IdleTimeout);
         }
-    }
-
-    /// Counts runs of saturated and of dark samples in a scan; a run of
-    /// [`SUSPECT_RUN`] stops it.
-    pub(crate) fn watch(&mut self, flags: SampleFlags) -> Result<(), Fault> {
-        let run = |n: &mut u32, hit: bool| {
-            *n = if hit { *n + 1 } else { 0 };
-            *n >= SUSPECT_RUN
-        };
-        if run(&mut self.suspect.saturated, flags.contains(SampleFlags::SATURATED)) {
-            return Err(Fault::Saturated);
-        }
-        if run(&mut self.suspect.dark, flags.contains(SampleFlags::BELOW_NOISE)) {
-            return Err(Fault::NoSignal);
-        }
-        Ok(())
     }
 
     pub fn load_sanity(&mut self, c: SanityConfig) -> Reply<()> {

@@ -1,5 +1,6 @@
-//! Forward and inverse kinematics of the head (`head.md`, kinematics), and
-//! the reachability check that refuses a target before anything moves.
+//! Forward and inverse kinematics of the head (the lab frame below, the
+//! reference head's travel and blind zone in [`crate::config::REFERENCE`]),
+//! and the reachability check that refuses a target before anything moves.
 //!
 //! Lab frame: laser at `L = (1,0,0)`, detector at `D(ψ) = (cosψ, sinψ, 0)`,
 //! sample normal `n(ω,τ) = (cosτ cosω, cosτ sinω, sinτ)`. The sign of τ

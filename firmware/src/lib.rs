@@ -28,7 +28,7 @@ pub mod link;
 pub mod math;
 pub mod motion;
 pub mod sanity;
-mod scan_run;
+pub mod scan_run;
 mod serve;
 pub mod state;
 pub mod sweep;

@@ -1,11 +1,26 @@
 //! A scan in progress, apart from the head that runs it: its visit order as
-//! the host has queued it, where it stands, what it has counted, and the
-//! events that say so. The head decides *when* (its state table, the serve
-//! loop's watch); this says *what comes next*. Nothing here moves or
-//! measures, so every operation is a few integer steps.
+//! the host has queued it, where it stands, what it has counted (its points,
+//! its runs of suspect samples), the row it is sweeping between two turns,
+//! and the events that say so. The head decides *when* (its state table, the
+//! serve loop's watch) and does the moving and measuring; this says *what
+//! comes next*, in a few integer steps per operation.
 
-use gonio_shared::{Fault, Field, PlanChunk, PlanQueued, Reply, ScanEvent, ScanSpec, Visit, PLAN_QUEUE};
+use crate::sweep::run::Sweeping;
+use gonio_shared::{Fault, Field, Reply, SampleFlags, ScanEvent, ScanSpec, Visit, VisitChunk, VisitsQueued, VISIT_QUEUE};
 use heapless::Deque;
+
+/// Consecutive scan points that may all be saturated at the lowest gain, or
+/// all below the noise floor, before the head stops the scan (stray light or
+/// a failed amplifier; a dead laser or a blocked beam). A retroreflector's
+/// scan has neither run; a black sample needs the dark watch relaxed.
+pub const SUSPECT_RUN: u32 = 8;
+
+/// Runs of suspect samples in a scan.
+#[derive(Debug, Default, Clone, Copy)]
+struct SuspectRuns {
+    saturated: u32,
+    dark: u32,
+}
 
 pub(crate) struct ScanRun {
     /// Number of the run since power-up (`ScanAccepted::run`).
@@ -13,7 +28,7 @@ pub(crate) struct ScanRun {
     spec: ScanSpec,
     /// The visit order the host has sent and the head not yet taken
     /// (canonical indices), and the visit position after its last.
-    plan: Deque<u32, PLAN_QUEUE>,
+    plan: Deque<u32, VISIT_QUEUE>,
     queued_to: u32,
     total: u32,
     next_order: u32,
@@ -23,6 +38,10 @@ pub(crate) struct ScanRun {
     /// middle of it leaves it here, and continuing visits it again (a row
     /// from its start: the host keeps a row's samples only once it is done).
     current: Option<(u32, Visit)>,
+    suspect: SuspectRuns,
+    /// The row a sweep scan is sweeping, between two turns of the serve
+    /// loop; any stop ends it (the row is swept again on continuing).
+    pub(crate) sweeping: Option<Sweeping>,
 }
 
 /// What the scan does next.
@@ -58,7 +77,25 @@ impl ScanRun {
             measured: 0,
             skipped: 0,
             current: None,
+            suspect: SuspectRuns::default(),
+            sweeping: None,
         }
+    }
+
+    /// Counts runs of saturated and of dark samples; a run of
+    /// [`SUSPECT_RUN`] stops the scan.
+    pub(crate) fn count_suspect(&mut self, flags: SampleFlags) -> Result<(), Fault> {
+        let run = |n: &mut u32, hit: bool| {
+            *n = if hit { *n + 1 } else { 0 };
+            *n >= SUSPECT_RUN
+        };
+        if run(&mut self.suspect.saturated, flags.contains(SampleFlags::SATURATED)) {
+            return Err(Fault::Saturated);
+        }
+        if run(&mut self.suspect.dark, flags.contains(SampleFlags::BELOW_NOISE)) {
+            return Err(Fault::NoSignal);
+        }
+        Ok(())
     }
 
     /// `(run, next visit position, points)`, for the status.
@@ -67,14 +104,14 @@ impl ScanRun {
     }
 
     /// Whether `chunk` is addressed to this run (0: whichever runs).
-    pub(crate) fn is_addressed_by(&self, chunk: &PlanChunk) -> bool {
+    pub(crate) fn is_addressed_by(&self, chunk: &VisitChunk) -> bool {
         chunk.run == 0 || chunk.run == self.run
     }
 
     /// Queues the next stretch of the visit order. A chunk that does not
     /// start where the queue ends takes nothing, and what does not fit is
     /// left out: the answer says where to go on.
-    pub(crate) fn queue(&mut self, chunk: &PlanChunk) -> Reply<PlanQueued> {
+    pub(crate) fn queue(&mut self, chunk: &VisitChunk) -> Reply<VisitsQueued> {
         if chunk.indices.iter().any(|&i| i >= self.total) {
             return Err(Fault::InvalidValue(Field::ScanRange));
         }
@@ -86,9 +123,9 @@ impl ScanRun {
                 self.queued_to += 1;
             }
         }
-        Ok(PlanQueued {
+        Ok(VisitsQueued {
             next_order: self.queued_to,
-            room: (PLAN_QUEUE - self.plan.len()) as u32,
+            room: (VISIT_QUEUE - self.plan.len()) as u32,
         })
     }
 
@@ -169,7 +206,7 @@ mod tests {
         let spec = ScanSpec::belcour();
         let total = spec.validate().unwrap();
         let mut run = ScanRun::new(1, spec, total);
-        let chunk = PlanChunk {
+        let chunk = VisitChunk {
             run: 1,
             first_order: 0,
             indices: heapless::Vec::from_slice(indices).unwrap(),

@@ -11,17 +11,17 @@
 //! answered when the operation ends.
 
 use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
-use crate::head::{Head, SweepTurn};
+use crate::head::Head;
 use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
 use crate::scan_run::{Next, Recorded};
 use crate::state::{Event, Mode};
+use crate::sweep::run::SweepTurn;
 use embassy_futures::select::{select, Either};
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, MeasureEndpoint,
-    MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic,
-    StatusEndpoint,
+    AbortEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, IdentifyEndpoint, LearnEndpoint, MeasureEndpoint, MechanicsEndpoint,
+    MoveEndpoint, PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint, VisitEndpoint,
 };
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::wire::check;
@@ -302,7 +302,7 @@ impl<B: Board> Head<B> {
 
     /// Continues a held scan where it stopped, or re-arms the head after an
     /// E-STOP once the input has read closed for [`ESTOP_DEBOUNCE_US`].
-    async fn resume<S: Sentry>(&mut self, sentry: &mut S) -> Reply<Status> {
+    async fn continue_scan<S: Sentry>(&mut self, sentry: &mut S) -> Reply<Status> {
         if self.mode == Mode::Faulted {
             // Closed now, and still closed the debounce time later.
             let bounced = sentry.estop_open()
@@ -349,58 +349,36 @@ impl<B: Board> Head<B> {
         };
         self.talk.key_kind = hdr.key.kind();
         let seq = hdr.seq_no;
+        // Each arm names its endpoint (so its answer's type is checked
+        // against the table) and the answer: computed at once, or by an
+        // operation run under watch (`operate`).
+        macro_rules! answer {
+            ($ep:ident, $resp:expr) => {{
+                let resp = $resp;
+                self.reply::<$ep, L>(seq, &resp, link).await
+            }};
+        }
+        macro_rules! under_watch {
+            ($ep:ident, |$h:ident| $op:expr) => {
+                answer!($ep, self.operate(link, sentry, inbox, async |$h: &mut Self| $op.await).await?)
+            };
+        }
         match cmd {
-            Command::Identify(()) => self.reply::<IdentifyEndpoint, L>(seq, &self.identity(), link).await,
-            Command::Status(()) => self.reply::<StatusEndpoint, L>(seq, &self.status(), link).await,
-            Command::Mechanics(()) => self.reply::<MechanicsEndpoint, L>(seq, &self.cfg.mechanics(), link).await,
-            Command::Home(r) => {
-                let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.home(r).await).await?;
-                self.reply::<HomeEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Move(g) => {
-                let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.move_to(g).await).await?;
-                self.reply::<MoveEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Measure(r) => {
-                let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.measure(r).await).await?;
-                self.reply::<MeasureEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Calibrate(c) => {
-                let resp = self.operate(link, sentry, inbox, async |h: &mut Self| h.calibrate(c).await).await?;
-                self.reply::<CalibrateEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Scan(spec) => {
-                let resp = self.start_scan(spec);
-                self.reply::<ScanEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Plan(chunk) => {
-                let resp = self.queue_plan(&chunk);
-                self.reply::<PlanEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Abort(()) => {
-                let resp = self.abort().await;
-                self.reply::<AbortEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Pause(()) => {
-                let resp = self.pause().await;
-                self.reply::<PauseEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Continue(()) => {
-                let resp = self.resume(sentry).await;
-                self.reply::<ContinueEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Detection(s) => {
-                let resp = self.configure_detection(s);
-                self.reply::<DetectionEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Sanity(c) => {
-                let resp = self.load_sanity(c);
-                self.reply::<SanityEndpoint, L>(seq, &resp, link).await
-            }
-            Command::Safety(c) => {
-                let resp = self.configure_safety(c);
-                self.reply::<SafetyEndpoint, L>(seq, &resp, link).await
-            }
+            Command::Identify(()) => answer!(IdentifyEndpoint, self.identity()),
+            Command::Status(()) => answer!(StatusEndpoint, self.status()),
+            Command::Mechanics(()) => answer!(MechanicsEndpoint, self.cfg.mechanics()),
+            Command::Home(r) => under_watch!(HomeEndpoint, |h| h.home(r)),
+            Command::Move(g) => under_watch!(MoveEndpoint, |h| h.move_to(g)),
+            Command::Measure(r) => under_watch!(MeasureEndpoint, |h| h.measure(r)),
+            Command::Learn(c) => under_watch!(LearnEndpoint, |h| h.learn_reference(c)),
+            Command::Scan(spec) => answer!(ScanEndpoint, self.start_scan(spec)),
+            Command::Visits(chunk) => answer!(VisitEndpoint, self.queue_visits(&chunk)),
+            Command::Abort(()) => answer!(AbortEndpoint, self.abort().await),
+            Command::Pause(()) => answer!(PauseEndpoint, self.pause().await),
+            Command::Continue(()) => answer!(ContinueEndpoint, self.continue_scan(sentry).await),
+            Command::Detection(s) => answer!(DetectionEndpoint, self.configure_detection(s)),
+            Command::Sanity(c) => answer!(SanityEndpoint, self.load_sanity(c)),
+            Command::Safety(c) => answer!(SafetyEndpoint, self.configure_safety(c)),
         }
     }
 
@@ -439,12 +417,12 @@ impl<B: Board> Head<B> {
                     // completed it is not sent, and the scan resumes at it.
                     h.acquire(Some(g), Some(here))
                         .await
-                        .and_then(|s| h.watch(s.signal.flags).map(|()| ScanEvent::Sample(s)))
+                        .and_then(|s| run.count_suspect(s.signal.flags).map(|()| ScanEvent::Sample(s)))
                 };
                 self.guarded(link, sentry, inbox, true, visit).await
             }
             Visit::Row(row) => {
-                let turn = async |h: &mut Self| h.sweep_turn(&row, here).await;
+                let turn = async |h: &mut Self| h.sweep_turn(&mut run, &row, here).await;
                 match self.guarded(link, sentry, inbox, true, turn).await {
                     Ok(Ok(SweepTurn::Begun)) => {
                         self.scan = Some(run);

@@ -28,7 +28,7 @@ pub enum Mode {
     Idle,
     Homing,
     Moving,
-    /// A single measurement or a calibration (laser on).
+    /// A single measurement or the reference learned (laser on).
     Measuring,
     Scanning,
     /// A scan is held; moves and measurements (a drift-monitor visit) are
@@ -45,7 +45,7 @@ pub enum Event {
     // Requests.
     Home,
     Move,
-    /// A measurement or a calibration, moving first when asked to.
+    /// A measurement or the reference learned, moving first when asked to.
     Measure,
     Scan,
     Pause,

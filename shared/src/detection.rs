@@ -15,7 +15,7 @@ pub enum Reference {
     /// Sine at the chop frequency.
     Sine,
     /// The signal's own waveform (the chop through the amplifier's response),
-    /// learned by [`crate::icd::CalibrateEndpoint`]: the least-squares
+    /// learned by [`crate::icd::LearnEndpoint`]: the least-squares
     /// amplitude of a known waveform in white noise, which reaches the
     /// Cramér–Rao bound where square and sine references fall short.
     Matched,
@@ -133,18 +133,18 @@ pub struct DetectionReport {
 /// electronics' phase delay and the waveform for [`Reference::Matched`].
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct CalibrateRequest {
+pub struct LearnRequest {
     /// Chop periods averaged (230 = 1 s at 230 Hz).
     pub periods: u16,
 }
 
-/// What the calibration learned.
+/// What the detector learned.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct CalibrationReport {
+pub struct LearnReport {
     /// Phase of the signal relative to the chop, now the reference phase (degrees).
     pub phase_deg: f32,
-    /// Chop amplitude seen during calibration (V at the ADC) and the gain used.
+    /// Chop amplitude seen while learning (V at the ADC) and the gain used.
     pub amplitude_v: f32,
     pub gain_index: u8,
     /// Signal-to-noise ratio of the learned waveform (amplitude / standard error).

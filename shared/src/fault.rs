@@ -119,9 +119,9 @@ pub enum Fault {
     Saturated,
     /// A GPIO write (DIR, enable, gain select, laser) failed.
     Gpio,
-    /// The matched reference was asked for before a calibration learned it.
-    NotCalibrated,
-    /// The calibration signal is too weak or too noisy to learn from.
+    /// The matched reference was asked for before it was learned.
+    NotLearned,
+    /// The signal is too weak or too noisy to learn the reference from.
     WeakSignal,
     /// Consecutive scan points all below the noise floor: the laser is dead
     /// or the beam blocked.
@@ -159,7 +159,7 @@ impl Fault {
             Fault::AdcOverrun => 500,
             Fault::Saturated => 501,
             Fault::Gpio => 600,
-            Fault::NotCalibrated => 502,
+            Fault::NotLearned => 502,
             Fault::WeakSignal => 503,
             Fault::NoSignal => 504,
             Fault::HostSilent => 303,
@@ -188,8 +188,8 @@ impl fmt::Display for Fault {
             Fault::AdcOverrun => f.write_str("ADC block lost (DMA overrun)"),
             Fault::Saturated => f.write_str("detector saturated at the lowest gain"),
             Fault::Gpio => f.write_str("GPIO write failed"),
-            Fault::NotCalibrated => f.write_str("matched reference not calibrated; run calibrate on a strong signal first"),
-            Fault::WeakSignal => f.write_str("calibration signal too weak or too noisy"),
+            Fault::NotLearned => f.write_str("matched reference not learned; learn it on a strong signal first (--learn-at)"),
+            Fault::WeakSignal => f.write_str("signal too weak or too noisy to learn the reference from"),
             Fault::NoSignal => f.write_str("no signal at consecutive scan points: laser dead or beam blocked"),
             Fault::HostSilent => f.write_str("the host went silent during the scan (heartbeat timeout)"),
             Fault::WatchdogReset => f.write_str("the head was restarted by its watchdog (hung firmware); it came up safe"),

@@ -1,5 +1,6 @@
 //! Measurement geometry: the isotropic BRDF coordinates and the three axis
-//! angles of the head (`../shared/spec/head.md`, kinematics).
+//! angles of the head (their lab frame and kinematics:
+//! `firmware/src/kinematics.rs`).
 
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};

@@ -1,13 +1,13 @@
 //! Endpoints and topics: paths and schema-hashed keys (postcard-rpc).
 //!
 //! Requests are answered in order; a scan is accepted at once, its visit
-//! order follows in chunks on [`PlanEndpoint`] (the host plans it), and its
+//! order follows in chunks on [`VisitEndpoint`] (the host plans it), and its
 //! points arrive on [`ScanEventTopic`] while the head still answers
-//! [`StatusEndpoint`], [`PlanEndpoint`] and [`AbortEndpoint`]. Wire-level errors (unknown key, undecodable body)
+//! [`StatusEndpoint`], [`VisitEndpoint`] and [`AbortEndpoint`]. Wire-level errors (unknown key, undecodable body)
 //! come back on postcard-rpc's standard error path,
 //! [`postcard_rpc::standard_icd::ERROR_PATH`].
 
-use crate::detection::{CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings};
+use crate::detection::{DetectionReport, DetectionSettings, LearnReport, LearnRequest};
 use crate::fault::Fault;
 use crate::geometry::{AxisAngles, Geometry};
 use crate::identity::Identity;
@@ -15,7 +15,7 @@ use crate::mechanics::Mechanics;
 use crate::safety::SafetySettings;
 use crate::sample::Sample;
 use crate::sanity::SanityConfig;
-use crate::scan::{PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec};
+use crate::scan::{ScanAccepted, ScanEvent, ScanSpec, VisitChunk, VisitsQueued};
 use crate::status::Status;
 use crate::Reply;
 use postcard_rpc::{endpoints, topics, Endpoint, TopicDirection};
@@ -62,7 +62,7 @@ pub struct MeasureRequest {
 pub enum Latency {
     /// Answered at once: settings, status, abort, a scan's acceptance.
     Prompt,
-    /// Answered after a move, a measured point or a calibration: seconds,
+    /// Answered after a move, a measured point or the reference learned: seconds,
     /// a minute or two for the longest move.
     Motion,
     /// Answered once every axis has homed: minutes.
@@ -108,11 +108,11 @@ pub type MeasureReply = Reply<Sample>;
 pub type ScanReply = Reply<ScanAccepted>;
 pub type DetectionReply = Reply<DetectionReport>;
 pub type SanityReply = Reply<()>;
-pub type CalibrateReply = Reply<CalibrationReport>;
+pub type LearnReply = Reply<LearnReport>;
 pub type SafetyReply = Reply<()>;
 pub type PauseReply = Reply<Status>;
 pub type ContinueReply = Reply<Status>;
-pub type PlanReply = Reply<PlanQueued>;
+pub type VisitReply = Reply<VisitsQueued>;
 
 /// The one table of the head's endpoints: the command each carries, its
 /// marker type, request, response, path and [`Latency`]. It makes
@@ -171,11 +171,11 @@ head_endpoints! {
     | Abort      | AbortEndpoint         | ()                | Status                  | "gonio/abort"        | Prompt   |
     | Detection  | DetectionEndpoint     | DetectionSettings | DetectionReply          | "gonio/detection"    | Prompt   |
     | Sanity     | SanityEndpoint        | SanityConfig      | SanityReply             | "gonio/sanity"       | Prompt   |
-    | Calibrate  | CalibrateEndpoint     | CalibrateRequest  | CalibrateReply          | "gonio/calibrate"    | Motion   |
+    | Learn      | LearnEndpoint         | LearnRequest      | LearnReply              | "gonio/learn"        | Motion   |
     | Safety     | SafetyEndpoint        | SafetySettings    | SafetyReply             | "gonio/safety"       | Prompt   |
     | Pause      | PauseEndpoint         | ()                | PauseReply              | "gonio/pause"        | Motion   |
     | Continue   | ContinueEndpoint      | ()                | ContinueReply           | "gonio/continue"     | Prompt   |
-    | Plan       | PlanEndpoint          | PlanChunk         | PlanReply               | "gonio/plan"         | Motion   |
+    | Visits     | VisitEndpoint         | VisitChunk        | VisitReply              | "gonio/visits"       | Motion   |
 }
 
 topics! {

@@ -8,10 +8,12 @@ use serde::{Deserialize, Serialize};
 /// `ScanSpec` spaced them evenly at the horizon; 12: a sweep scan's retro
 /// points, [`crate::scan::SWEEP_LAYOUT_SINCE`]; 13: a scan's lobe patterns,
 /// `ScanSpec::patterns`, and the reference head's through-splitter zone out
-/// to 5°). Keys are schema-hashed too, so an
+/// to 5°; 14: one name per meaning on the wire: the detector's reference
+/// learning is `gonio/learn` with `LearnRequest` / `LearnReport`, the visit
+/// order `gonio/visits` with `VisitChunk` / `VisitsQueued`). Keys are schema-hashed too, so an
 /// old head answers new requests with `UnknownKey`; the identify endpoint keeps
 /// its types stable so the host can always tell *why*.
-pub const PROTOCOL_VERSION: u16 = 13;
+pub const PROTOCOL_VERSION: u16 = 14;
 
 /// USB identity of the head (pid.codes test range until a PID is assigned).
 pub const USB_VID: u16 = 0x1209;

@@ -26,7 +26,7 @@ pub mod status;
 pub mod sweep;
 pub mod wire;
 
-pub use detection::{CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Reference};
+pub use detection::{DetectionReport, DetectionSettings, LearnReport, LearnRequest, Reference};
 pub use fault::{Axis, Fault, Field, Unreachable};
 pub use geometry::{AxisAngles, Geometry};
 pub use identity::{Capabilities, Identity, PROTOCOL_VERSION};
@@ -36,7 +36,9 @@ pub use models::{ModelSpec, MODELS};
 pub use safety::SafetySettings;
 pub use sample::{Sample, SampleFlags, Signal};
 pub use sanity::{SanityConfig, SanityKind, SanityModel};
-pub use scan::{AngleRange, PlanChunk, PlanQueued, ScanAccepted, ScanEvent, ScanSpec, SweepRow, SweepScan, Visit, PLAN_CHUNK, PLAN_QUEUE};
+pub use scan::{
+    AngleRange, ScanAccepted, ScanEvent, ScanSpec, SweepRow, SweepScan, Visit, VisitChunk, VisitsQueued, VISIT_CHUNK, VISIT_QUEUE,
+};
 pub use status::{HeadState, Status};
 pub use sweep::{SweepLobe, SweepReport, SweepRequest, SweptSample};
 

@@ -17,11 +17,11 @@
 //! tilted so that its normal lies at θi from `l`, `tan Δφ_H = cos θi·tan γ`
 //! (γ = 0 is the retro half of the plane of incidence, γ = ±180° its mirror
 //! half; the two agree at 0, ±90° and ±180°). Rows evenly spaced at the
-//! horizon instead, as they were, are turned up to `1/cos θi` times the step
-//! apart next to the plane of incidence (19.4° for 10° steps at θi = 60°):
-//! across the mirror lobe at 60° they lay twice as far apart as the grid's
-//! points, and retro-phong settled on n = 45 for the glass beads where the
-//! grid's fit has 77.
+//! horizon instead would be turned up to `1/cos θi` times the step apart
+//! next to the plane of incidence (19.4° for 10° steps at θi = 60°): across
+//! the mirror lobe at 60° twice as far apart as the grid's points, and a
+//! model outside the material's family, fitted to them, settles elsewhere
+//! than on the grid (`docs/decisions/009-rows-turned-about-the-laser.md`).
 
 use libm::{atan2f, cosf, sinf};
 

@@ -16,7 +16,7 @@ bitflags::bitflags! {
         const SATURATED = 1 << 0;
         /// Amplitude below three times its noise estimate.
         const BELOW_NOISE = 1 << 1;
-        /// Phase off the calibrated reference phase.
+        /// Phase off the learned reference phase.
         const PHASE_OFF = 1 << 2;
         /// An ADC block was lost or late during integration.
         const OVERRUN = 1 << 3;
@@ -30,8 +30,8 @@ bitflags::bitflags! {
     }
 }
 
-/// The schema of the `u16` newtype the flags were before they were a bit
-/// set: the wire bytes are the same, and so are the endpoint keys.
+/// The schema of a plain `u16` newtype: the bit set travels as one, so its
+/// wire bytes and the endpoint keys are those of a `u16` newtype.
 impl Schema for SampleFlags {
     const SCHEMA: &'static NamedType = &NamedType {
         name: "SampleFlags",
@@ -78,8 +78,8 @@ pub struct Sample {
     /// Geometry actually reached, from the step counts.
     pub reached: Geometry,
     pub axes: AxisAngles,
-    /// What the detector made of it (last on the wire, as its fields were
-    /// when they were the sample's own).
+    /// What the detector made of it (last, so that the wire bytes are those
+    /// of the same fields written inline in the sample).
     pub signal: Signal,
 }
 
@@ -113,8 +113,8 @@ pub struct Signal {
 mod tests {
     use super::*;
 
-    /// The bit set keeps the schema (and so the endpoint keys) and the wire
-    /// bytes of the plain `u16` newtype it replaced.
+    /// The bit set has the schema (and so the endpoint keys) and the wire
+    /// bytes of a plain `u16` newtype.
     #[test]
     fn the_flags_keep_the_wire_format_of_a_u16_newtype() {
         #[derive(Serialize, Schema)]

@@ -465,19 +465,19 @@ pub enum ScanEvent {
 
 /// Visit positions a chunk of the plan carries: 32 indices of at most five
 /// bytes each keep a chunk inside one frame.
-pub const PLAN_CHUNK: usize = 32;
+pub const VISIT_CHUNK: usize = 32;
 /// Visit positions the head holds ahead of the point it is at (1 KiB). At
 /// 150 ms or more per measured point, 256 points carry a scan through 38 s
 /// of an absent host; when they run out the head waits, its host watch
 /// running.
-pub const PLAN_QUEUE: usize = 256;
+pub const VISIT_QUEUE: usize = 256;
 
 /// The next stretch of a scan's visit order, from the host (which plans it:
 /// f64 at GHz, where the head would spend seconds;
 /// `docs/decisions/001-host-plans-the-visit-order.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PlanChunk {
+pub struct VisitChunk {
     /// The run it belongs to (`ScanAccepted::run`), so a late chunk of an
     /// earlier run is refused; 0 for the scan the head holds now (a script
     /// that sends its frames blind).
@@ -485,13 +485,13 @@ pub struct PlanChunk {
     /// Visit position of the first index.
     pub first_order: u32,
     /// Canonical indices (`ScanSpec::point`) in visit order.
-    pub indices: heapless::Vec<u32, PLAN_CHUNK>,
+    pub indices: heapless::Vec<u32, VISIT_CHUNK>,
 }
 
 /// What the head holds of the plan after a chunk.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
-pub struct PlanQueued {
+pub struct VisitsQueued {
     /// Visit position the next chunk must start at: a chunk that starts
     /// elsewhere, or the part of one that does not fit, is not taken.
     pub next_order: u32,

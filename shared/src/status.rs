@@ -12,7 +12,7 @@ pub enum HeadState {
     Idle,
     Homing,
     Moving,
-    /// A measurement or a calibration.
+    /// A measurement or the reference learned.
     Measuring,
     /// A scan is running; `next_order` is the next point to visit.
     Scanning {

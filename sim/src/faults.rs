@@ -1,5 +1,5 @@
-//! Faults the simulated head can be made to suffer (issue #8's fault
-//! matrix, `gonio scan --sim --inject`): on its link to the host, and in its
+//! Faults the simulated head can be made to suffer (the fault
+//! matrix of docs/faults.md, `gonio scan --sim --inject`): on its link to the host, and in its
 //! hardware. The plan is shared (`Arc`) between the host and every head
 //! built from the same `SimConfig`, so a one-off fault fires once even when
 //! the host reconnects to a fresh head, and a test can clear a lasting fault

@@ -6,9 +6,9 @@ use gonio_acquire::scan_order::visit_order;
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::dispatch;
 use gonio_firmware::motion::PARK;
-use gonio_shared::icd::{PlanEndpoint, ScanEndpoint, ScanEventTopic};
+use gonio_shared::icd::{ScanEndpoint, ScanEventTopic, VisitEndpoint};
 use gonio_shared::wire::{check, framing};
-use gonio_shared::{PlanChunk, ScanEvent, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
+use gonio_shared::{ScanEvent, ScanSpec, VisitChunk, VISIT_CHUNK, VISIT_QUEUE};
 use gonio_sim::Sent;
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Key, Topic};
@@ -49,11 +49,11 @@ where
 /// chunks name run 0, the scan the head holds.
 pub fn scan_frames(spec: &ScanSpec) -> Vec<Vec<u8>> {
     let first = spec.first_order as usize;
-    let order: Vec<u32> = visit_order(&REFERENCE, spec, PARK).skip(first).take(PLAN_QUEUE).collect();
-    let chunks = order.chunks(PLAN_CHUNK).enumerate().map(|(j, c)| {
-        send::<PlanEndpoint>(&PlanChunk {
+    let order: Vec<u32> = visit_order(&REFERENCE, spec, PARK).skip(first).take(VISIT_QUEUE).collect();
+    let chunks = order.chunks(VISIT_CHUNK).enumerate().map(|(j, c)| {
+        send::<VisitEndpoint>(&VisitChunk {
             run: 0,
-            first_order: (first + j * PLAN_CHUNK) as u32,
+            first_order: (first + j * VISIT_CHUNK) as u32,
             indices: c.iter().copied().collect(),
         })
     });

@@ -7,14 +7,14 @@ use crate::frames::{request, sealed};
 use gonio_analysis::formats::{alta, brdf_csv};
 use gonio_firmware::dispatch;
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, MeasureEndpoint,
-    MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, PlanEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint,
-    StatusEndpoint,
+    AbortEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, IdentifyEndpoint, LearnEndpoint, MeasureEndpoint,
+    MeasureRequest, MechanicsEndpoint, MoveEndpoint, PauseEndpoint, SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
+    VisitEndpoint,
 };
 use gonio_shared::wire::check;
 use gonio_shared::wire::framing::{self, Decoder};
 use gonio_shared::{
-    AngleRange, CalibrateRequest, DetectionSettings, Geometry, SafetySettings, SanityConfig, SanityKind, SanityModel, ScanSpec,
+    AngleRange, DetectionSettings, Geometry, LearnRequest, SafetySettings, SanityConfig, SanityKind, SanityModel, ScanSpec,
 };
 use gonio_sim::{FrameHead, SimConfig};
 
@@ -126,11 +126,11 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
             }),
         ),
         (
-            "plan",
-            request::<PlanEndpoint>(&gonio_shared::PlanChunk {
+            "visits",
+            request::<VisitEndpoint>(&gonio_shared::VisitChunk {
                 run: 1,
                 first_order: 0,
-                indices: (0..gonio_shared::PLAN_CHUNK as u32).collect(),
+                indices: (0..gonio_shared::VISIT_CHUNK as u32).collect(),
             }),
         ),
         ("abort", request::<AbortEndpoint>(&())),
@@ -138,7 +138,7 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         ("continue", request::<ContinueEndpoint>(&())),
         ("detection", request::<DetectionEndpoint>(&DetectionSettings::default())),
         ("sanity", request::<SanityEndpoint>(&sanity)),
-        ("calibrate", request::<CalibrateEndpoint>(&CalibrateRequest { periods: 23 })),
+        ("learn", request::<LearnEndpoint>(&LearnRequest { periods: 23 })),
         (
             "safety",
             request::<SafetyEndpoint>(&SafetySettings {
@@ -181,8 +181,8 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
     ));
     out.push((
         "dispatch",
-        "calibrate-sanity".into(),
-        session(&["home", "move", "calibrate", "sanity", "measure"]),
+        "learn-sanity".into(),
+        session(&["home", "move", "learn", "sanity", "measure"]),
     ));
     out.push((
         "dispatch",

@@ -1,4 +1,4 @@
-//! The trials of `safety-bench` (issue #17), as a library so that a test
+//! The trials of `safety-bench`, as a library so that a test
 //! runs a few of them and checks the same bars; the binary's doc says what
 //! each figure is.
 

@@ -26,8 +26,8 @@ pub async fn scan_and_read(session: &mut Session, spec: &ScanSpec, dir: &Path) -
 pub async fn session(target: Arc<dyn Target>) -> Session {
     let setup = Setup {
         settings: DetectionSettings::default(),
-        calibrate_at: None,
-        calibration_periods: 0,
+        learn_at: None,
+        learning_periods: 0,
     };
     let mut s = Session::connect(target, setup, Operator::Silent).await.unwrap();
     s.start().await.unwrap();

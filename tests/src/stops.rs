@@ -1,4 +1,4 @@
-//! Stops measured on the simulated head (issue #17): a trigger (abort, a
+//! Stops measured on the simulated head: a trigger (abort, a
 //! pulled cable, a silent host, the E-STOP) at a chosen moment of simulated
 //! time in the middle of an activity, and what the virtual hardware saw:
 //! when the laser went dark, when the last step fell, how the step

@@ -65,7 +65,7 @@ pub fn fault() -> impl Strategy<Value = Fault> {
         Just(Fault::AdcOverrun),
         Just(Fault::Saturated),
         Just(Fault::Gpio),
-        Just(Fault::NotCalibrated),
+        Just(Fault::NotLearned),
         Just(Fault::WeakSignal),
         Just(Fault::NoSignal),
         Just(Fault::HostSilent),

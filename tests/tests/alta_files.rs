@@ -1,4 +1,4 @@
-//! Issue #16: ALTA files as ALTA writes and reads them. Every input
+//! ALTA files as ALTA writes and reads them. Every input
 //! parametrization the reader knows is written here by an independent
 //! computation from `(θi, θo, Δφ)` (the inverse of the reader's, from the
 //! light and view vectors) and must read back as the same geometry; files

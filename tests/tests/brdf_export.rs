@@ -1,4 +1,4 @@
-//! Issue #7: the Disney BRDF Explorer export. Every model's `.brdf` file is
+//! The Disney BRDF Explorer export. Every model's `.brdf` file is
 //! checked three ways: naga (pure Rust, so everywhere `cargo test` runs)
 //! parses its GLSL as a fragment shader with the parameters as uniforms and
 //! validates the module (types, names, calls, control flow); glslangValidator

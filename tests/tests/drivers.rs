@@ -186,7 +186,7 @@ fn delayed(m: usize, low: u16, high: u16, delay: usize, periods: usize) -> Vec<V
 }
 
 #[test]
-fn calibration_learns_the_phase_and_the_matched_reference_round_trips() {
+fn learning_finds_the_phase_and_the_matched_reference_round_trips() {
     let m = 64;
     let s = DetectionSettings {
         periods: 23,
@@ -194,7 +194,7 @@ fn calibration_learns_the_phase_and_the_matched_reference_round_trips() {
         ..DetectionSettings::default()
     };
     let mut pins = Pins::idle();
-    // The gain (0) is written each time the chop starts: calibration, then
+    // The gain (0) is written each time the chop starts: learning, then
     // the first measurement after the reconfiguration.
     let [a, b] = gain_bits(0);
     let [c, d] = gain_bits(0);
@@ -206,12 +206,12 @@ fn calibration_learns_the_phase_and_the_matched_reference_round_trips() {
         reference: Kind::Matched,
         ..s
     };
-    assert_eq!(det.configure(&mut hw, &REFERENCE, matched), Err(Fault::NotCalibrated));
+    assert_eq!(det.configure(&mut hw, &REFERENCE, matched), Err(Fault::NotLearned));
 
-    // Calibrate on a strong chop delayed by d = 4 of 64 samples. Against the
+    // Learn on a strong chop delayed by d = 4 of 64 samples. Against the
     // square references that is I ∝ 32 − 2d and Q ∝ 2d.
     hw.adc.periods.extend(delayed(m, 1000, 2500, 4, 1 + 230));
-    let report = block_on(det.calibrate(&mut hw, &REFERENCE, 230)).unwrap();
+    let report = block_on(det.learn(&mut hw, &REFERENCE, 230)).unwrap();
     let want = 8f32.atan2(24.0).to_degrees();
     assert!((report.phase_deg - want).abs() < 1e-3, "{report:?}");
     assert!(report.snr > 1e3);
@@ -228,7 +228,7 @@ fn calibration_learns_the_phase_and_the_matched_reference_round_trips() {
     );
     assert!(!weak.flags.contains(SampleFlags::PHASE_OFF));
 
-    // A quarter period later than calibrated: flagged as off phase.
+    // A quarter period later than learned: flagged as off phase.
     hw.adc.periods.extend(delayed(m, 1000, 2500, 20, 1 + 23));
     let late = block_on(det.measure(&mut hw, &REFERENCE)).unwrap();
     assert!(late.flags.contains(SampleFlags::PHASE_OFF), "{late:?}");
@@ -236,7 +236,7 @@ fn calibration_learns_the_phase_and_the_matched_reference_round_trips() {
 }
 
 #[test]
-fn calibration_refuses_a_weak_or_short_signal() {
+fn learning_refuses_a_weak_or_short_signal() {
     let s = DetectionSettings {
         auto_range: false,
         ..DetectionSettings::default()
@@ -248,16 +248,16 @@ fn calibration_refuses_a_weak_or_short_signal() {
     let mut hw = pins.into_hardware(CheckedDelay::new(&[]));
     let mut det = Detector::new::<ScriptedAdc>(s);
     assert_eq!(
-        block_on(det.calibrate(&mut hw, &REFERENCE, 3)),
+        block_on(det.learn(&mut hw, &REFERENCE, 3)),
         Err(Fault::InvalidValue(Field::Periods))
     );
     // No chop at all: nothing to learn from.
     hw.adc.periods.extend(delayed(64, 1000, 1000, 0, 1 + 50));
-    assert_eq!(block_on(det.calibrate(&mut hw, &REFERENCE, 50)), Err(Fault::WeakSignal));
+    assert_eq!(block_on(det.learn(&mut hw, &REFERENCE, 50)), Err(Fault::WeakSignal));
     done(&mut hw);
 }
 
-/// Issue #15 defect 8: a trigger rate the ADC cannot convert (84-cycle
+/// A trigger rate the ADC cannot convert (84-cycle
 /// sampling at 21 MHz: 218.75 kS/s) is refused instead of losing samples
 /// silently; the default settings and the highest accepted rate fit.
 #[test]

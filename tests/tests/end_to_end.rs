@@ -176,7 +176,7 @@ async fn refused_commands_move_nothing() {
         ..DetectionSettings::default()
     };
     let err = head.request::<DetectionEndpoint>(&matched).await.unwrap_err();
-    assert!(format!("{err:#}").contains("not calibrated"), "{err:#}");
+    assert!(format!("{err:#}").contains("not learned"), "{err:#}");
     head.request::<HomeEndpoint>(&HomeRequest::ALL).await.unwrap();
     let before = head.request::<StatusEndpoint>(&()).await.unwrap();
     for (g, why) in [
@@ -300,7 +300,7 @@ async fn lost_answers_and_requests_over_a_port_are_recovered_by_reconnecting() {
     session.close().await;
 }
 
-/// Issue #17 over the pseudo-terminal, as with a real head: the host's port
+/// A stop over the pseudo-terminal, as with a real head: the host's port
 /// closes while the head moves between two scan points with the laser on.
 /// The head sees the terminal hang up, darkens the laser and brakes at
 /// once: the stages stand well short of the second point although the

@@ -1,4 +1,4 @@
-//! Issue #8, the head's half of the fault matrix (docs/faults.md): each
+//! The head's half of the fault matrix (docs/faults.md): each
 //! hardware fault, host silence and a pulled cable injected into the
 //! simulated head, driven frame by frame. For each: the fault is reported
 //! with its code, and when it is reported the laser is off and every motor
@@ -128,7 +128,7 @@ fn a_saturated_adc_stops_the_scan_after_a_run_of_saturated_points() {
     let (reason, next, samples) = stopped(&scan("saturated@30", 0.0).1);
     assert_eq!(reason, Fault::Saturated);
     // Points 30..37 saturate; the eighth stops the scan and is measured again on resume.
-    assert_eq!(next, SHADOWED + 30 + gonio_firmware::head::SUSPECT_RUN - 1);
+    assert_eq!(next, SHADOWED + 30 + gonio_firmware::scan_run::SUSPECT_RUN - 1);
     assert_eq!(samples, (next - SHADOWED) as usize);
 }
 
@@ -136,7 +136,7 @@ fn a_saturated_adc_stops_the_scan_after_a_run_of_saturated_points() {
 fn a_dead_laser_stops_the_scan_after_a_run_of_dark_points() {
     let (reason, next, _) = stopped(&scan("laser-dead@30", 0.0).1);
     assert_eq!(reason, Fault::NoSignal);
-    assert_eq!(next, SHADOWED + 30 + gonio_firmware::head::SUSPECT_RUN - 1);
+    assert_eq!(next, SHADOWED + 30 + gonio_firmware::scan_run::SUSPECT_RUN - 1);
 }
 
 #[test]

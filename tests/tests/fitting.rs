@@ -7,7 +7,7 @@ use gonio_analysis::formats::alta;
 use gonio_brdf::{ModelId, Param};
 use gonio_tests::synthetic;
 
-/// Issue #6: retro-phong's parameters within 5 % (or 2 standard errors) of
+/// Retro-phong's parameters within 5 % (or 2 standard errors) of
 /// the truth, from 7 000 samples with 2 % noise, no starting point, weighted
 /// by each sample's uncertainty. Ten noise seeds: a 2σ band misses one
 /// draw in twenty, so each parameter may miss once; the standard errors are
@@ -140,7 +140,7 @@ fn fitting_units_and_weights_reach_the_same_noise_free_optimum() {
     assert!(format!("{e:#}").contains("sample 8 has none"), "{e:#}");
 }
 
-/// Issue #7: ALTA export → import reproduces every value to 1e-12 relative
+/// ALTA export → import reproduces every value to 1e-12 relative
 /// (in fact exactly: numbers are written in their shortest round-trip form).
 #[test]
 fn alta_round_trip_is_exact() {
@@ -160,7 +160,7 @@ fn alta_round_trip_is_exact() {
     }
 }
 
-/// Issue #19: an input every sample shares (a reference plate 1 % off, a
+/// An input every sample shares (a reference plate 1 % off, a
 /// stage zero) does not average out over the samples. The covariance adds
 /// the move of the optimum it causes: refitting data shifted by exactly that
 /// input's effect moves each parameter by the square root of what it added

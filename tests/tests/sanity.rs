@@ -37,8 +37,8 @@ async fn dust_is_flagged_and_clean_data_is_not() {
     let material = Material::tape();
     let setup = Setup {
         settings: DetectionSettings::default(),
-        calibrate_at: None,
-        calibration_periods: 0,
+        learn_at: None,
+        learning_periods: 0,
     };
     let mut session = Session::connect(Arc::new(Simulated(sim.clone())), setup, Operator::Silent)
         .await

@@ -1,4 +1,4 @@
-//! Issue #17, stop means stop: the step executor's brake on its own, and
+//! Stop means stop: the step executor's brake on its own, and
 //! the firmware on the simulated head stopped in the middle of a move, a
 //! measurement and a scan by an abort, the E-STOP and the idle watch; a
 //! paused scan continued. docs/faults.md#stops states what is checked.

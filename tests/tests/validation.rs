@@ -1,14 +1,14 @@
-//! Issue #8: commands are validated at the boundary. Random sequences of
+//! Commands are validated at the boundary. Random sequences of
 //! commands, valid ones among them and many with NaN, infinite or
 //! out-of-range fields, are served to the firmware on the simulated head in
 //! one session; after every refused command the stages are where they were,
 //! the laser was not switched on and no driver was enabled.
 
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint,
+    AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, LearnEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint,
     SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
-use gonio_shared::{CalibrateRequest, Fault, Geometry, SafetySettings};
+use gonio_shared::{Fault, Geometry, LearnRequest, SafetySettings};
 use gonio_sim::{FrameHead, Sent, SimConfig};
 use gonio_tests::frames::{refusal, send};
 use gonio_tests::strategies::{any_f32, detection_settings, geometry, sanity_config, scan_spec};
@@ -31,7 +31,7 @@ fn command() -> impl Strategy<Value = (Vec<u8>, bool)> {
         2 => scan_spec().prop_filter("an invalid scan", |s| s.validate().is_err()).prop_map(|s| (send::<ScanEndpoint>(&s), true)),
         2 => detection_settings().prop_map(|d| (send::<DetectionEndpoint>(&d), true)),
         1 => sanity_config().prop_map(|c| (send::<SanityEndpoint>(&c), true)),
-        1 => any::<u16>().prop_map(|periods| (send::<CalibrateEndpoint>(&CalibrateRequest { periods }), true)),
+        1 => any::<u16>().prop_map(|periods| (send::<LearnEndpoint>(&LearnRequest { periods }), true)),
         1 => any_f32().prop_map(|t| (send::<SafetyEndpoint>(&SafetySettings {
             host_timeout_s: t,
             ..SafetySettings::default()
@@ -45,7 +45,7 @@ fn command() -> impl Strategy<Value = (Vec<u8>, bool)> {
 fn refused(f: Fault) -> bool {
     matches!(
         f,
-        Fault::InvalidValue(_) | Fault::Unreachable(_) | Fault::NotHomed | Fault::Busy | Fault::NotCalibrated
+        Fault::InvalidValue(_) | Fault::Unreachable(_) | Fault::NotHomed | Fault::Busy | Fault::NotLearned
     )
 }
 

@@ -1,4 +1,4 @@
-//! Calibration of the detection chain on a strong, steady signal: the mean
+//! Learning the detection chain on a strong, steady signal: the mean
 //! chop-period waveform (with the offset drift removed), its phase against
 //! the square and sine references, and the matched reference built from it.
 
@@ -6,7 +6,7 @@ use super::nuisance::Nuisance;
 use super::reference::{Reference, MAX_M};
 use gonio_shared::Reference as Kind;
 
-/// What a calibration learned, valid for one number of samples per period.
+/// What learning found, valid for one number of samples per period.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Learned {
     m: usize,
@@ -27,7 +27,7 @@ impl Learned {
     }
 }
 
-/// Accumulates periods for a calibration.
+/// Accumulates periods to learn from.
 pub struct Learner {
     m: usize,
     sums: [i64; MAX_M],

@@ -75,8 +75,8 @@ pub struct Design {
 /// one stretch at configure: 657 000 instructions for 23 periods, 8.7 M
 /// (52 ms) for 256 on the chip (`chip-bench`'s `design_instructions`); a
 /// longer integration (up to 50 000 periods, seconds of work at once, past
-/// the watchdog) accumulates its own Gram matrix over its periods, as every
-/// integration used to (42 000 instructions a period against 8 500).
+/// the watchdog) accumulates its own Gram matrix over its periods, at about
+/// five times a factored design's cost per period (`chip-bench`).
 const PRECOMPUTE_MAX_PERIODS: u32 = 256;
 
 impl Design {

@@ -44,7 +44,7 @@ impl Table {
     }
 
     /// `Σ k·r_k`: the response of this reference to a unit-slope ramp. Summed
-    /// in integers (exact, as the f64 sum was: |Σ| < 2^32) and converted once.
+    /// in integers (exact: |Σ| < 2^32) and converted once.
     pub fn ramp_moment(&self) -> f64 {
         self.values().iter().enumerate().map(|(k, &r)| k as i64 * r as i64).sum::<i64>() as f64
     }
@@ -80,7 +80,7 @@ pub struct Reference {
     unit_i: f64,
     /// Matched sum per unit of (boxcar-equivalent) chop amplitude.
     unit_matched: f64,
-    /// Calibrated phase of the electronics for this reference kind, as its
+    /// Learned phase of the electronics for this reference kind, as its
     /// cosine and sine: every period's amplitude projects on it, and `libm`'s
     /// f64 cosine and sine cost thousands of instructions each on the chip.
     phase_ref: (f64, f64),
@@ -128,7 +128,7 @@ impl Reference {
             let w = l.waveform();
             let peak = w.iter().fold(0.0f64, |a, x| a.max(x.abs())).max(1e-12);
             let t = Table::from_fn(m, |k| FULL * w[k] / peak);
-            // Scale: the matched amplitude of the calibration waveform equals
+            // Scale: the matched amplitude of the learned waveform equals
             // its phase-projected square amplitude.
             let boxcar = r.project(r.i.dot(w), r.q.dot(w));
             if boxcar.abs() > 0.0 {

@@ -13,8 +13,9 @@
 //! change of formula), so no block straddles two phases. A cruise is one block.
 //!
 //! Why not Klipper's greedy compression, which checks every step of every
-//! candidate block: measured on the Cortex-M4 (`chip-bench`, soft-float
-//! f64), it took 203 M instructions (1.2 s) to plan one three-axis move. The
+//! candidate block: on the Cortex-M4 (soft-float f64) that costs hundreds of
+//! millions of instructions, over a second, per three-axis move
+//! (`docs/decisions/006-step-blocks-from-an-error-bound.md`). The
 //! bound needs two evaluations of the schedule per block and a bisection in
 //! f32 for its length, and the blocks come one at a time
 //! ([`ProfileBlocks`]), so the planner can yield between them.

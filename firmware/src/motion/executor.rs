@@ -127,7 +127,7 @@ impl Track {
 
     /// Loads the next block after the step at `from` (Q32 ticks); the queue
     /// holds no empty blocks and no interval below one ([`Executor::push`]).
-    /// Inline: out of line, its call and frame were a tenth of the worst
+    /// Inline: out of line, its call and frame cost a tenth of the worst
     /// event (three axes loading at one tick).
     #[inline(always)]
     fn load(&mut self, from: u64) {
@@ -308,8 +308,8 @@ impl<P: OutputPin> Executor<P> {
     /// every queue is empty and every pin low.
     pub fn fire(&mut self, now: u32) -> Option<u32> {
         let now = now.min(NEVER - 1);
-        // The three axes written out (not a loop): the loop's index, track
-        // address and spilled registers were a tenth of the worst event.
+        // The three axes written out (not a loop): a loop's index, track
+        // address and spilled registers cost a tenth of the worst event.
         let [a, b, c] = &mut self.tracks;
         let [pa, pb, pc] = &mut self.pins;
         let (pulse, collisions) = (self.pulse_ticks, &mut self.collisions);

@@ -1,5 +1,5 @@
 //! The person at the instrument, as the library sees them: what it tells
-//! them while it works (notices: a calibration's result, a recovery under
+//! them while it works (notices: the reference learned, a recovery under
 //! way; progress bars), and what it asks them to do by hand (mount the
 //! reference plate). The command line chooses where notices go: stderr and a bar on a terminal
 //! run, nowhere under `--json` (whose output says it all) or in tests.

@@ -1,5 +1,5 @@
 //! A session with a head for a scan: connect, prepare it (detection
-//! settings, homing, the detector's calibration, the host watch), and find it
+//! settings, homing, the detector's reference learned, the host watch), and find it
 //! again after the link was lost: the same head (by serial number) on the
 //! same port or, for a real head plugged back in, on whichever port it came
 //! back on; then prepare it again, since it may have been power-cycled.
@@ -9,9 +9,9 @@ use crate::operator::Operator;
 use crate::target::Target;
 use anyhow::{bail, Context, Result};
 use gonio_shared::icd::{
-    AbortEndpoint, CalibrateEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MoveEndpoint, SafetyEndpoint, StatusEndpoint,
+    AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, LearnEndpoint, MoveEndpoint, SafetyEndpoint, StatusEndpoint,
 };
-use gonio_shared::{CalibrateRequest, CalibrationReport, DetectionReport, DetectionSettings, Geometry, Reference, SafetySettings};
+use gonio_shared::{DetectionReport, DetectionSettings, Geometry, LearnReport, LearnRequest, Reference, SafetySettings};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -29,8 +29,8 @@ pub const HOST_TIMEOUT_S: f32 = 20.0;
 pub struct Setup {
     pub settings: DetectionSettings,
     /// Where to learn the detection chain (matched reference), if anywhere.
-    pub calibrate_at: Option<Geometry>,
-    pub calibration_periods: u16,
+    pub learn_at: Option<Geometry>,
+    pub learning_periods: u16,
 }
 
 pub struct Session {
@@ -41,7 +41,7 @@ pub struct Session {
     /// Where notices of the preparation and of recoveries go.
     pub operator: Operator,
     pub detection: Option<DetectionReport>,
-    pub calibration: Option<CalibrationReport>,
+    pub learned: Option<LearnReport>,
     /// Times the link was found again.
     pub reconnections: u32,
 }
@@ -57,7 +57,7 @@ impl Session {
             head: Some(head),
             operator,
             detection: None,
-            calibration: None,
+            learned: None,
             reconnections: 0,
         })
     }
@@ -68,32 +68,32 @@ impl Session {
     }
 
     /// Stops whatever the head was doing, then detection settings, homing,
-    /// calibration of the detection chain, the host watch.
+    /// the detector's reference learned, the host watch.
     async fn prepare(&mut self) -> Result<()> {
         let head = self.head();
         // A head found again may still be running the scan whose answer was
         // lost (its events then went nowhere): stop it first, or every
         // setting below would be refused as busy.
         head.request::<AbortEndpoint>(&()).await?;
-        // The chop timing is set first: a calibration holds for that timing.
+        // The chop timing is set first: a learned reference holds for that timing.
         head.request::<DetectionEndpoint>(&DetectionSettings {
             reference: Reference::Square,
             ..self.setup.settings
         })
         .await?;
         head.request::<HomeEndpoint>(&HomeRequest::ALL).await?;
-        let calibration = match self.setup.calibrate_at {
+        let learned = match self.setup.learn_at {
             Some(g) => {
                 head.request::<MoveEndpoint>(&g)
                     .await
-                    .context("moving to the calibration geometry")?;
+                    .context("moving to where the reference is learned")?;
                 let c = head
-                    .request::<CalibrateEndpoint>(&CalibrateRequest {
-                        periods: self.setup.calibration_periods,
+                    .request::<LearnEndpoint>(&LearnRequest {
+                        periods: self.setup.learning_periods,
                     })
                     .await?;
                 self.operator.notice(format_args!(
-                    "detector calibrated: phase {:.1}°, {:.3} V at gain {}, SNR {:.0}",
+                    "reference learned: phase {:.1}°, {:.3} V at gain {}, SNR {:.0}",
                     c.phase_deg, c.amplitude_v, c.gain_index, c.snr
                 ));
                 Some(c)
@@ -111,8 +111,8 @@ impl Session {
         })
         .await?;
         self.detection = Some(detection);
-        if calibration.is_some() {
-            self.calibration = calibration;
+        if learned.is_some() {
+            self.learned = learned;
         }
         Ok(())
     }

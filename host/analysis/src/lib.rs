@@ -1,6 +1,6 @@
 //! Analysis of stored scans: what a scan directory's files (`gonio-scan-dir`)
 //! hold, turned into BRDF values and what a physicist reads of them. Reads
-//! files only: links no tokio, serial port or simulated head.
+//! files only: links no tokio and no serial port.
 //!
 //! [`calibration`] scales raw samples by the reference plate, with each
 //! value's budget from [`uncertainty`]; [`fit`] fits the models of

@@ -1,4 +1,4 @@
-//! Issue #7's calibration on the simulated head: reference plate, laser
+//! The reference-plate calibration on the simulated head: reference plate, laser
 //! drift of ±5 % during the scan, monitor readings, `gonio calibrate`, and
 //! the calibrated BRDF against the virtual material's truth.
 

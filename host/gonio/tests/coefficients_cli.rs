@@ -1,4 +1,4 @@
-//! Issue #19: `gonio coefficients` (R_A, R_L) from a model, a fit and
+//! `gonio coefficients` (R_A, R_L) from a model, a fit and
 //! measured data, and the uncertainty budget carried from the calibrated
 //! samples through the fit to the coefficients, on an imperfect simulated head.
 

@@ -1,4 +1,4 @@
-//! Issue #8, the host's half of the fault matrix (docs/faults.md): every
+//! The host's half of the fault matrix (docs/faults.md): every
 //! fault injected into the simulated head (`gonio scan --sim --inject`), run
 //! as a user runs it. Link faults and transient hardware faults are
 //! recovered during the scan; lasting hardware faults end it with the fault

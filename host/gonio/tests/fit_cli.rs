@@ -397,7 +397,7 @@ fn mistakes_name_the_valid_choices_or_the_line() {
     }
 }
 
-/// Issue #16: an ALTA file without `#PARAM_OUT` (ALTA's UNKNOWN_OUTPUT) is
+/// An ALTA file without `#PARAM_OUT` (ALTA's UNKNOWN_OUTPUT) is
 /// fitted, with a warning that says what was assumed; `--units` says what
 /// the values are, and the fit follows it.
 #[test]
@@ -430,7 +430,7 @@ fn a_file_that_does_not_say_its_units_is_fitted_as_told() {
     assert!((v["params"]["kd"].as_f64().unwrap() - 0.5).abs() < 1e-9, "{v}");
 }
 
-/// Issue #16, bad input: no data, all-zero values, fewer samples than
+/// Bad input: no data, all-zero values, fewer samples than
 /// parameters are errors; negative values and a single incidence angle are
 /// warnings that name the problem; never a panic.
 #[test]
@@ -487,7 +487,7 @@ fn doubtful_data_is_refused_or_named() {
     }
 }
 
-/// Issue #16: the search box holds data in relative units (its amplitudes
+/// The search box holds data in relative units (its amplitudes
 /// follow the data's scale), `--bounds` replaces it, and a fit that ends on
 /// its edge says so (`at_bound` in JSON, a warning in text).
 #[test]

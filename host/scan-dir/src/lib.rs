@@ -9,6 +9,7 @@
 //! | `reference.csv`, `samples.csv.part`, `samples.csv` | [`samples`] (swept samples' geometry: [`swept`]) |
 //! | `run.json` | [`run`] |
 //! | `calibrated.csv` | [`calibrated`] |
+//! | `calibration.json` | named here; written by the calibration (`gonio-analysis`) |
 
 pub mod calibrated;
 pub mod record;
@@ -63,6 +64,12 @@ impl<'a> ScanDir<'a> {
     /// `calibrated.csv`: the samples in BRDF units, written by `gonio calibrate`.
     pub fn calibrated(&self) -> PathBuf {
         self.root.join("calibrated.csv")
+    }
+
+    /// `calibration.json`: the plate's scale, splitter factor and drift that
+    /// `gonio calibrate` found (its fields are the calibration's own).
+    pub fn calibration(&self) -> PathBuf {
+        self.root.join("calibration.json")
     }
 
     /// What a new scan must not overwrite: a completed scan's samples and record.

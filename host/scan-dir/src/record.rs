@@ -49,7 +49,7 @@ impl SimHead {
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ScanRecord {
-    /// Named `target` in records written before it was `head`.
+    /// `target` in the records of an earlier gonio.
     #[serde(alias = "target")]
     pub head: RecordedHead,
     pub spec: ScanSpec,
@@ -154,7 +154,7 @@ pub struct DetectorChoice {
     /// Demodulation reference.
     pub reference: Reference,
     /// Where the detector learns its phase and waveform before the scan.
-    pub calibrate_at: Option<Geometry>,
+    pub learn_at: Option<Geometry>,
     /// Integration time per point as asked (s); the head integrates whole
     /// chop periods ([`DetectorChoice::settings`]).
     pub integration_s: f32,
@@ -176,8 +176,8 @@ impl DetectorChoice {
         if !(self.integration_s.is_finite() && self.integration_s > 0.0 && self.integration_s <= DetectionSettings::INTEGRATION_MAX_S) {
             bail!("--integration-s must be in (0, {}] s", DetectionSettings::INTEGRATION_MAX_S);
         }
-        if self.reference == Reference::Matched && self.calibrate_at.is_none() {
-            bail!("--reference matched needs --calibrate-at TI,TO,DPHI");
+        if self.reference == Reference::Matched && self.learn_at.is_none() {
+            bail!("--reference matched needs --learn-at TI,TO,DPHI");
         }
         Ok(self)
     }
@@ -191,12 +191,14 @@ impl DetectorChoice {
 enum StoredDetector {
     Plan {
         reference: Reference,
-        calibrate_at: Option<Geometry>,
+        #[serde(alias = "calibrate_at")]
+        learn_at: Option<Geometry>,
         integration_s: f32,
     },
     Options {
         reference: String,
-        calibrate_at: Option<String>,
+        #[serde(alias = "calibrate_at")]
+        learn_at: Option<String>,
         integration_s: f32,
     },
 }
@@ -208,17 +210,17 @@ impl TryFrom<StoredDetector> for DetectorChoice {
         match stored {
             StoredDetector::Plan {
                 reference,
-                calibrate_at,
+                learn_at,
                 integration_s,
             } => DetectorChoice {
                 reference,
-                calibrate_at,
+                learn_at,
                 integration_s,
             }
             .check(),
             StoredDetector::Options {
                 reference,
-                calibrate_at,
+                learn_at,
                 integration_s,
             } => DetectorChoice {
                 reference: match reference.to_ascii_lowercase().as_str() {
@@ -227,7 +229,7 @@ impl TryFrom<StoredDetector> for DetectorChoice {
                     "matched" => Reference::Matched,
                     other => bail!("reference: `{other}` is none of square, sine, matched"),
                 },
-                calibrate_at: calibrate_at.as_deref().map(parse_geometry).transpose().context("--calibrate-at")?,
+                learn_at: learn_at.as_deref().map(parse_geometry).transpose().context("--learn-at")?,
                 integration_s,
             }
             .check(),
@@ -262,7 +264,7 @@ mod tests {
         let choice: DetectorChoice = serde_json::from_str(old).unwrap();
         let demo = DetectorChoice {
             reference: Reference::Matched,
-            calibrate_at: Some(Geometry::new(30.0, 30.0, 0.0)),
+            learn_at: Some(Geometry::new(30.0, 30.0, 0.0)),
             integration_s: 0.1,
         };
         assert_eq!(choice, demo);
@@ -273,10 +275,10 @@ mod tests {
     #[test]
     fn a_choice_read_back_is_checked_again() {
         for bad in [
-            r#"{"reference":"Square","calibrate_at":null,"integration_s":0.0}"#,
-            r#"{"reference":"Matched","calibrate_at":null,"integration_s":0.1}"#,
+            r#"{"reference":"Square","learn_at":null,"integration_s":0.0}"#,
+            r#"{"reference":"Matched","learn_at":null,"integration_s":0.1}"#,
             r#"{"reference":"square","calibrate_at":"30,x,0","integration_s":0.1}"#,
-            r#"{"reference":"cosine","calibrate_at":null,"integration_s":0.1}"#,
+            r#"{"reference":"cosine","learn_at":null,"integration_s":0.1}"#,
         ] {
             assert!(serde_json::from_str::<DetectorChoice>(bad).is_err(), "{bad}");
         }

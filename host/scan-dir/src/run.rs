@@ -4,7 +4,7 @@
 use crate::ScanDir;
 use anyhow::{Context, Result};
 use gonio_brdf::Specimen;
-use gonio_shared::{CalibrationReport, DetectionReport, Identity, ScanSpec, SweepScan};
+use gonio_shared::{DetectionReport, Identity, LearnReport, ScanSpec, SweepScan};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -113,8 +113,8 @@ pub struct RunRecord {
     pub material: Option<Specimen>,
     pub grid: Grid,
     pub detection: Detection,
-    /// The detector calibration taken before the scan, if any.
-    pub calibration: Option<CalibrationReport>,
+    /// The reference the detector learned before the scan, if any.
+    pub learned: Option<LearnReport>,
     /// Duration the plan predicted before the scan (s); compare `counts.head_time_s`.
     pub estimated_s: Option<f64>,
     pub counts: ScanOutcome,
@@ -127,7 +127,7 @@ impl RunRecord {
         material: Option<Specimen>,
         spec: &ScanSpec,
         det: &DetectionReport,
-        calibration: Option<CalibrationReport>,
+        learned: Option<LearnReport>,
         counts: ScanOutcome,
     ) -> Self {
         RunRecord {
@@ -144,7 +144,7 @@ impl RunRecord {
             material,
             grid: Grid::from(spec),
             detection: Detection::from(det),
-            calibration,
+            learned,
             estimated_s: None,
             counts,
             complete: true,

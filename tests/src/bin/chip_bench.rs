@@ -57,7 +57,7 @@
 use anyhow::{bail, Context, Result};
 use gonio_firmware::config::CPU_HZ;
 use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
-use gonio_shared::scan::PLAN_CHUNK;
+use gonio_shared::scan::VISIT_CHUNK;
 use gonio_shared::SweepRequest;
 use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
 use serde_json::{json, Value};
@@ -223,7 +223,7 @@ fn main() -> Result<()> {
         bail!("the served scan ended after {scan_points} of the Belcour grid's {grid} points");
     }
     // The resume starts two chunks before the grid's end (probes.rs).
-    let resumed = 2 * PLAN_CHUNK as u64;
+    let resumed = 2 * VISIT_CHUNK as u64;
     if resume_points != resumed {
         bail!("the resumed scan ended after {resume_points} of its {resumed} points");
     }

@@ -53,7 +53,7 @@ fn ours(r: &Reference, sig: &ChopSignal, codes: &[u16]) -> f64 {
     it.estimate().amplitude
 }
 
-/// Calibration as the head does it: one second of a strong chop.
+/// Learning as the head does it: one second of a strong chop.
 fn learn(sig: &ChopSignal, rng: &mut StdRng) -> Learned {
     let cal = ChopSignal {
         amplitude: 1500.0,
@@ -68,7 +68,7 @@ fn learn(sig: &ChopSignal, rng: &mut StdRng) -> Learned {
     for p in codes.chunks(cal.samples_per_period) {
         l.push(p);
     }
-    l.finish().expect("calibration periods")
+    l.finish().expect("learning periods")
 }
 
 fn mean_var(x: &[f64]) -> (f64, f64) {

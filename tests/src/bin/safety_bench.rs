@@ -1,5 +1,5 @@
 //! `cargo run --release -p tests --bin safety-bench [TRIALS_PER_TRIGGER]`:
-//! issue #17's figures, one JSON object on stdout (progress on stderr).
+//! how fast and how surely the head stops, one JSON object on stdout (progress on stderr).
 //!
 //! The firmware on the simulated head, in simulated time, is stopped at
 //! randomised moments (default 1 000 per trigger: 640 in moves between

@@ -25,11 +25,11 @@ use gonio_firmware::sanity::model::FixedModel;
 use gonio_firmware::sweep;
 use gonio_firmware::units;
 use gonio_firmware::Head;
-use gonio_shared::icd::{HomeEndpoint, HomeRequest, PlanEndpoint, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint};
+use gonio_shared::icd::{HomeEndpoint, HomeRequest, SanityEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint, VisitEndpoint};
 use gonio_shared::wire::check;
 use gonio_shared::{
-    AngleRange, Axis, Geometry, PlanChunk, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, SweepLobe, SweepRequest,
-    SweepScan, Visit, PLAN_CHUNK, PLAN_QUEUE,
+    AngleRange, Axis, Geometry, Reference as Kind, SanityConfig, SanityModel, ScanEvent, ScanSpec, SweepLobe, SweepRequest, SweepScan,
+    Visit, VisitChunk, VISIT_CHUNK, VISIT_QUEUE,
 };
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
 use postcard_rpc::{Endpoint, Topic};
@@ -220,7 +220,7 @@ fn plan_next() {
         patterns: None,
     };
     for spec in [ScanSpec::belcour_with_patterns(), big] {
-        let mut queue: heapless::Deque<u32, PLAN_QUEUE> = heapless::Deque::new();
+        let mut queue: heapless::Deque<u32, VISIT_QUEUE> = heapless::Deque::new();
         for o in (0..spec.len()).step_by(13) {
             let _ = queue.push_back(spec.index_at_order(o).unwrap_or(0));
             measure("plan_next", || {
@@ -431,10 +431,10 @@ where
 /// The visit order from `from`, a chunk's worth (the serpentine: the head
 /// takes any order; the host's plan only changes which moves it makes).
 fn chunk(spec: &ScanSpec, from: u32) -> heapless::Vec<u8, 256> {
-    let indices = (from..spec.len().min(from + PLAN_CHUNK as u32))
+    let indices = (from..spec.len().min(from + VISIT_CHUNK as u32))
         .filter_map(|o| spec.index_at_order(o))
         .collect();
-    request::<PlanEndpoint>(&PlanChunk {
+    request::<VisitEndpoint>(&VisitChunk {
         run: 0,
         first_order: from,
         indices,
@@ -489,10 +489,10 @@ fn serve(head: &mut Head<board::Rigged>, spec: &ScanSpec, started: bool, mut fed
             if idle > 100_000 {
                 mark("serve_stalled", BEGIN);
             }
-            if !board::HOST.closed.get() && fed < spec.len() && fed - done <= (PLAN_QUEUE - PLAN_CHUNK) as u32 {
+            if !board::HOST.closed.get() && fed < spec.len() && fed - done <= (VISIT_QUEUE - VISIT_CHUNK) as u32 {
                 let mut inbox = board::HOST.inbox.borrow_mut();
                 if inbox.push_back(chunk(spec, fed)).is_ok() {
-                    fed = (fed + PLAN_CHUNK as u32).min(spec.len());
+                    fed = (fed + VISIT_CHUNK as u32).min(spec.len());
                 }
             }
             false
@@ -542,21 +542,23 @@ fn scan_and_resume() {
     serve(head, &spec, false, 0, "scan_points");
 
     let resumed = ScanSpec {
-        first_order: spec.len() - 2 * PLAN_CHUNK as u32,
+        first_order: spec.len() - 2 * VISIT_CHUNK as u32,
         ..spec
     };
-    let first = PlanChunk {
+    let first = VisitChunk {
         run: 0,
         first_order: resumed.first_order,
-        indices: (resumed.first_order..resumed.first_order + PLAN_CHUNK as u32)
+        indices: (resumed.first_order..resumed.first_order + VISIT_CHUNK as u32)
             .filter_map(|o| resumed.index_at_order(o))
             .collect(),
     };
-    let started = measure("resume", || head.start_scan(resumed.clone()).and_then(|_| head.queue_plan(&first)));
+    let started = measure("resume", || {
+        head.start_scan(resumed.clone()).and_then(|_| head.queue_visits(&first))
+    });
     if started.is_err() {
         mark("resume_refused", BEGIN);
     }
-    serve(head, &resumed, true, resumed.first_order + PLAN_CHUNK as u32, "resume_points");
+    serve(head, &resumed, true, resumed.first_order + VISIT_CHUNK as u32, "resume_points");
 }
 
 // Every probe is out of line (`#[inline(never)]`): inlined here, their

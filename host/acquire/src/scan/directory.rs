@@ -51,8 +51,8 @@ pub async fn scan_into(
     let settings = det.settings();
     let setup = Setup {
         settings,
-        calibrate_at: det.calibrate_at,
-        calibration_periods: settings.periods_for(LEARNING_S),
+        learn_at: det.learn_at,
+        learning_periods: settings.periods_for(LEARNING_S),
     };
     let mut session = Session::connect(target.clone(), setup, operator).await?;
     let id = session.head().identity().clone();
@@ -130,7 +130,7 @@ pub async fn scan_into(
         outcome.swept_samples = rows.iter().filter(|r| r.extent_deg.is_some()).count() as u32;
         outcome.skipped = outcome.points - outcome.measured;
     }
-    let mut run_record = RunRecord::new(&id, record.material(), spec, &detection, session.calibration, outcome.clone());
+    let mut run_record = RunRecord::new(&id, record.material(), spec, &detection, session.learned, outcome.clone());
     run_record.estimated_s = Some(estimate);
     run_record.write(dir)?;
     session.close().await;

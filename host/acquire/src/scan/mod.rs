@@ -14,9 +14,9 @@ use gonio_scan_dir::record::Monitor;
 use gonio_scan_dir::run::ScanOutcome;
 use gonio_scan_dir::samples::SampleWriter;
 use gonio_shared::icd::{
-    AbortEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, PauseEndpoint, PlanEndpoint, StatusEndpoint,
+    AbortEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, PauseEndpoint, StatusEndpoint, VisitEndpoint,
 };
-use gonio_shared::{HeadState, PlanChunk, ScanAccepted, ScanSpec, PLAN_CHUNK, PLAN_QUEUE};
+use gonio_shared::{HeadState, ScanAccepted, ScanSpec, VisitChunk, VISIT_CHUNK, VISIT_QUEUE};
 use indicatif::ProgressBar;
 use sequencer::{Action, Interruption, Sequencer, Stretch, EVENT_TIMEOUT};
 use std::collections::BTreeMap;
@@ -41,7 +41,7 @@ pub async fn run(
     let t0 = Instant::now();
     let mut first = spec.first_order;
     // The whole visit order, planned here once (the head keeps only the next
-    // `PLAN_QUEUE` points) for the mechanics the head reported, as the
+    // `VISIT_QUEUE` points) for the mechanics the head reported, as the
     // duration estimate.
     let order = visit_order(session.head().config(), spec, PARK).collect();
     let mut run = ScanDriver {
@@ -303,16 +303,16 @@ async fn gap(head: &HeadClient, expected: u32) -> Result<Stretch> {
 /// for a fault) is left to the event stream to explain.
 pub async fn feed(head: &HeadClient, run: u32, order: &[u32], mut from: u32) -> Result<u32> {
     // Each turn queues a chunk or learns where the queue ends.
-    for _ in 0..2 * PLAN_QUEUE {
+    for _ in 0..2 * VISIT_QUEUE {
         let Some(rest) = order.get(from as usize..).filter(|r| !r.is_empty()) else {
             break;
         };
-        let chunk = PlanChunk {
+        let chunk = VisitChunk {
             run,
             first_order: from,
-            indices: rest.iter().copied().take(PLAN_CHUNK).collect(),
+            indices: rest.iter().copied().take(VISIT_CHUNK).collect(),
         };
-        match head.request::<PlanEndpoint>(&chunk).await {
+        match head.request::<VisitEndpoint>(&chunk).await {
             // A chunk taken in part filled the queue: room is then 0.
             Ok(q) => {
                 from = q.next_order;

@@ -5,7 +5,7 @@
 //! how the stretch ends. The loop in [`super`] performs the actions.
 
 use gonio_scan_dir::run::ScanOutcome;
-use gonio_shared::{Fault, HeadState, Sample, ScanAccepted, ScanEvent, SweptSample, PLAN_QUEUE};
+use gonio_shared::{Fault, HeadState, Sample, ScanAccepted, ScanEvent, SweptSample, VISIT_QUEUE};
 use std::time::Duration;
 
 /// Longest time the head may stay at one position (one move plus one integration).
@@ -197,7 +197,7 @@ impl Sequencer {
         }
         // Stored first: a refill or a pause that fails ends the stretch
         // after this position, which must then be on disk.
-        if order.is_some() && self.queued < self.order_len && self.queued.saturating_sub(self.expected) < (PLAN_QUEUE / 2) as u32 {
+        if order.is_some() && self.queued < self.order_len && self.queued.saturating_sub(self.expected) < (VISIT_QUEUE / 2) as u32 {
             actions.push(Action::Refill);
         }
         if !self.pausing && self.stop_at.is_some_and(|p| self.expected >= p && self.expected < self.points) {

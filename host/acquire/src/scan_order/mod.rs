@@ -10,13 +10,7 @@
 //! order; an incidence with more points than [`PLAN_CAPACITY`] falls back to
 //! the serpentine of `ScanSpec::index_at_order`.
 //!
-//! Why here and not on the head: measured on the Cortex-M4 (`chip-bench`),
-//! one step of a nearest-neighbour plan over a 4 096-point incidence costs
-//! hundreds of millions of instructions in soft-float f64 (seconds, past the
-//! watchdog), and a resume would replay the plan up to its position; the
-//! host does the whole Belcour grid in well under a second, and the head only
-//! keeps a bounded queue of the next points (`PLAN_QUEUE`), which carries it
-//! through a brief absence of the host.
+//! Why here and not on the head: `docs/decisions/001-host-plans-the-visit-order.md`.
 
 mod bound;
 mod duration;

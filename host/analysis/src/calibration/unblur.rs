@@ -19,11 +19,11 @@ const EVEN: f32 = 3.0;
 /// one, a quadratic, next to a row's ends) are the measured ones gives `f`
 /// at the sample's middle, whatever the extents: in the ramps at a row's
 /// ends, where the arm speeds up over its first 7.5° and slows over its
-/// last, neighbours differ in length (a correction that assumed them equal,
-/// `B − Δ²B/24 + 3·Δ⁴B/640`, left a fifth of the blur there, where the
-/// tape's lobe is). The tape's retro-phong exponent came out 494 ± 2.3 from
-/// uncorrected 1° samples (`scan-bench`, `fit_agreement`). The noise grows
-/// by about a tenth; the uncertainty budget is kept as it was. Samples at
+/// last, neighbours differ in length (a correction that assumes them equal,
+/// `B − Δ²B/24 + 3·Δ⁴B/640`, leaves a fifth of the blur there, where the
+/// tape's lobe is; `scan-bench`'s `fit_agreement` compares the fits). The
+/// noise grows by about a tenth; the uncertainty budget is not widened for
+/// it. Samples at
 /// rest, at a row's ends, or beside an unusable one are left as they are.
 pub fn unblur(rows: &mut [CalibratedRow]) {
     // Samples k and k + 1 abut along one row.

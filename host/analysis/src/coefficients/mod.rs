@@ -198,7 +198,7 @@ mod tests {
         Source::model(Material::parse(ModelId::Lambert, "kd=0.5").unwrap())
     }
 
-    /// issue #19: Lambertian kd = 0.5 → R_A(0.2°, −4°) ≈ 0.15838 (0.15834
+    /// Lambertian kd = 0.5 → R_A(0.2°, −4°) ≈ 0.15838 (0.15834
     /// with the observer beyond the beam, as here), R_L ≈ 3.444.
     #[test]
     fn lambertian_coefficients_by_hand() {

@@ -21,10 +21,10 @@ const SAME_INCIDENCE: f64 = 0.05 * PI / 180.0;
 /// direction where no sample lies. Measured by dividing
 /// the hemisphere into cells of about [`CELL`] a side and giving each cell's
 /// solid angle to the sample nearest its centre: exact in the limit, with
-/// no assumption on how the samples lie (a k-nearest-neighbour density,
-/// tried first, made a sweep scan's rows, 1° apart along a row and up to
-/// 10° across, count as dense as they are along the row, and its fits of
-/// the glass beads moved with k). Brute force: each cell (330 000 over the
+/// no assumption on how the samples lie (a density from the k nearest
+/// neighbours would count a sweep scan's rows, 1° apart along a row and up
+/// to 10° across, as dense as they are along the row, and the fit would
+/// move with k). Brute force: each cell (330 000 over the
 /// hemisphere) against each sample of its incidence, some 10⁹ dot products
 /// for a sweep scan's 10 000 samples at three incidences, a second or two.
 /// Cells much smaller than the samples' spacing are what make it exact: a

@@ -1,4 +1,4 @@
-//! Fit files: a fit as the JSON object of the contract (issue #6: model,
+//! Fit files: a fit as one JSON object (model,
 //! parametrization, params, stderr, metrics), and a material read back from
 //! one, for `gonio plot --fit` and `gonio export`.
 

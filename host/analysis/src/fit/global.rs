@@ -144,14 +144,14 @@ pub fn search(problem: &Problem, seed: u64) -> Vec<f64> {
 /// every parameter). Probes that ended in one basin enter once. A pace is a
 /// factor, not a difference: a probe whose lobe overflows on the samples it
 /// did not see enters at 1e30 and falls by decades a round, which a linear
-/// pace took for a winner's.
+/// pace would take for a winner's.
 ///
 /// Why every candidate: a basin the subset ranks fifth or sixteenth can be
 /// the lowest on all the data (`fit-bench`'s misfit cases: abc-retro data
 /// fitted by beckmann-retro, whose best has `r0` on its bound, and two lobes
 /// fitted by abc-retro, won by a start whose cost was 300 times the best's).
-/// Why a race: polishing all of them to the end took five times as long,
-/// mostly on basins clearly worse and on copies of the best one crawling
+/// Why a race: polishing all of them to the end takes several times as
+/// long (`fit-bench`), mostly on basins clearly worse and on copies of the best one crawling
 /// along a flat valley towards a bound.
 fn race(problem: &Problem, starts: Vec<Vec<f64>>) -> Option<Vec<f64>> {
     let mut entrants: Vec<Descent> = starts.iter().map(|x| Descent::new_in(problem, x, local::Space::Box)).collect();

@@ -3,11 +3,11 @@
 //! its last steps in the parameters themselves, the box kept by projection
 //! ([`Space::Box`]).
 //!
-//! Written here rather than taken from the `levenberg-marquardt` crate (its
-//! MINPACK port was the first version): our problems are tall and thin
-//! (thousands of samples, at most 8 parameters), and the crate's pivoted QR
-//! of the whole Jacobian took half of every fit (measured: 7 of 14 ms for
-//! `lafortune` on 7 000 samples). Solving the n×n normal equations with
+//! Written here rather than taken from the `levenberg-marquardt` crate: our
+//! problems are tall and thin (thousands of samples, at most 8 parameters),
+//! and a pivoted QR of the whole Jacobian, as that crate's MINPACK port
+//! does, costs as much as the rest of a fit (`fit-bench` times both).
+//! Solving the n×n normal equations with
 //! Marquardt's diagonal scaling costs `m·n²` flops and a Cholesky of at most
 //! 8×8, which is plenty accurate for a handful of well-scaled parameters;
 //! the damping update is Nielsen's (Madsen, Nielsen & Tingleff 2004, §3.2).

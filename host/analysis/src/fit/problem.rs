@@ -63,9 +63,8 @@ impl Gather for Dense {
 }
 
 /// What a Levenberg–Marquardt step needs of a point, `JᵀJ`, `Jᵀr` and `Σr²`,
-/// summed as the rows are made: the `m×n` Jacobian is never stored (at
-/// 7 000 samples, storing it and multiplying it out after took as long as
-/// computing it).
+/// summed as the rows are made: the `m×n` Jacobian is never stored
+/// (storing it and multiplying it out costs as much as computing it).
 #[derive(Debug, Clone)]
 pub struct Normal {
     pub cost: f64,

@@ -192,7 +192,7 @@ pub fn calibrate(a: &CalibrateArgs) -> Result<Calibrated> {
         "budget": calibration::budget_by_incidence(&calibrated),
         "file": csv,
     });
-    let path = a.scan.join("calibration.json");
+    let path = ScanDir::new(&a.scan).calibration();
     std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n").with_context(|| format!("writing {}", path.display()))?;
     Ok(Calibrated {
         cal,

@@ -151,7 +151,7 @@ fn fits_source(paths: &[PathBuf]) -> Result<Source> {
     Source::measured(fits, support.context("no fit")?)
 }
 
-/// The JSON of the contract: `ra` (a list) and `rl` (the last R_L, or null).
+/// The coefficients as JSON: `ra` (a list) and `rl` (the last R_L, or null).
 pub fn to_json(values: &[Coefficient]) -> Value {
     let entry = |c: &Coefficient| {
         let g = &c.request.geometry;

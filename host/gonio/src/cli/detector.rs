@@ -9,7 +9,7 @@ use gonio_shared::Reference;
 pub enum ReferenceArg {
     Square,
     Sine,
-    /// The signal's own waveform, learned by --calibrate-at: reaches the noise limit.
+    /// The signal's own waveform, learned by --learn-at: reaches the noise limit.
     Matched,
 }
 
@@ -21,8 +21,8 @@ pub struct DetectorArgs {
     /// Before scanning, learn the detector's phase and waveform at this
     /// geometry, THETA_I,THETA_O,DPHI in degrees: put a strong, steady
     /// target there (the reference plate, or the retro peak of the sample).
-    #[arg(long, value_name = "TI,TO,DPHI", allow_hyphen_values = true)]
-    pub calibrate_at: Option<String>,
+    #[arg(long, alias = "calibrate-at", value_name = "TI,TO,DPHI", allow_hyphen_values = true)]
+    pub learn_at: Option<String>,
     /// Integration time per point (s), rounded to whole chop periods.
     #[arg(long, default_value_t = 0.1)]
     pub integration_s: f32,
@@ -33,7 +33,7 @@ impl DetectorArgs {
     pub fn demo() -> Self {
         DetectorArgs {
             reference: ReferenceArg::Matched,
-            calibrate_at: Some("30,30,0".into()),
+            learn_at: Some("30,30,0".into()),
             integration_s: 0.1,
         }
     }
@@ -46,12 +46,7 @@ impl DetectorArgs {
                 ReferenceArg::Sine => Reference::Sine,
                 ReferenceArg::Matched => Reference::Matched,
             },
-            calibrate_at: self
-                .calibrate_at
-                .as_deref()
-                .map(parse_geometry)
-                .transpose()
-                .context("--calibrate-at")?,
+            learn_at: self.learn_at.as_deref().map(parse_geometry).transpose().context("--learn-at")?,
             integration_s: self.integration_s,
         }
         .check()
@@ -66,6 +61,6 @@ mod tests {
     fn the_demo_options_check() {
         let c = DetectorArgs::demo().checked().unwrap();
         assert_eq!(c.reference, Reference::Matched);
-        assert!(c.calibrate_at.is_some());
+        assert!(c.learn_at.is_some());
     }
 }

@@ -3,8 +3,8 @@
 //! (`sentry::ALIVE_MS`, at least every 250 ms: the core wakes its waits for
 //! it). So it fires if the executor stops running tasks — a busy loop, a
 //! panic or a fault (fault.rs has made the pins safe and waits for it) — and
-//! also if the serve loop is stuck in a future that never ends (a send to a
-//! host that stopped reading, before its timeout was there). The chip then
+//! also if the serve loop is stuck in a future that never ends (a wait
+//! without a deadline, such as a send with no timeout). The chip then
 //! restarts, and restarting means the safe state: the pins come up with the
 //! laser off and the drivers disabled before anything else runs, and the
 //! head reports the watchdog reset in its status. A step timer that stops is

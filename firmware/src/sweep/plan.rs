@@ -1,14 +1,11 @@
-//! Measuring while moving: the speeds of a sweep's axes and the tags of its
-//! samples. The head runs a sweep ([`crate::Head::sweep`]): an ordinary move
-//! to its start, the detector ranged and settled there, then one move to its
-//! end during which the chop runs on and every few periods become a
-//! [`gonio_shared::SweptSample`], tagged from the step timer's counts at its first period's
-//! start and its last one's end.
+//! Planning a sweep: the speeds of its axes within their limits, a sweep
+//! scan's row (its ends, speed and slow levels across the lobes), the
+//! checks a sweep must pass, and the tags of its samples from the step
+//! counts.
 
 use crate::config::HeadConfig;
 use crate::kinematics;
-use crate::motion::{self, Level, Levels, Limits, Position, Running};
-use gonio_shared::sample::ScanPosition;
+use crate::motion::{self, Level, Levels, Limits, Position};
 use gonio_shared::{Axis, AxisAngles, Fault, Field, SweepLobe, SweepRequest, SweepRow, Unreachable};
 use libm::{acos, cos, sin};
 
@@ -16,30 +13,6 @@ const DEG: f64 = core::f64::consts::PI / 180.0;
 /// How far beyond the blind zone a row begins (deg of arm): the arm's
 /// microstep rounding and its backlash keep clear of it.
 const BLIND_MARGIN_DEG: f64 = 0.5;
-
-/// A sweep under way, between two of its samples: its move in flight and
-/// where the next sample begins (the design of its samples is the
-/// detector's). A scan keeps it
-/// across the serve loop's turns (one sample each).
-pub(crate) struct Sweeping {
-    pub(crate) run: Running,
-    /// The sweep scan's row, if it is one.
-    pub(crate) scan: Option<ScanPosition>,
-    /// When the move started (µs).
-    pub(crate) t0: u64,
-    /// Steps emitted and head time where the next sample begins.
-    pub(crate) first: [u32; 3],
-    pub(crate) start_us: u64,
-    /// False once the move is over (its last sample taken).
-    pub(crate) moving: bool,
-    /// The detector sees through the beam splitter all along (a path
-    /// cannot cross the blind zone between it and the open view,
-    /// [`check_path`]).
-    pub(crate) splitter: bool,
-    /// Some sample so far rose above the noise.
-    pub(crate) lit: bool,
-    pub(crate) samples: u32,
-}
 
 /// Limits of the axes moving by `delta` microsteps, so that the one with the
 /// longest travel cruises at `speed_dps` and every axis follows the same
@@ -184,8 +157,8 @@ pub fn row_levels(row: &SweepRow, from: &AxisAngles, to: &AxisAngles, speed_dps:
     let Some(lobe) = row.lobe else {
         return out;
     };
-    // `lobe.slow_dps(sample_s) / speed_dps`, in the order of its rounding
-    // that every measured figure of the sweeps was taken with.
+    // `lobe.slow_dps(sample_s) / speed_dps`, in an order of rounding of its
+    // own, kept so that `scan-bench`'s sweep figures reproduce bit for bit.
     let scale = lobe.extent_fraction * lobe.width_deg / (sample_s * speed_dps);
     if !(scale < 1.0 && scale > 0.0) {
         return out;
