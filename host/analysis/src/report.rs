@@ -32,14 +32,7 @@ pub struct Report<'a> {
 
 /// Every fit with what weighs it against the others.
 fn fitted(fits: &[Fit]) -> Vec<Fitted> {
-    fits.iter()
-        .map(|f| Fitted {
-            material: f.material.clone(),
-            covariance: f.covariance.clone(),
-            rmse: f.metrics.rmse,
-            aic: f.aic,
-        })
-        .collect()
+    fits.iter().map(Fitted::from).collect()
 }
 
 /// One table cell: the value ± u, extrapolated ones marked.
@@ -62,8 +55,8 @@ fn coefficient_cell(e: &Estimate) -> String {
 /// from the data where they hold the geometry, from the best fit beyond it
 /// (marked, with the adequate models' spread in its uncertainty), and the
 /// picture of R_A against α per β.
-fn coefficients_section(fits: &[Fit], data: &Dataset, dir: &Path) -> Result<String> {
-    let source = Source::measured(fitted(fits), Support::of(data)?)?;
+fn coefficients_section(fits: &[Fit], support: Support, dir: &Path) -> Result<String> {
+    let source = Source::measured(fitted(fits), support)?;
     let values = coefficients::compute(&source, &coefficients::report_requests())?;
     let mut html = format!(
         "<h2>Coefficients of retroreflection</h2>\n<p>Each value says what it rests on. <b>measured</b>: a sample of this \
@@ -193,6 +186,9 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     let fits_dir = dir.join("fits");
     std::fs::create_dir_all(&fits_dir).with_context(|| format!("creating {}", fits_dir.display()))?;
     let order = ranked(r.fits);
+    // What the data hold near the laser: kept in every fit file, and what
+    // the coefficients rest on.
+    let support = Support::of(r.data)?;
     let mut html = String::new();
     let _ = write!(
         html,
@@ -238,7 +234,7 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         fit::file::write_with_support(
             &json,
             &fit::file::to_json(f, r.data.units, r.holdout.get(i).and_then(Option::as_ref)),
-            r.data,
+            &support,
         )?;
         let brdf = fits_dir.join(format!("{name}.brdf"));
         let text = brdf_explorer::write(
@@ -274,7 +270,7 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     }
     html.push_str("</table>\n");
     if !r.fits.is_empty() {
-        html.push_str(&coefficients_section(r.fits, r.data, dir)?);
+        html.push_str(&coefficients_section(r.fits, support, dir)?);
     }
     if !r.budget.is_empty() {
         html.push_str(&budget_section(r.budget));

@@ -72,6 +72,13 @@ fn user_mistakes_are_errors_not_panics() {
             vec!["scan", "--port", "/dev/null", "--out", out, "--inject", "drop@3"],
             "--inject acts on the simulated head only",
         ),
+        (vec!["scan", "--sim", "--out", out, "--theta-i", "100"], "100° is not an incidence"),
+        (vec!["scan", "--sim", "--out", out, "--theta-i", "-10"], "-10° is not an incidence"),
+        (vec!["scan", "--sim", "--out", out, "--theta-o", "0:95:5"], "beyond the view angles"),
+        (vec!["scan", "--resume", out, "--theta-i", "10"], "cannot be used with '--theta-i"),
+        (vec!["scan", "--resume", out, "--integration-s", "1"], "cannot be used with"),
+        (vec!["scan", "--resume", out, "--material", "lambert"], "cannot be used with"),
+        (vec!["calibrate", "/nonexistent"], "/nonexistent is not a scan directory"),
     ] {
         let o = gonio(&args);
         assert!(!o.status.success(), "{args:?}");
@@ -352,4 +359,63 @@ fn a_sweep_scan_killed_at_a_random_point_resumes_to_every_position_once_and_whol
     let run: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("run.json")).unwrap()).unwrap();
     assert_eq!(run["counts"]["measured"].as_u64(), Some(114 + 3 * 400));
     assert_eq!(run["counts"]["swept_samples"].as_u64(), Some(idx.len() as u64 - 3 - 3 * 400));
+}
+
+/// A drift monitor or a learning geometry the head cannot reach is refused
+/// once the head has said what it reaches, before anything moves, and no
+/// scan directory is left behind.
+#[test]
+fn an_unreachable_monitor_is_refused_before_the_first_move() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scan");
+    let grid = ["--theta-i", "30", "--theta-o", "0:30:10", "--dphi", "0:0:1", "--no-patterns"];
+    for (option, at, says) in [
+        ("--monitor", "30,95,0", "behind the sample plane"),
+        ("--learn-at", "30,24,0", "blind zone"),
+    ] {
+        let o = gonio(&[&["scan", "--sim", "--out", out.to_str().unwrap(), option, at][..], &grid].concat());
+        assert_eq!(o.status.code(), Some(1), "{}", text(&o));
+        let msg = text(&o);
+        assert!(msg.contains(&format!("{option} {at}")) && msg.contains(says), "{msg}");
+        assert!(!out.exists(), "{option}: a directory for a scan that cannot run");
+    }
+}
+
+/// Data files with directions no measurement has are refused, row named:
+/// an incidence or a view beyond 90° or below 0°, a Δφ beyond a turn, an
+/// ALTA direction below the sample plane.
+#[test]
+fn impossible_angles_in_data_files_are_refused_with_their_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = |name: &str, row: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, format!("theta_i_deg,theta_o_deg,dphi_deg,brdf_sr\n30,30,0,1\n{row}\n")).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    let alta = dir.path().join("below.dat");
+    // Spherical angles in radians: the second sample's view at θ = 2.0 rad.
+    std::fs::write(
+        &alta,
+        "#DIM 4 1\n#PARAM_IN SPHERICAL_TL_PL_TV_PV\n#PARAM_OUT INV_STERADIAN\n#VS 0\n0.5 0 0.5 3.14159 1\n0.5 0 2.0 3.14159 1\n",
+    )
+    .unwrap();
+    let files = [
+        (csv("ti.csv", "100,30,0,1"), "line 3: θi = 100° is not an incidence angle"),
+        (csv("neg.csv", "-10,30,0,1"), "line 3: θi = -10° is not an incidence angle"),
+        (csv("to.csv", "30,95,0,1"), "line 3: θo = 95° is not a view angle"),
+        (csv("dphi.csv", "30,30,400,1"), "line 3: Δφ = 400° is outside"),
+        (alta.to_str().unwrap().to_string(), "line 6: θo = 114.5916° is not a view angle"),
+    ];
+    for (file, says) in &files {
+        for cmd in [
+            vec!["fit", file, "--model", "lambert"],
+            vec!["convert", file, "/dev/null"],
+            vec!["coefficients", "--data", file],
+        ] {
+            let o = gonio(&cmd);
+            let msg = text(&o);
+            assert_eq!(o.status.code(), Some(1), "{cmd:?}: {msg}");
+            assert!(msg.contains(says), "{cmd:?}: {msg}");
+        }
+    }
 }

@@ -154,3 +154,49 @@ fn lasting_faults_end_the_scan_named_and_resumable() {
         assert_eq!(stored_indices(dir.path()), all, "{inject}: stored positions after resuming");
     }
 }
+
+/// Ctrl-C in the middle of a scan: the head is stopped through the client,
+/// the operator is told where the scan stands and how to resume, the exit
+/// code is 130, and the resumed scan completes the grid exactly.
+#[test]
+fn ctrl_c_stops_the_scan_says_how_to_resume_and_the_resume_completes_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scan");
+    // One incidence with its rings: long enough to be interrupted.
+    let grid = ["--theta-i", "30", "--dphi=-180:180:10"];
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_gonio"))
+        .args([&["scan", "--sim", "--out", out.to_str().unwrap()][..], &grid].concat())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let part = out.join("samples.csv.part");
+    let rows = || std::fs::read_to_string(&part).map_or(0, |t| t.lines().count());
+    let t0 = std::time::Instant::now();
+    while rows() < 50 {
+        assert!(t0.elapsed().as_secs() < 120, "the scan never started");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let msg = text(&o);
+    assert_eq!(o.status.code(), Some(130), "{msg}");
+    assert!(
+        msg.contains("interrupted at position") && msg.contains("the head is safe (laser off, drivers off)"),
+        "{msg}"
+    );
+    assert!(msg.contains(&format!("gonio scan --resume {}", out.display())), "{msg}");
+    assert!(!out.join("samples.csv").exists(), "an interrupted scan is not complete");
+    let o = gonio(&["scan", "--resume", out.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let spec = gonio_shared::ScanSpec {
+        theta_i_deg: heapless::Vec::from_slice(&[30.0]).unwrap(),
+        dphi: gonio_shared::AngleRange::new(-180.0, 180.0, 10.0),
+        ..gonio_shared::ScanSpec::belcour_with_patterns()
+    };
+    assert_eq!(stored_indices(&out), common::reachable(&spec));
+}

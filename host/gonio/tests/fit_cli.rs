@@ -232,6 +232,19 @@ fn compare_lists_every_model() {
     let models = &html[html.find("<h2>Models</h2>").unwrap()..];
     let first_row = models.find("<td class=\"l\">").map(|i| &models[i..i + 40]).unwrap();
     assert!(first_row.contains("retro-phong"), "{first_row}");
+    // A report is not overwritten unless asked.
+    let again = gonio(&["compare", file.to_str().unwrap(), "--report", report.to_str().unwrap()]);
+    assert_eq!(again.status.code(), Some(1));
+    assert!(text(&again).contains("already holds a report"), "{}", text(&again));
+    let forced = gonio(&[
+        "compare",
+        file.to_str().unwrap(),
+        "--report",
+        report.to_str().unwrap(),
+        "--force",
+        "--json",
+    ]);
+    assert!(forced.status.success(), "{}", text(&forced));
 }
 
 #[test]

@@ -100,13 +100,7 @@ fn main() -> anyhow::Result<()> {
         let f = fit::fit(&data, &spec)?;
         // As `gonio coefficients --fit fit.json` takes it: the fit and its
         // data's support (measured values from the data, the rest from the fit).
-        let fitted = Fitted {
-            material: f.material.clone(),
-            covariance: f.covariance.clone(),
-            rmse: f.metrics.rmse,
-            aic: f.aic,
-        };
-        let src = Source::measured(vec![fitted], Support::of(&data)?)?;
+        let src = Source::measured(vec![Fitted::from(&f)], Support::of(&data)?)?;
         let mut scan_coef = Tally::default();
         for (k, (got, want)) in coefficients::compute(&src, &reqs)?
             .iter()
@@ -207,15 +201,7 @@ fn provenance_coverage(rt: &tokio::runtime::Runtime, material: Specimen, scans: 
             retro_zone_min = retro_zone_min.min(near);
         }
         let outcomes = compare(&domain(&c.csv, &options)?, &options)?;
-        let fits: Vec<Fitted> = outcomes
-            .iter()
-            .map(|o| Fitted {
-                material: o.fit.material.clone(),
-                covariance: o.fit.covariance.clone(),
-                rmse: o.fit.metrics.rmse,
-                aic: o.fit.aic,
-            })
-            .collect();
+        let fits: Vec<Fitted> = outcomes.iter().map(|o| Fitted::from(&o.fit)).collect();
         let source = Source::measured(fits, Support::of(&data)?)?;
         let got = coefficients::compute(&source, &reqs)?;
         let mut scan: BTreeMap<&'static str, Tally> = BTreeMap::new();

@@ -1,7 +1,8 @@
-//! A scan into a scan directory, new or resumed: connect, set the detector
-//! up, record the scan (`scan.json`), measure the plate if asked, run it,
-//! and write its `run.json`. Connects first, so a head that cannot be
-//! reached leaves no files behind.
+//! A scan into a scan directory, new or resumed: connect, check what the
+//! head is asked to reach, set the detector up, record the scan
+//! (`scan.json`), measure the plate if asked, run it, and write its
+//! `run.json`. Files are written only once the head answers and the scan is
+//! known to be possible; Ctrl-C stops the head and says how to resume.
 
 use super::run;
 use crate::operator::Operator;
@@ -11,13 +12,16 @@ use crate::session::{Session, Setup};
 use crate::target::Target;
 use anyhow::{bail, Context, Result};
 use gonio_firmware::config::HeadConfig;
+use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
 use gonio_scan_dir::record::ScanRecord;
 use gonio_scan_dir::run::{RunRecord, ScanOutcome};
 use gonio_scan_dir::samples::{self, drop_last_position, stored_rows, SampleWriter};
 use gonio_scan_dir::ScanDir;
+use gonio_shared::icd::AbortEndpoint;
 use gonio_shared::{DetectionReport, ScanSpec};
 use std::collections::BTreeSet;
+use std::future::Future;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -34,15 +38,20 @@ pub struct Destination<'a> {
     pub force: bool,
 }
 
-/// Runs `record` on the head at `target` into `to`. Returns the counts and
-/// the samples file.
+/// Runs `record` on the head at `target` into `to`; `stop` resolving (the
+/// operator's Ctrl-C) stops the head and ends the scan with [`Interrupted`].
+/// Returns the counts and the samples file.
 pub async fn scan_into(
     record: &ScanRecord,
     target: Arc<dyn Target>,
     to: Destination<'_>,
     operator: Operator,
+    stop: impl Future<Output = ()>,
 ) -> Result<(ScanOutcome, PathBuf)> {
     let (dir, resume) = (to.dir, to.resume);
+    if resume.is_none() {
+        refuse_finished(dir, to.force)?;
+    }
     let det = &record.detector;
     let spec = &ScanSpec {
         first_order: resume.unwrap_or(0),
@@ -55,6 +64,7 @@ pub async fn scan_into(
         learning_periods: settings.periods_for(LEARNING_S),
     };
     let mut session = Session::connect(target.clone(), setup, operator).await?;
+    reachable(session.head().config(), record)?;
     let id = session.head().identity().clone();
     operator.notice(format_args!(
         "head: {} (serial {}, firmware {}, protocol v{}{})",
@@ -106,14 +116,34 @@ pub async fn scan_into(
         None => SampleWriter::create(dir)?,
     };
     let pb = operator.bar(spec.len() as u64, "scanning", positions(spec));
-    let mut outcome = run(&mut session, spec, &mut writer, &pb, record.monitor.as_ref())
-        .await
-        .with_context(|| {
-            format!(
-                "scan interrupted; every sample so far is on disk: finish it with `gonio scan --resume {}`",
-                dir.display()
-            )
-        })?;
+    let ended = {
+        let scanning = run(&mut session, spec, &mut writer, &pb, record.monitor.as_ref());
+        tokio::pin!(scanning);
+        tokio::select! {
+            r = &mut scanning => Some(r),
+            () = stop => None,
+        }
+    };
+    let Some(ended) = ended else {
+        pb.finish_and_clear();
+        // The scan is dropped between two events: every row on disk is whole.
+        let safe = session.head().request::<AbortEndpoint>(&()).await.is_ok();
+        session.close().await;
+        let at = resume_from(dir, &record.spec)?;
+        return Err(Interrupted {
+            at,
+            of: spec.len(),
+            dir: dir.to_path_buf(),
+            head_safe: safe,
+        }
+        .into());
+    };
+    let mut outcome = ended.with_context(|| {
+        format!(
+            "scan interrupted; every sample so far is on disk: finish it with `gonio scan --resume {}`",
+            dir.display()
+        )
+    })?;
     if reconnected_before_scan > 0 {
         outcome
             .recoveries
@@ -153,20 +183,81 @@ pub fn resume_from(dir: &Path, spec: &ScanSpec) -> Result<u32> {
     })
 }
 
-/// Refuses to mix a new scan into a directory that holds one.
+/// Refuses to mix a new scan into a directory that holds one, before
+/// anything is asked of the head.
+fn refuse_finished(dir: &Path, force: bool) -> Result<()> {
+    if let Some(p) = ScanDir::new(dir).finished_files().iter().find(|p| p.exists()) {
+        if !force {
+            let f = p.file_name().unwrap_or_default().to_string_lossy();
+            bail!("{} already holds a scan ({f}); choose another --out or pass --force", dir.display());
+        }
+    }
+    Ok(())
+}
+
+/// Makes `dir` ready for a new scan: created, a completed scan's files
+/// removed (`--force`, checked by [`refuse_finished`]).
 fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     for p in ScanDir::new(dir).finished_files() {
         if p.exists() {
-            if !force {
-                let f = p.file_name().unwrap_or_default().to_string_lossy();
-                bail!("{} already holds a scan ({f}); choose another --out or pass --force", dir.display());
-            }
+            refuse_finished(dir, force)?;
             std::fs::remove_file(&p).with_context(|| format!("removing {}", p.display()))?;
         }
     }
     Ok(())
 }
+
+/// Refuses a scan whose drift monitor or learning geometry this head
+/// cannot reach (its mechanics, as it reported them), before it moves.
+fn reachable(cfg: &HeadConfig, record: &ScanRecord) -> Result<()> {
+    let asked = [
+        ("--monitor", record.monitor.map(|m| m.at)),
+        ("--learn-at", record.detector.learn_at),
+    ];
+    for (option, at) in asked {
+        let Some(g) = at else { continue };
+        if let Err(f) = kinematics::inverse(cfg, &g) {
+            bail!(
+                "{option} {},{},{}: {f} on this head; choose a geometry it reaches",
+                g.theta_i_deg,
+                g.theta_o_deg,
+                g.dphi_deg
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A scan stopped by the operator (Ctrl-C): where, and whether the head
+/// confirmed it is safe. The command line exits with 130 for it.
+#[derive(Debug)]
+pub struct Interrupted {
+    /// The first visit position not stored.
+    pub at: u32,
+    pub of: u32,
+    pub dir: PathBuf,
+    /// The head answered the abort: laser off, drivers off.
+    pub head_safe: bool,
+}
+
+impl std::fmt::Display for Interrupted {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let head = match self.head_safe {
+            true => "the head is safe (laser off, drivers off)",
+            false => "the head did not confirm the stop: check it is safe (its host watch stops it once the host is silent)",
+        };
+        write!(
+            f,
+            "interrupted at position {} of {}; {head}; every sample so far is on disk: resume with `gonio scan --resume {}`",
+            self.at,
+            self.of,
+            self.dir.display()
+        )
+    }
+}
+
+impl std::error::Error for Interrupted {}
 
 /// The scan replayed from the park position under the head's reported axis
 /// limits, from the scan's first position on: moves, settle and acquisition,

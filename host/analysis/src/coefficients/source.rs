@@ -53,6 +53,17 @@ pub struct Fitted {
     pub aic: f64,
 }
 
+impl From<&crate::fit::Fit> for Fitted {
+    fn from(f: &crate::fit::Fit) -> Self {
+        Fitted {
+            material: f.material.clone(),
+            covariance: f.covariance.clone(),
+            rmse: f.metrics.rmse,
+            aic: f.aic,
+        }
+    }
+}
+
 /// A model fits the data comparably when its RMSE is within this factor
 /// of the best one's (`docs/retroreflection.md`, *Provenance*): where the
 /// data end, what these models say is what the data cannot tell apart.

@@ -32,6 +32,27 @@ pub struct Observation {
     pub shared: [f64; SHARED.len()],
 }
 
+/// Refuses angles no measurement has (radians): incidence and view in the
+/// sample's front hemisphere, [0°, 90°], and Δφ within [−360°, 360°]. What
+/// a reader says of a row it cannot take; the file's own words are its
+/// caller's (line numbers).
+pub fn check_angles(theta_i: f64, theta_o: f64, dphi: f64) -> Result<(), String> {
+    // A direction computed on the horizon may land a rounding off it.
+    const SLACK: f64 = 1e-9;
+    let front = |t: f64| (-SLACK..=std::f64::consts::FRAC_PI_2 + SLACK).contains(&t);
+    let deg = |x: f64| format!("{}°", (x.to_degrees() * 1e4).round() / 1e4);
+    if !front(theta_i) {
+        return Err(format!("θi = {} is not an incidence angle (0° to 90°)", deg(theta_i)));
+    }
+    if !front(theta_o) {
+        return Err(format!("θo = {} is not a view angle (0° to 90°)", deg(theta_o)));
+    }
+    if dphi.abs() > 2.0 * std::f64::consts::PI + SLACK {
+        return Err(format!("Δφ = {} is outside −360° to 360°", deg(dphi)));
+    }
+    Ok(())
+}
+
 impl Observation {
     pub fn directions(&self) -> Directions {
         Directions::from_angles(self.theta_i, self.theta_o, self.dphi)

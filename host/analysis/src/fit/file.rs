@@ -2,7 +2,7 @@
 //! parametrization, params, stderr, metrics), and a material read back from
 //! one, for `gonio plot --fit` and `gonio export`.
 
-use super::{Dataset, Fit, Metrics, Units};
+use super::{Fit, Metrics, Units};
 use crate::coefficients::Support;
 use anyhow::{bail, Context, Result};
 use gonio_brdf::{Material, ModelId, Param};
@@ -49,9 +49,9 @@ pub struct FitFile {
 /// (`coefficients::Support`: the samples within 12° of the retro direction
 /// and the incidences), so that `gonio coefficients --fit` can say what
 /// each value rests on.
-pub fn write_with_support(path: &Path, v: &Value, data: &Dataset) -> Result<()> {
+pub fn write_with_support(path: &Path, v: &Value, support: &Support) -> Result<()> {
     let mut v = v.clone();
-    v["support"] = Support::of(data)?.to_json();
+    v["support"] = support.to_json();
     write(path, &v)
 }
 

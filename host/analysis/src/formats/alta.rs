@@ -28,6 +28,7 @@
 //! lower and upper ends (absolute); both taken as k = 2 intervals. The
 //! writer uses `#VS 2` when every value has an uncertainty.
 
+use crate::fit::data::check_angles;
 use crate::fit::{Dataset, Observation, Units};
 use crate::uncertainty::K_COVERAGE;
 use anyhow::{anyhow, bail, Result};
@@ -263,6 +264,7 @@ pub fn parse(text: &str) -> Result<Dataset> {
         }
         let (l, v) = p.directions(&x);
         let (theta_i, theta_o, dphi) = angles(l, v).ok_or_else(|| err("a direction of length zero".into()))?;
+        check_angles(theta_i, theta_o, dphi).map_err(err)?;
         let value = x[d];
         let conf = &x[d + outputs..];
         let sigma = match h.vs {

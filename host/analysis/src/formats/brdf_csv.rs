@@ -7,6 +7,7 @@
 //! flagged as rejected (`flags` with the saturated or weak-signal bits) are
 //! left out when a `usable` column says `false`.
 
+use crate::fit::data::check_angles;
 use crate::fit::{Dataset, Observation, Units};
 use crate::uncertainty::SHARED;
 use anyhow::{anyhow, bail, Context, Result};
@@ -45,10 +46,12 @@ pub fn parse(text: &str) -> Result<Dataset> {
         if usable.and_then(|u| record.get(u)) == Some("false") {
             continue;
         }
+        let (theta_i, theta_o, dphi) = (num(ti)?.to_radians(), num(to)?.to_radians(), num(dp)?.to_radians());
+        check_angles(theta_i, theta_o, dphi).map_err(|e| anyhow!("line {line}: {e}"))?;
         observations.push(Observation {
-            theta_i: num(ti)?.to_radians(),
-            theta_o: num(to)?.to_radians(),
-            dphi: num(dp)?.to_radians(),
+            theta_i,
+            theta_o,
+            dphi,
             value: num(value)?,
             sigma: match sigma {
                 Some(s) if !record.get(s).unwrap_or("").is_empty() => Some(num(s)?),

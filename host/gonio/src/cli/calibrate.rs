@@ -152,6 +152,9 @@ fn slope_model(a: &CalibrateArgs, first: &[CalibratedRow]) -> Result<Option<Mate
 
 /// Calibrates a scan directory: writes calibrated.csv and calibration.json.
 pub fn calibrate(a: &CalibrateArgs) -> Result<Calibrated> {
+    if !a.scan.is_dir() {
+        bail!("{} is not a scan directory (no such directory)", a.scan.display());
+    }
     let reference = a.reference.clone().unwrap_or_else(|| ScanDir::new(&a.scan).reference());
     let (plate, monitor) = if reference.is_dir() {
         let all = rows(&reference).context("reading the reference plate's scan")?;

@@ -2,6 +2,7 @@
 //! or the calibrated sample CSV).
 
 use anyhow::{bail, Context, Result};
+use gonio_analysis::coefficients::Support;
 use gonio_analysis::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
 use gonio_brdf::{ModelId, Param};
 use serde_json::Value;
@@ -107,6 +108,9 @@ pub struct CompareArgs {
     /// BRDF Explorer shader (DIR/fits), pictures of the best fits (DIR/plots).
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
+    /// Overwrite a report already in the --report directory.
+    #[arg(long, requires = "report")]
+    pub force: bool,
     #[command(flatten)]
     pub options: FitOptions,
 }
@@ -212,7 +216,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         v["warnings"] = serde_json::json!(d.train.warnings);
     }
     if let Some(out) = &a.out {
-        fit::file::write_with_support(out, &v, &d.train)?;
+        fit::file::write_with_support(out, &v, &Support::of(&d.train)?)?;
     }
     if let Some(out) = &a.brdf {
         super::export::write_brdf(&f.material, &a.file.display().to_string(), out)?;
@@ -288,6 +292,9 @@ pub fn report(
 }
 
 pub fn compare_cmd(a: CompareArgs) -> Result<()> {
+    if let Some(dir) = a.report.as_ref().filter(|d| d.join("report.html").exists() && !a.force) {
+        bail!("{} already holds a report; choose another --report or pass --force", dir.display());
+    }
     let d = domain(&a.file, &a.options)?;
     let rows = compare(&d, &a.options)?;
     if let Some(dir) = &a.report {

@@ -9,9 +9,11 @@ use std::path::PathBuf;
 #[derive(Debug, Clone, clap::Args)]
 pub struct GridArgs {
     /// Incidence angles θi (degrees), comma separated, at most 8.
-    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "15,30,60", value_parser = finite_deg)]
+    #[arg(long, value_name = "LIST", value_delimiter = ',', default_value = "15,30,60", value_parser = finite_deg, allow_hyphen_values = true)]
     pub theta_i: Vec<f32>,
-    /// View angles θo as START:STOP:STEP (degrees, STOP included).
+    /// View angles θo as START:STOP:STEP (degrees, STOP included). The
+    /// default is the Belcour grid as the paper gives it: its θo = 90°
+    /// (grazing) is refused by the head, and counted as unreachable.
     #[arg(long, value_name = "RANGE", default_value = "0:90:3", allow_hyphen_values = true)]
     pub theta_o: AngleRange,
     /// Azimuth differences Δφ as START:STOP:STEP (degrees, STOP included).
@@ -169,6 +171,20 @@ impl GridArgs {
         let theta_i_deg = heapless::Vec::from_slice(&self.theta_i)
             .ok()
             .context("--theta-i: at most 8 incidence angles")?;
+        if let Some(t) = self.theta_i.iter().find(|t| !(0.0..90.0).contains(*t)) {
+            bail!("--theta-i: {t}° is not an incidence the head can light (0° to under 90°)");
+        }
+        let (o, p) = (&self.theta_o, &self.dphi);
+        if o.start_deg < 0.0 || o.stop_deg > 90.0 {
+            bail!(
+                "--theta-o: {}°:{}° reaches beyond the view angles 0° to 90°",
+                o.start_deg,
+                o.stop_deg
+            );
+        }
+        if p.start_deg < -360.0 || p.stop_deg > 360.0 {
+            bail!("--dphi: {}°:{}° reaches beyond −360° to 360°", p.start_deg, p.stop_deg);
+        }
         let sweep = match self.sweep {
             true => Some(SweepScan {
                 speed_dps: self.sweep_speed,
@@ -231,6 +247,11 @@ mod tests {
         refused(&["--theta-i", "x"], "not a number");
         refused(&["--theta-i", "nan"], "not finite");
         refused(&["--theta-i", "1,2,3,4,5,6,7,8,9"], "at most 8");
+        refused(&["--theta-i", "100"], "not an incidence");
+        refused(&["--theta-i", "-10"], "not an incidence");
+        refused(&["--theta-o", "0:95:5"], "beyond the view angles");
+        refused(&["--theta-o", "-5:60:5"], "beyond the view angles");
+        refused(&["--dphi", "200:400:10"], "beyond −360° to 360°");
     }
 
     #[test]

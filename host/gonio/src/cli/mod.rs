@@ -8,6 +8,7 @@ mod devices;
 mod export;
 pub mod fit;
 pub mod grid;
+pub mod interrupt;
 pub mod material;
 mod model_eval;
 mod plot;
@@ -31,7 +32,9 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 pub enum Command {
-    /// Full scan of the Belcour grid on the simulated head; writes samples.csv and run.json.
+    /// The whole chain on the simulated head: the reference plate, the Belcour
+    /// grid with its lobe rings, calibration, every model fitted, R_A and R_L;
+    /// writes the scan directory, calibrated.csv, fits/, plots/ and report.html.
     Demo(scan::DemoArgs),
     /// Scan a grid on a head (real or simulated) and store the samples.
     Scan(scan::ScanArgs),

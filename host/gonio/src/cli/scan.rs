@@ -5,7 +5,7 @@ use super::detector::DetectorArgs;
 use super::fit::{self, FitOptions};
 use super::grid::{GridArgs, LobeArgs};
 use super::material::SimHeadArgs;
-use super::simulated;
+use super::{interrupt, simulated};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
 use gonio_acquire::scan::directory::{hms, positions, resume_from, scan_into, Destination};
@@ -60,8 +60,18 @@ pub struct ScanArgs {
     #[arg(long)]
     pub out: Option<PathBuf>,
     /// Finish the interrupted scan in this directory (same grid, head and
-    /// detector settings; no point measured twice, none left out).
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["sim", "out", "force"])]
+    /// detector settings, as its scan.json records them: options that would
+    /// change them are refused; no point measured twice, none left out).
+    #[arg(
+        long,
+        value_name = "DIR",
+        conflicts_with_all = [
+            "sim", "out", "force", "DetectorArgs", "SimHeadArgs", "monitor", "monitor_every", "reference_plate",
+            // The grid's (a group of its own would not hold its flattened parts).
+            "theta_i", "theta_o", "dphi", "sweep", "sweep_speed", "sweep_periods", "sweep_lobe", "sweep_lobe_from",
+            "sweep_extent", "retro_rings", "retro_azimuths", "mirror_rings", "mirror_azimuths", "no_patterns",
+        ]
+    )]
     pub resume: Option<PathBuf>,
     #[command(flatten)]
     pub grid: GridArgs,
@@ -208,6 +218,7 @@ pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &Out
         simulated::target(&record.head, sim.faults),
         to,
         Operator::for_json(output.json),
+        interrupt::requested(),
     )
     .await
 }
@@ -226,7 +237,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         };
         // A resume runs on the repaired head: no faults.
         let target = simulated::target(&record.head, Faults::default());
-        let (outcome, samples) = scan_into(&record, target, to, Operator::for_json(a.output.json)).await?;
+        let (outcome, samples) = scan_into(&record, target, to, Operator::for_json(a.output.json), interrupt::requested()).await?;
         return summarise(&record.spec, &outcome, &samples, a.output.json);
     }
     let (spec, det) = (a.grid.spec()?, &a.detector.checked()?);
@@ -256,7 +267,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         force: a.output.force,
     };
     let target = simulated::target(&record.head, faults);
-    let (outcome, samples) = scan_into(&record, target, to, Operator::for_json(a.output.json)).await?;
+    let (outcome, samples) = scan_into(&record, target, to, Operator::for_json(a.output.json), interrupt::requested()).await?;
     summarise(&spec, &outcome, &samples, a.output.json)
 }
 
