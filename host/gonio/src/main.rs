@@ -1,26 +1,21 @@
 //! `gonio`: scan BRDFs with the retroreflection head, or with its simulator.
 
 use clap::Parser;
-use gonio::cli::interrupt;
-use gonio_acquire::scan::directory::Interrupted;
+use gonio::cli::{failure, interrupt};
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     env_logger::Builder::from_env(env_logger::Env::default().default_filter_or("warn")).init();
-    let cli = gonio::cli::Cli::parse();
+    let cli = match gonio::cli::Cli::try_parse() {
+        Ok(cli) => cli,
+        Err(e) => return failure::usage(e, std::env::args().any(|a| a == "--json")),
+    };
+    let json = cli.command.json();
     if let Err(e) = interrupt::install() {
-        eprintln!("error: {e:#}");
-        return ExitCode::FAILURE;
+        return failure::report(&e, json);
     }
     match gonio::cli::run(cli) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) if e.downcast_ref::<Interrupted>().is_some() => {
-            eprintln!("{e}");
-            ExitCode::from(interrupt::EXIT_CODE)
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+        Err(e) => failure::report(&e, json),
     }
 }

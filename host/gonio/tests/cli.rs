@@ -217,6 +217,10 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
     assert_eq!(measured + skipped, points);
     // θo = 90° is behind the sample for every (θi, Δφ): 3 × 37 points at least.
     assert!(skipped >= 111, "{summary}");
+    // R_A and R_L as the report gives them, each saying what it rests on.
+    let ra = summary["coefficients"]["ra"].as_array().expect("R_A in the demo's JSON");
+    assert!(!ra.is_empty() && ra.iter().all(|c| c["provenance"].is_string()), "{summary}");
+    assert!(!summary["coefficients"]["rl"].is_null(), "{summary}");
     let idx = csv_indices(&out.join("samples.csv"));
     assert_eq!(idx.len() as u64, measured);
     assert_eq!(idx.iter().collect::<BTreeSet<_>>().len(), idx.len(), "duplicate points");
@@ -417,5 +421,76 @@ fn impossible_angles_in_data_files_are_refused_with_their_line() {
             assert_eq!(o.status.code(), Some(1), "{cmd:?}: {msg}");
             assert!(msg.contains(says), "{cmd:?}: {msg}");
         }
+    }
+}
+
+/// Under `--json` every subcommand prints one JSON object on stdout, on
+/// success and on failure (`{"error", "kind"}`), with the same exit codes.
+#[test]
+fn every_subcommand_speaks_json_on_failure_and_success() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let good = at("good.csv");
+    std::fs::write(
+        &good,
+        "theta_i_deg,theta_o_deg,dphi_deg,brdf_sr\n30,30,0,0.2\n30,40,0,0.2\n30,50,180,0.2\n",
+    )
+    .unwrap();
+    let fit = at("fit.json");
+    std::fs::write(&fit, r#"{"model": "lambert", "parametrization": "view", "params": {"kd": 0.5}}"#).unwrap();
+    let (missing, out) = (at("missing.csv"), at("out"));
+    let failing: Vec<(Vec<&str>, &str, i32)> = vec![
+        (vec!["scan", "--sim", "--out", &out, "--theta-i", "100"], "input", 1),
+        (vec!["demo", "--out", "/dev/null/x"], "io", 1),
+        (vec!["calibrate", "/nonexistent"], "input", 1),
+        (vec!["coefficients", "--data", &missing], "io", 1),
+        (vec!["fit", &missing, "--model", "lambert"], "io", 1),
+        (vec!["compare", &missing], "io", 1),
+        (vec!["plot", &missing, "--out", &out], "io", 1),
+        (vec!["convert", &missing, &out], "io", 1),
+        (vec!["export", &missing, &out], "io", 1),
+        (
+            vec![
+                "eval",
+                "--model",
+                "lambert",
+                "--params",
+                "kd=0.5",
+                "--theta-i",
+                "100",
+                "--theta-o",
+                "0",
+                "--dphi",
+                "0",
+            ],
+            "input",
+            1,
+        ),
+        (
+            vec!["dhr", "--model", "lambert", "--params", "kd=0.5", "--theta-i", "100"],
+            "input",
+            1,
+        ),
+        (vec!["fit", "--model", "lambert"], "usage", 2),
+    ];
+    for (args, kind, code) in failing {
+        let o = gonio(&[&args[..], &["--json"]].concat());
+        assert_eq!(o.status.code(), Some(code), "{args:?}: {}", text(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}: {}", text(&o)));
+        assert_eq!(v["kind"], kind, "{args:?}: {v}");
+        assert!(v["error"].as_str().is_some_and(|e| !e.is_empty()), "{args:?}: {v}");
+    }
+    let (brdf, dat, plots) = (at("fit.brdf"), at("good.dat"), at("plots"));
+    let succeeding: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["convert", &good, &dat], "samples"),
+        (vec!["export", &fit, &brdf], "model"),
+        (vec!["plot", &good, "--out", &plots, "--fit", &fit], "written"),
+        (vec!["devices"], ""),
+    ];
+    for (args, key) in succeeding {
+        let o = gonio(&[&args[..], &["--json"]].concat());
+        assert!(o.status.success(), "{args:?}: {}", text(&o));
+        let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}: {}", text(&o)));
+        assert!(key.is_empty() || !v[key].is_null(), "{args:?}: {v}");
     }
 }

@@ -193,6 +193,15 @@ fn ctrl_c_stops_the_scan_says_how_to_resume_and_the_resume_completes_it() {
     assert!(!out.join("samples.csv").exists(), "an interrupted scan is not complete");
     let o = gonio(&["scan", "--resume", out.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", text(&o));
+    // The whole scan's counts: the skipped ones' reasons add up to them.
+    let summary: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    let reasons: u64 = summary["skipped_by_reason"]
+        .as_object()
+        .unwrap()
+        .values()
+        .map(|n| n.as_u64().unwrap())
+        .sum();
+    assert_eq!(summary["skipped"].as_u64(), Some(reasons), "{summary}");
     let spec = gonio_shared::ScanSpec {
         theta_i_deg: heapless::Vec::from_slice(&[30.0]).unwrap(),
         dphi: gonio_shared::AngleRange::new(-180.0, 180.0, 10.0),

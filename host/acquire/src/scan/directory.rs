@@ -159,6 +159,15 @@ pub async fn scan_into(
         outcome.measured = rows.iter().filter_map(|r| r.order).collect::<BTreeSet<_>>().len() as u32;
         outcome.swept_samples = rows.iter().filter(|r| r.extent_deg.is_some()).count() as u32;
         outcome.skipped = outcome.points - outcome.measured;
+        // Why the earlier sessions skipped theirs is not on disk: said so,
+        // so that the reasons add up to the count.
+        let known: u32 = outcome.skipped_by_reason.values().sum();
+        if outcome.skipped > known {
+            *outcome
+                .skipped_by_reason
+                .entry("skipped before the resume (reason not recorded)".into())
+                .or_default() += outcome.skipped - known;
+        }
     }
     let mut run_record = RunRecord::new(&id, record.material(), spec, &detection, session.learned, outcome.clone());
     run_record.estimated_s = Some(estimate);

@@ -40,6 +40,7 @@ pub struct CalibrateArgs {
     pub slope_fit: Option<PathBuf>,
     #[command(flatten)]
     pub head: HeadUncertaintyArgs,
+    /// Print one JSON object (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
 }

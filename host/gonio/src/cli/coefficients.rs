@@ -57,6 +57,7 @@ pub struct CoefficientsArgs {
     /// Angular diameter of the receiver seen from the sample (degrees); default: each set's own.
     #[arg(long)]
     pub receiver_aperture_deg: Option<f64>,
+    /// Print one JSON object (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
 }

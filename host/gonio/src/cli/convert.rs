@@ -16,6 +16,9 @@ pub struct ConvertArgs {
     /// its values are (ALTA without #PARAM_OUT), what they are.
     #[arg(long, value_enum)]
     pub units: Option<Units>,
+    /// Print one JSON object: what was written (errors too: `{"error", "kind"}`).
+    #[arg(long)]
+    pub json: bool,
 }
 
 pub fn convert_cmd(a: ConvertArgs) -> Result<()> {
@@ -29,6 +32,9 @@ pub fn convert_cmd(a: ConvertArgs) -> Result<()> {
         a.input.display()
     ));
     std::fs::write(&a.output, alta::write(&data)).with_context(|| format!("cannot write {}", a.output.display()))?;
-    eprintln!("{} samples written to {}", data.observations.len(), a.output.display());
+    match a.json {
+        true => println!("{}", serde_json::json!({ "written": a.output, "samples": data.observations.len() })),
+        false => eprintln!("{} samples written to {}", data.observations.len(), a.output.display()),
+    }
     Ok(())
 }

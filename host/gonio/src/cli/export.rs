@@ -12,6 +12,9 @@ pub struct ExportArgs {
     pub fit: PathBuf,
     /// Output `.brdf` file (GLSL `BRDF(L, V, N, X, Y)` with parameter lines).
     pub output: PathBuf,
+    /// Print one JSON object: what was written (errors too: `{"error", "kind"}`).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Writes a fitted material as `.brdf`, naming where it came from in the header.
@@ -23,6 +26,9 @@ pub fn write_brdf(m: &gonio_brdf::Material, source: &str, out: &Path) -> Result<
 pub fn export_cmd(a: ExportArgs) -> Result<()> {
     let m = read_material(&a.fit)?;
     write_brdf(&m, &a.fit.display().to_string(), &a.output)?;
-    eprintln!("{} written to {}", m.model.name(), a.output.display());
+    match a.json {
+        true => println!("{}", serde_json::json!({ "written": a.output, "model": m.model.name() })),
+        false => eprintln!("{} written to {}", m.model.name(), a.output.display()),
+    }
     Ok(())
 }

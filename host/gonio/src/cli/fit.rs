@@ -2,7 +2,7 @@
 //! or the calibrated sample CSV).
 
 use anyhow::{bail, Context, Result};
-use gonio_analysis::coefficients::Support;
+use gonio_analysis::coefficients::{Coefficient, Fitted, Source, Support};
 use gonio_analysis::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
 use gonio_brdf::{ModelId, Param};
 use serde_json::Value;
@@ -39,7 +39,7 @@ pub struct FitOptions {
     /// each model takes the names it has).
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "NAME=LO:HI")]
     pub bounds: Vec<String>,
-    /// Machine-readable output.
+    /// Print one JSON object (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
 }
@@ -265,6 +265,14 @@ pub fn compare(d: &Domain, o: &FitOptions) -> Result<Vec<Outcome>> {
     }
     bar.finish_and_clear();
     Ok(rows)
+}
+
+/// R_A and R_L of a comparison, as its report gives them: from the data
+/// where they hold the geometry, from the fits beyond.
+pub fn coefficients(d: &Domain, rows: &[Outcome]) -> Result<Vec<Coefficient>> {
+    let fits = rows.iter().map(|r| Fitted::from(&r.fit)).collect();
+    let source = Source::measured(fits, Support::of(&d.train)?)?;
+    gonio_analysis::coefficients::compute(&source, &gonio_analysis::coefficients::report_requests())
 }
 
 /// Writes `dir/report.html` of a comparison.

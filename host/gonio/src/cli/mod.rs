@@ -6,6 +6,7 @@ mod convert;
 mod detector;
 mod devices;
 mod export;
+pub mod failure;
 pub mod fit;
 pub mod grid;
 pub mod interrupt;
@@ -60,6 +61,28 @@ pub enum Command {
     Eval(model_eval::EvalArgs),
     /// Directional-hemispherical reflectance of a model, and its energy check.
     Dhr(model_eval::DhrArgs),
+}
+
+impl Command {
+    /// Whether the command was asked for one JSON object on stdout (its
+    /// errors too). `sim` serves until stopped and prints no result.
+    pub fn json(&self) -> bool {
+        match self {
+            Command::Demo(a) => a.output.json,
+            Command::Scan(a) => a.output.json,
+            Command::Devices(a) => a.json,
+            Command::Sim(_) => false,
+            Command::Calibrate(a) => a.json,
+            Command::Coefficients(a) => a.json,
+            Command::Fit(a) => a.options.json,
+            Command::Compare(a) => a.options.json,
+            Command::Plot(a) => a.json,
+            Command::Convert(a) => a.json,
+            Command::Export(a) => a.json,
+            Command::Eval(a) => a.json,
+            Command::Dhr(a) => a.json,
+        }
+    }
 }
 
 /// Reads a data file for a command. Where the file does not say what its

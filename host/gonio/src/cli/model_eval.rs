@@ -65,6 +65,7 @@ pub struct EvalArgs {
     /// Azimuth difference Δφ = φo − φi (degrees; 0 is the retro half-plane).
     #[arg(long, allow_negative_numbers = true)]
     pub dphi: f64,
+    /// Print one JSON object (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
 }
@@ -103,6 +104,7 @@ pub struct DhrArgs {
     /// Incidence polar angle θi (degrees).
     #[arg(long, allow_negative_numbers = true)]
     pub theta_i: f64,
+    /// Print one JSON object (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
 }

@@ -41,7 +41,7 @@ pub struct OutputArgs {
     /// Overwrite a scan already in the output directory.
     #[arg(long)]
     pub force: bool,
-    /// Print the summary as JSON.
+    /// Print the summary as one JSON object (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
 }
@@ -177,6 +177,7 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         v["models"] = rows.iter().map(|r| r.json.clone()).collect();
         v["material"] = truth.describe().into();
         v["best_model"] = best.fit.material.model.name().into();
+        v["coefficients"] = super::coefficients::to_json(&fit::coefficients(&domain, &rows)?);
         v["report"] = report.display().to_string().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
