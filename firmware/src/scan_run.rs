@@ -12,7 +12,7 @@ use heapless::Deque;
 /// Consecutive scan points that may all be saturated at the lowest gain, or
 /// all below the noise floor, before the head stops the scan (stray light or
 /// a failed amplifier; a dead laser or a blocked beam). A retroreflector's
-/// scan has neither run; a black sample needs the dark watch relaxed.
+/// scan has neither run; a black sample needs the dark-run limit relaxed.
 pub const SUSPECT_RUN: u32 = 8;
 
 /// Runs of suspect samples in a scan.
@@ -28,13 +28,13 @@ pub(crate) struct ScanRun {
     spec: ScanSpec,
     /// The visit order the host has sent and the head not yet taken
     /// (canonical indices), and the visit position after its last.
-    plan: Deque<u32, VISIT_QUEUE>,
+    queue: Deque<u32, VISIT_QUEUE>,
     queued_to: u32,
     total: u32,
     next_order: u32,
     measured: u32,
     skipped: u32,
-    /// The position taken from the plan and not yet done: a stop in the
+    /// The position taken from the queue and not yet done: a stop in the
     /// middle of it leaves it here, and continuing visits it again (a row
     /// from its start: the host keeps a row's samples only once it is done).
     current: Option<(u32, Visit)>,
@@ -48,7 +48,7 @@ pub(crate) struct ScanRun {
 pub(crate) enum Next {
     /// Visit position `order`, canonical index `index`: a point or a row.
     Visit { index: u32, order: u32, at: Visit },
-    /// The plan has run dry before the last point: wait for the host.
+    /// The visit queue has run dry before the last point: wait for the host.
     Starved,
     /// Every point is done.
     Finished(ScanEvent),
@@ -70,7 +70,7 @@ impl ScanRun {
         ScanRun {
             run,
             spec,
-            plan: Deque::new(),
+            queue: Deque::new(),
             queued_to: first,
             total,
             next_order: first,
@@ -117,7 +117,7 @@ impl ScanRun {
         }
         if chunk.first_order == self.queued_to {
             for &i in &chunk.indices {
-                if self.queued_to >= self.total || self.plan.push_back(i).is_err() {
+                if self.queued_to >= self.total || self.queue.push_back(i).is_err() {
                     break;
                 }
                 self.queued_to += 1;
@@ -125,17 +125,17 @@ impl ScanRun {
         }
         Ok(VisitsQueued {
             next_order: self.queued_to,
-            room: (VISIT_QUEUE - self.plan.len()) as u32,
+            room: (VISIT_QUEUE - self.queue.len()) as u32,
         })
     }
 
     /// The position to visit next: the one a stop interrupted, else the
-    /// next of the plan.
+    /// next of the queue.
     pub(crate) fn next(&mut self) -> Next {
         if self.current.is_none() {
             // Indices were checked against the grid when they were queued.
             let order = self.next_order;
-            self.current = self.plan.pop_front().and_then(|i| self.spec.visit(i, order).map(|v| (i, v)));
+            self.current = self.queue.pop_front().and_then(|i| self.spec.visit(i, order).map(|v| (i, v)));
         }
         match self.current {
             Some((index, at)) => Next::Visit {

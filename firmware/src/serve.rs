@@ -179,7 +179,7 @@ impl<B: Board> Head<B> {
             // a turn whose awaits all completed at once (requests already
             // received, replies that found room in the USB channel, a scan
             // point skipped for its kinematics) would otherwise run into the
-            // next, and a burst of queued plan chunks or a run of
+            // next, and a burst of queued visit chunks or a run of
             // unreachable points into one long stretch.
             embassy_futures::yield_now().await;
         }
@@ -468,7 +468,7 @@ impl<B: Board> Head<B> {
         self.publish::<ScanEventTopic, L>(&ev, link).await
     }
 
-    /// A running scan whose plan has run dry: waits for the host's next
+    /// A running scan whose visit queue has run dry: waits for the host's next
     /// chunk (or any request), the E-STOP, or the host's silence (which the
     /// next step sees and holds the scan for).
     async fn starved<L: Link, S: Sentry>(&mut self, link: &mut L, sentry: &mut S, inbox: &mut Inbox) -> Result<(), LinkError> {

@@ -121,7 +121,7 @@ pub type VisitReply = Reply<VisitsQueued>;
 /// commands to code generated per endpoint (the firmware's `Command` and
 /// `decode`). A new endpoint is a row here and its arm in the firmware's
 /// `handle` (which the compiler asks for); the host's client sends any
-/// endpoint of the table (`Head::request`), and a response type that cannot
+/// endpoint of the table (`HeadClient::request`), and a response type that cannot
 /// be refused also needs its line in `always_accepted!`. The firmware's
 /// `dispatch.rs` imports its request type, as
 /// the generated code names request types as the caller sees them. Each

@@ -3,16 +3,12 @@
 use postcard_schema::Schema;
 use serde::{Deserialize, Serialize};
 
-/// Bumped on every change of a message type or of what one means (11: a
-/// sweep scan's rows turned evenly about the laser, `row_turn`, where the same
-/// `ScanSpec` spaced them evenly at the horizon; 12: a sweep scan's retro
-/// points, [`crate::scan::SWEEP_LAYOUT_SINCE`]; 13: a scan's lobe patterns,
-/// `ScanSpec::patterns`, and the reference head's through-splitter zone out
-/// to 5°; 14: one name per meaning on the wire: the detector's reference
-/// learning is `gonio/learn` with `LearnRequest` / `LearnReport`, the visit
-/// order `gonio/visits` with `VisitChunk` / `VisitsQueued`). Keys are schema-hashed too, so an
-/// old head answers new requests with `UnknownKey`; the identify endpoint keeps
-/// its types stable so the host can always tell *why*.
+/// Bumped on every change of a message type, of a name on the wire or of
+/// what a message means (what each bump changed is in git's history; a
+/// sweep scan's layout dates from [`crate::scan::SWEEP_LAYOUT_SINCE`]). Keys
+/// are schema-hashed too, so an old head answers new requests with
+/// `UnknownKey`; the identify endpoint keeps its types stable so the host
+/// can always tell *why*.
 pub const PROTOCOL_VERSION: u16 = 14;
 
 /// USB identity of the head (pid.codes test range until a PID is assigned).

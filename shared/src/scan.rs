@@ -10,9 +10,9 @@
 //! then θo, then Δφ, each incidence's pattern points after its grid (a
 //! sweep scan's: θi-major, then the retro point, the rows, the pattern);
 //! files and resumption use it. The *visit order* is the order
-//! the head visits positions in: the host plans it and sends it in chunks of
-//! canonical indices (below); the head takes any order. The host's
-//! planner (`scan_order` in gonio-acquire) puts each incidence's unreachable
+//! the head visits positions in: the host orders the positions and sends
+//! the order in chunks of canonical indices (below); the head takes any
+//! order. The host's `scan_order` (gonio-acquire) puts each incidence's unreachable
 //! points first and the reachable ones along a short path of move times;
 //! where it does not search (a sweep scan's positions, an incidence too large
 //! for the search) it sends [`ScanSpec::index_at_order`]: a serpentine that
@@ -32,7 +32,7 @@ use serde::{Deserialize, Serialize};
 
 /// The protocol since which a sweep scan's positions lie where they do now
 /// (each incidence's retro point first, its rows turned evenly about the
-/// laser): a scan planned under an earlier one is not resumed under this.
+/// laser): a scan recorded under an earlier one is not resumed under this.
 /// Raised only when `ScanSpec::visit` or `index_at_order` move a sweep
 /// scan's positions.
 pub const SWEEP_LAYOUT_SINCE: u16 = 12;
@@ -458,12 +458,12 @@ pub enum ScanEvent {
     /// The scan stopped early; `next_order` resumes it.
     Stopped { run: u32, next_order: u32, reason: Fault },
     /// The scan is held at `next_order`, at the host's request (`None`) or
-    /// for a fault (host silence): continue resumes it there without
-    /// replanning; a new scan replaces it.
+    /// for a fault (host silence): `gonio/continue` carries it on there with
+    /// its queue as it was; a new scan replaces it.
     Paused { run: u32, next_order: u32, reason: Option<Fault> },
 }
 
-/// Visit positions a chunk of the plan carries: 32 indices of at most five
+/// Visit positions a chunk of the visit order carries: 32 indices of at most five
 /// bytes each keep a chunk inside one frame.
 pub const VISIT_CHUNK: usize = 32;
 /// Visit positions the head holds ahead of the point it is at (1 KiB). At
@@ -472,7 +472,7 @@ pub const VISIT_CHUNK: usize = 32;
 /// running.
 pub const VISIT_QUEUE: usize = 256;
 
-/// The next stretch of a scan's visit order, from the host (which plans it:
+/// The next stretch of a scan's visit order, from the host (which orders it:
 /// f64 at GHz, where the head would spend seconds;
 /// `docs/decisions/001-host-plans-the-visit-order.md`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Schema)]
@@ -488,7 +488,7 @@ pub struct VisitChunk {
     pub indices: heapless::Vec<u32, VISIT_CHUNK>,
 }
 
-/// What the head holds of the plan after a chunk.
+/// What the head holds of the visit order after a chunk.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, Schema)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct VisitsQueued {

@@ -19,7 +19,7 @@ pub enum HeadState {
         next_order: u32,
         total: u32,
     },
-    /// Scan `run` is held at `next_order`; continue resumes it there.
+    /// Scan `run` is held at `next_order`; `gonio/continue` carries it on there.
     Paused {
         run: u32,
         next_order: u32,

@@ -1,6 +1,6 @@
 //! The scan grid shared by head and host: canonical indexing, the
-//! serpentine visit order (a sweep scan's too), and the host's plan against
-//! its lower bound.
+//! fallback serpentine order (`index_at_order`, a sweep scan's too), and
+//! the host's visit order against its lower bound.
 
 use gonio_acquire::scan_order::{lower_bound, scan_time, visit_order, ScanTime};
 use gonio_firmware::config::REFERENCE;

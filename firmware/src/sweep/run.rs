@@ -135,16 +135,16 @@ impl<B: Board> Head<B> {
         if s.signal.flags.doubtful() {
             self.samples_flagged = self.samples_flagged.wrapping_add(1);
         }
-        // The watch of a scan's points, over its samples: a run of
+        // The suspect count of a scan's points, over its samples: a run of
         // saturated ones (8, some 8° of a row at 30 deg/s) ends the scan,
         // and so does a row all of whose samples are below the noise (a
         // dead laser, a blocked beam: a swept sample integrates a third of a
         // point's periods, and a dark floor a few degrees long is no
         // fault); the arm is braked, the sample that completed it not sent.
         sw.lit |= !s.signal.flags.contains(SampleFlags::BELOW_NOISE);
-        let watched = scan.count_suspect(s.signal.flags.difference(SampleFlags::BELOW_NOISE));
+        let counted = scan.count_suspect(s.signal.flags.difference(SampleFlags::BELOW_NOISE));
         let row_dark = !sw.moving && !sw.lit;
-        if let Err(f) = watched.and(if row_dark { Err(Fault::NoSignal) } else { Ok(()) }) {
+        if let Err(f) = counted.and(if row_dark { Err(Fault::NoSignal) } else { Ok(()) }) {
             return Err(self.abandon_sweep(f).await);
         }
         if sw.moving {

@@ -133,11 +133,11 @@ fn a_sweep_scan_takes_its_lobe_width_from_a_fit_file() {
     assert!(!o.status.success() && text(&o).contains("--sweep"), "{}", text(&o));
 }
 
-/// A sweep scan planned under an earlier protocol (its rows and retro
+/// A sweep scan recorded under an earlier protocol (its rows and retro
 /// points elsewhere), or by a gonio that did not keep it, is not resumed
 /// into a mix of the two layouts; a grid scan, unchanged, is.
 #[test]
-fn a_sweep_scan_planned_under_another_protocol_is_not_resumed() {
+fn a_sweep_scan_recorded_under_another_protocol_is_not_resumed() {
     let dir = tempfile::tempdir().unwrap();
     let cases = [
         ("sweep", Some(11), "protocol 11"),

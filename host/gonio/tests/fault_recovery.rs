@@ -81,8 +81,8 @@ fn link_and_transient_faults_are_recovered_without_losing_or_repeating_a_sample(
         ("duplicate@60", Recovery::None),
         ("delay@60:300", Recovery::None),
         // Frames 1–7 answer the setup, 8 the scan request; then the five
-        // chunks of the plan are answered among the first points' events,
-        // so 9–156 are the 143 points' events and 5 plan replies (156 the
+        // chunks of the visit order are answered among the first points' events,
+        // so 9–156 are the 143 points' events and 5 chunk replies (156 the
         // last sample), 157 the end of the scan, whose loss the host
         // notices by asking the head (no recovery needed).
         ("drop@156", Named("events lost or out of order")),

@@ -9,7 +9,7 @@
 //! | `reference.csv`, `samples.csv.part`, `samples.csv` | [`samples`] (swept samples' geometry: [`swept`]) |
 //! | `run.json` | [`run`] |
 //! | `calibrated.csv` | [`calibrated`] |
-//! | `calibration.json` | named here; written by the calibration (`gonio-analysis`) |
+//! | `calibration.json` | named here; its fields are the calibration's summary, written by `gonio calibrate` |
 
 pub mod calibrated;
 pub mod record;

@@ -70,8 +70,8 @@ pub struct ScanRecord {
 /// A laser-drift monitor: one geometry of the mounted target, measured
 /// before the scan, after every `every` scan positions, and after the scan.
 /// Its readings track the laser's power through the scan (`gonio calibrate`
-/// interpolates them). The scan is paused for it with an abort between two
-/// points and continued from the next position, as a resume would.
+/// interpolates them). The scan is held for it between two points with
+/// `gonio/pause` and carried on with `gonio/continue`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Monitor {
     pub at: Geometry,
@@ -122,7 +122,7 @@ impl ScanRecord {
     }
 
     /// The record of the scan in `dir`, to resume: refused for a sweep scan
-    /// planned before its positions took their place
+    /// recorded before its positions took their place
     /// ([`SWEEP_LAYOUT_SINCE`]: the rows turned evenly about the laser, each
     /// incidence's retro point first) or by a later gonio, so that no scan
     /// mixes two layouts.
@@ -189,7 +189,7 @@ impl DetectorChoice {
 #[derive(Deserialize)]
 #[serde(untagged)]
 enum StoredDetector {
-    Plan {
+    Choice {
         reference: Reference,
         #[serde(alias = "calibrate_at")]
         learn_at: Option<Geometry>,
@@ -208,7 +208,7 @@ impl TryFrom<StoredDetector> for DetectorChoice {
 
     fn try_from(stored: StoredDetector) -> Result<Self> {
         match stored {
-            StoredDetector::Plan {
+            StoredDetector::Choice {
                 reference,
                 learn_at,
                 integration_s,

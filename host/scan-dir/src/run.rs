@@ -115,7 +115,7 @@ pub struct RunRecord {
     pub detection: Detection,
     /// The reference the detector learned before the scan, if any.
     pub learned: Option<LearnReport>,
-    /// Duration the plan predicted before the scan (s); compare `counts.head_time_s`.
+    /// The duration estimated before the scan (s); compare `counts.head_time_s`.
     pub estimated_s: Option<f64>,
     pub counts: ScanOutcome,
     pub complete: bool,

@@ -37,7 +37,7 @@
 //!   fills the ADC's ring of two: with the serve loop's budget it must fit
 //!   in a period of the fastest chop a sweep runs with
 //!   (`SweepRequest::CHOP_MAX_HZ`).
-//! - `resume_instructions_max` (≤ 1 000 000): a scan continued near its end.
+//! - `resume_instructions_max` (≤ 1 000 000): a scan resumed near its end.
 //! - `await_free_instructions_max` (≤ 100 000): the longest poll of the serve
 //!   loop while it serves the full Belcour grid (all 3 441 points, with a
 //!   sanity model, its plan fed as the host feeds it) and a resume two plan

@@ -168,7 +168,7 @@ impl ScanDriver<'_> {
     }
 
     /// Runs the scan from `spec.first_order`, to the end or, with `stop_at`,
-    /// until that visit position has been reached (then aborts it between
+    /// until that visit position has been reached (then pauses it between
     /// points), or until something interrupts it: the requests, events and
     /// storage of the [`Sequencer`]'s decisions.
     async fn stretch(&mut self, spec: &ScanSpec, stop_at: Option<u32>) -> Result<Stretch> {

@@ -1,5 +1,5 @@
 //! A scan's visit order, planned on the host and streamed to the head in
-//! chunks (`gonio/plan`), what an order costs, and how far it is from the
+//! chunks (`gonio/visits`), what an order costs, and how far it is from the
 //! fastest possible.
 //!
 //! Within each incidence angle, the unreachable points come first (they cost
@@ -7,7 +7,7 @@
 //! *move times* under the axis limits that local search finds ([`tour`]),
 //! starting from where the previous incidence ended. The search is
 //! deterministic, so the duration estimate and a resumed scan follow the same
-//! order; an incidence with more points than [`PLAN_CAPACITY`] falls back to
+//! order; an incidence with more points than [`SEARCH_CAPACITY`] falls back to
 //! the serpentine of `ScanSpec::index_at_order`.
 //!
 //! Why here and not on the head: `docs/decisions/001-host-plans-the-visit-order.md`.
@@ -25,7 +25,7 @@ use gonio_firmware::motion::{move_time, target_steps};
 use gonio_shared::ScanSpec;
 
 /// Points of one incidence angle planned by search.
-pub const PLAN_CAPACITY: usize = 4096;
+pub const SEARCH_CAPACITY: usize = 4096;
 
 /// Stage targets (microsteps) of the points of incidence `block` in canonical
 /// order, `None` where a point is unreachable.
@@ -45,9 +45,9 @@ pub fn move_s(cfg: &HeadConfig, from: [i32; 3], to: [i32; 3]) -> f64 {
 }
 
 /// The visit order of a whole scan (canonical indices), from stage position
-/// `from` (microsteps). A sweep scan's positions follow their serpentine
-/// (`ScanSpec::index_at_order`): each incidence's retro point, then its
-/// rows, each starting where the previous one ended.
+/// `from` (microsteps). A sweep scan's positions follow
+/// `ScanSpec::index_at_order` (its rows each starting where the previous
+/// one ended).
 pub fn visit_order(cfg: &HeadConfig, spec: &ScanSpec, from: [i32; 3]) -> impl Iterator<Item = u32> {
     let n = spec.len();
     if spec.sweep.is_some() {
@@ -59,7 +59,7 @@ pub fn visit_order(cfg: &HeadConfig, spec: &ScanSpec, from: [i32; 3]) -> impl It
     let mut at = from;
     for block in 0..blocks {
         let base = block * per_block;
-        if per_block as usize > PLAN_CAPACITY {
+        if per_block as usize > SEARCH_CAPACITY {
             order.extend((base..base + per_block).filter_map(|o| spec.index_at_order(o)));
             continue;
         }

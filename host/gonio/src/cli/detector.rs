@@ -21,7 +21,7 @@ pub struct DetectorArgs {
     /// Before scanning, learn the detector's phase and waveform at this
     /// geometry, THETA_I,THETA_O,DPHI in degrees: put a strong, steady
     /// target there (the reference plate, or the retro peak of the sample).
-    #[arg(long, alias = "calibrate-at", value_name = "TI,TO,DPHI", allow_hyphen_values = true)]
+    #[arg(long, value_name = "TI,TO,DPHI", allow_hyphen_values = true)]
     pub learn_at: Option<String>,
     /// Integration time per point (s), rounded to whole chop periods.
     #[arg(long, default_value_t = 0.1)]

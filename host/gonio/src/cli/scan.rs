@@ -79,8 +79,8 @@ pub struct ScanArgs {
     /// and after the scan; `gonio calibrate` corrects the drift with it.
     #[arg(long, value_name = "TI,TO,DPHI")]
     pub monitor: Option<String>,
-    /// Scan positions between two monitor readings (each pause has the head
-    /// replay its plan to continue, so not too few).
+    /// Scan positions between two monitor readings (each visit costs a move
+    /// to the monitor and back and four readings, so not too few).
     #[arg(long, default_value_t = 500, requires = "monitor")]
     pub monitor_every: u32,
     /// Measure the Lambertian reference plate first (written to
