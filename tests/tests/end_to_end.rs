@@ -5,7 +5,7 @@
 use gonio::cli::simulated::Simulated;
 use gonio_acquire::client::HeadClient;
 use gonio_acquire::scan;
-use gonio_acquire::scan_order::{dwell_s, scan_time, visit_order};
+use gonio_acquire::scan_order::{dwell_s, scan_time, time_left_s, visit_order};
 use gonio_acquire::target::{Port, Target};
 use gonio_brdf::{Directions, Material, Specimen};
 use gonio_firmware::config::REFERENCE;
@@ -147,6 +147,12 @@ async fn the_host_plans_for_the_mechanics_the_head_reports() {
         "reference estimate {reference} s, head time {head} s"
     );
     assert_ne!(planned, for_reference, "the test needs a head the reference plan does not fit");
+    // The progress bar's time left: the same plan, position by position,
+    // from the whole estimate down to nothing.
+    let left = time_left_s(&cfg, &spec, visit_order(&cfg, &spec, PARK), PARK, &det);
+    assert_eq!(left.len(), spec.len() as usize + 1);
+    assert!((left[0] - ours).abs() < 1e-9 * ours, "{} vs {ours}", left[0]);
+    assert!(left.windows(2).all(|w| w[1] <= w[0]) && *left.last().unwrap() == 0.0);
 }
 
 #[tokio::test]

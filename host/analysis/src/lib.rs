@@ -16,4 +16,5 @@ pub mod formats;
 pub mod lobe;
 pub mod plot;
 pub mod report;
+pub mod rounding;
 pub mod uncertainty;

@@ -9,6 +9,7 @@ use crate::coefficients::{self, Estimate, Fitted, Kind, Provenance, Source, Supp
 use crate::fit::{self, Dataset, Fit, Metrics, Units};
 use crate::formats::brdf_explorer;
 use crate::plot;
+use crate::rounding;
 use anyhow::{Context, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -39,12 +40,12 @@ fn fitted(fits: &[Fit]) -> Vec<Fitted> {
 fn coefficient_cell(e: &Estimate) -> String {
     let provenance = e.basis.as_ref().map(|b| b.provenance);
     let title = e.basis.as_ref().map_or(String::new(), |b| escape(&b.why));
-    let text = format!("{:.4e} ± {:.1e}", e.value, e.u);
+    let text = rounding::with_uncertainty(e.value, e.u);
     match provenance {
         Some(Provenance::Extrapolated) => format!(
-            "<td class=\"ex\" title=\"{title}\">{text}<br><small>extrapolated ({}, models ±{:.1e})</small></td>",
+            "<td class=\"ex\" title=\"{title}\">{text}<br><small>extrapolated ({}, models ±{})</small></td>",
             e.model.unwrap_or("model"),
-            e.u_model.unwrap_or(0.0)
+            rounding::significant(e.u_model.unwrap_or(0.0), 2)
         ),
         Some(p) => format!("<td title=\"{title}\">{text}<br><small>{}</small></td>", p.name()),
         None => format!("<td>{text}</td>"),
@@ -151,26 +152,10 @@ fn params_cell(f: &Fit) -> String {
     let names = f.material.model.param_names();
     names
         .iter()
-        .zip(&f.material.params)
-        .zip(&f.stderr)
-        .map(|((n, v), e)| match e {
-            Some(e) => format!("{n} = {v:.4e} ± {e:.1e}"),
-            None => format!("{n} = {v:.4e}"),
-        })
+        .enumerate()
+        .map(|(k, n)| format!("{n} = {}", f.parameter_text(k)))
         .collect::<Vec<_>>()
         .join("<br>")
-}
-
-/// Caption of a picture from its file stem (`plane-30` …, see `plot::render`).
-fn caption(stem: &str) -> String {
-    let (kind, ti) = stem.split_once('-').unwrap_or((stem, ""));
-    let what = match kind {
-        "plane" => "incidence plane, log-polar (data and the best fits; retro and mirror directions marked)",
-        "hemisphere" => "projected hemisphere (θo·cosΔφ, θo·sinΔφ), log f_r of the data",
-        "residuals" => "relative residuals of the best fit",
-        other => other,
-    };
-    format!("θi = {ti}°: {what}")
 }
 
 /// Fits sorted best first (RMSE on the fitted samples).
@@ -197,10 +182,12 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
          table {{ border-collapse: collapse; }}\n\
          td, th {{ border: 1px solid #bbb; padding: 0.3em 0.6em; text-align: right; vertical-align: top; }}\n\
          td.l, th.l {{ text-align: left; }}\n\
+         td {{ white-space: nowrap; }}\n\
          tr.best {{ background: #eef6ee; }}\n\
          td.ex {{ background: #f3eee2; font-style: italic; }}\n\
-         figure {{ display: inline-block; margin: 0.5em; max-width: 48%; vertical-align: top; }}\n\
-         figure img {{ max-width: 100%; }}\n\
+         div.row {{ display: flex; gap: 0.8em; overflow-x: auto; }}\n\
+         figure {{ margin: 0.3em 0; flex: none; }}\n\
+         figcaption {{ max-width: 40em; }}\n\
          </style>\n</head>\n<body>\n<h1>{t}</h1>\n<table>\n",
         t = escape(&r.title)
     );
@@ -245,17 +232,22 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         let m = &f.metrics;
         let _ = write!(
             html,
-            "<tr{}><td class=\"l\">{name}</td><td>{}</td><td>{:.4e}</td><td>{:.4e}</td><td>{:.5}</td>",
+            "<tr{}><td class=\"l\">{name}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
             if rank < DRAWN { " class=\"best\"" } else { "" },
             f.material.params.len(),
-            m.rmse,
-            m.nrmse,
-            m.ncc
+            rounding::significant(m.rmse, 4),
+            rounding::significant(m.nrmse, 4),
+            rounding::figure(m.ncc, 5)
         );
         if holdout {
             match r.holdout.get(i).and_then(Option::as_ref) {
                 Some(h) => {
-                    let _ = write!(html, "<td>{:.4e}</td><td>{:.5}</td>", h.nrmse, h.ncc);
+                    let _ = write!(
+                        html,
+                        "<td>{}</td><td>{}</td>",
+                        rounding::significant(h.nrmse, 4),
+                        rounding::figure(h.ncc, 5)
+                    );
                 }
                 None => html.push_str("<td></td><td></td>"),
             }
@@ -277,19 +269,28 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     }
     let drawn: Vec<_> = order.iter().take(DRAWN).map(|&i| r.fits[i].material.clone()).collect();
     let names: Vec<&str> = drawn.iter().map(|m| m.model.name()).collect();
-    let files = plot::render(r.data, &drawn, &dir.join("plots"))?;
+    let files = plot::render(r.data, &drawn, &dir.join("plots"), &plot::Options::default())?;
     let _ = writeln!(
         html,
-        "<h2>Pictures</h2>\n<p>Drawn: {}. Click a picture for its SVG.</p>",
-        escape(&names.join(", "))
+        "<h2>Pictures</h2>\n<p>Drawn: {}. One row per incidence angle (scroll it sideways); click a picture for \
+         its SVG. Error bars and U: the expanded uncertainty (k = {}) of each sample's budget.</p>",
+        escape(&names.join(", ")),
+        crate::uncertainty::K_COVERAGE
     );
-    for png in files.iter().filter(|p| p.extension().is_some_and(|e| e == "png")) {
-        let stem = png.file_stem().and_then(|s| s.to_str()).unwrap_or_default();
-        let _ = writeln!(
-            html,
-            "<figure><a href=\"plots/{stem}.svg\"><img src=\"plots/{stem}.png\" alt=\"{stem}\"></a><figcaption>{}</figcaption></figure>",
-            escape(&caption(stem))
-        );
+    for ti in r.data.incidence_angles_deg() {
+        let _ = writeln!(html, "<h3>θi = {ti}°</h3>\n<div class=\"row\">");
+        for kind in plot::Picture::ALL {
+            let stem = format!("{}-{ti}", kind.name());
+            if !files.iter().any(|p| p.file_stem().and_then(|s| s.to_str()) == Some(stem.as_str())) {
+                continue;
+            }
+            let _ = writeln!(
+                html,
+                "<figure><a href=\"plots/{stem}.svg\"><img src=\"plots/{stem}.png\" alt=\"{stem}\"></a><figcaption>{}</figcaption></figure>",
+                escape(kind.describe())
+            );
+        }
+        html.push_str("</div>\n");
     }
     let _ = writeln!(html, "<p><small>gonio {}</small></p>\n</body>\n</html>", env!("CARGO_PKG_VERSION"));
     let path = dir.join("report.html");

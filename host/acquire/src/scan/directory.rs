@@ -4,10 +4,11 @@
 //! `run.json`. Files are written only once the head answers and the scan is
 //! known to be possible; Ctrl-C stops the head and says how to resume.
 
+use super::progress::Progress;
 use super::run;
 use crate::operator::Operator;
 use crate::plate;
-use crate::scan_order::{dwell_s, lower_bound, scan_time, sweep_time, visit_order};
+use crate::scan_order::{dwell_s, lower_bound, time_left_s, visit_order};
 use crate::session::{Session, Setup};
 use crate::target::Target;
 use anyhow::{bail, Context, Result};
@@ -85,7 +86,14 @@ pub async fn scan_into(
         plate::measure_plate(session.head(), target.as_ref(), dir, operator).await?;
     }
     let config = *session.head().config();
-    let estimate = estimate_s(&config, spec, &detection);
+    let rest = visit_order(&config, spec, PARK).skip(spec.first_order as usize);
+    let progress = Progress::new(
+        operator,
+        time_left_s(&config, spec, rest, PARK, &detection),
+        spec.first_order,
+        positions(spec),
+    );
+    let estimate = progress.estimate_s();
     if spec.sweep.is_some() {
         operator.notice(format_args!(
             "{} rows to sweep, {} retro points and {} pattern points to measure at rest; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
@@ -115,9 +123,8 @@ pub async fn scan_into(
         }
         None => SampleWriter::create(dir)?,
     };
-    let pb = operator.bar(spec.len() as u64, "scanning", positions(spec));
     let ended = {
-        let scanning = run(&mut session, spec, &mut writer, &pb, record.monitor.as_ref());
+        let scanning = run(&mut session, spec, &mut writer, &progress, record.monitor.as_ref());
         tokio::pin!(scanning);
         tokio::select! {
             r = &mut scanning => Some(r),
@@ -125,7 +132,7 @@ pub async fn scan_into(
         }
     };
     let Some(ended) = ended else {
-        pb.finish_and_clear();
+        progress.finish();
         // The scan is dropped between two events: every row on disk is whole.
         let safe = session.head().request::<AbortEndpoint>(&()).await.is_ok();
         session.close().await;
@@ -267,19 +274,6 @@ impl std::fmt::Display for Interrupted {
 }
 
 impl std::error::Error for Interrupted {}
-
-/// The scan replayed from the park position under the head's reported axis
-/// limits, from the scan's first position on: moves, settle and acquisition,
-/// or a sweep scan's moves, settling, ranging and sweeps (s).
-fn estimate_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> f64 {
-    let (settle, acquire) = dwell_s(det);
-    let rest = visit_order(cfg, spec, PARK).skip(spec.first_order as usize);
-    if spec.sweep.is_some() {
-        let ranging = acquire - det.integration_s as f64;
-        return sweep_time(cfg, spec, rest, PARK, (settle, acquire, ranging), det.settings.chop_hz).total_s();
-    }
-    scan_time(cfg, spec, rest, PARK, settle, acquire).total_s()
-}
 
 /// The least head time any stop-and-go order of the whole scan could take
 /// (s), for a sweep scan of its grid's points; `None` for a scan too large

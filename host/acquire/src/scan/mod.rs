@@ -3,6 +3,7 @@
 //! [`directory`] wraps it in a scan directory.
 
 pub mod directory;
+pub mod progress;
 pub mod sequencer;
 
 use crate::client::{is_link_loss, HeadClient};
@@ -17,7 +18,7 @@ use gonio_shared::icd::{
     AbortEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, PauseEndpoint, StatusEndpoint, VisitEndpoint,
 };
 use gonio_shared::{HeadState, ScanAccepted, ScanSpec, VisitChunk, VISIT_CHUNK, VISIT_QUEUE};
-use indicatif::ProgressBar;
+use progress::Progress;
 use sequencer::{Action, Interruption, Sequencer, Stretch, EVENT_TIMEOUT};
 use std::collections::BTreeMap;
 use std::time::{Duration, Instant};
@@ -35,7 +36,7 @@ pub async fn run(
     session: &mut Session,
     spec: &ScanSpec,
     out: &mut SampleWriter,
-    pb: &ProgressBar,
+    pb: &Progress,
     monitor: Option<&Monitor>,
 ) -> Result<ScanOutcome> {
     let t0 = Instant::now();
@@ -66,7 +67,6 @@ pub async fn run(
         progress: first,
         order,
     };
-    pb.set_length((run.outcome.points - first) as u64);
     let mut read_monitor_now = true;
     loop {
         if let (Some(m), true) = (monitor, read_monitor_now) {
@@ -95,7 +95,7 @@ pub async fn run(
     if let Some(m) = monitor {
         while !run.visit_monitor(m, run.outcome.points).await? {}
     }
-    pb.finish_and_clear();
+    pb.finish();
     let mut outcome = run.outcome;
     outcome.head_time_s = run.clock.span_s();
     outcome.wall_time_s = t0.elapsed().as_secs_f64();
@@ -107,7 +107,7 @@ pub async fn run(
 struct ScanDriver<'a> {
     session: &'a mut Session,
     out: &'a mut SampleWriter,
-    pb: &'a ProgressBar,
+    pb: &'a Progress,
     outcome: ScanOutcome,
     clock: HeadClock,
     /// Recoveries without a new point since, counted to give up.
@@ -269,8 +269,7 @@ impl ScanDriver<'_> {
                 }
             }
             if seq.progress() != progress {
-                pb.inc((seq.expected() - progress.0) as u64);
-                pb.set_message(format!("{} measured, {} unreachable", outcome.measured, outcome.skipped));
+                pb.update(seq.expected(), clock.span_s(), outcome.measured, outcome.skipped);
                 (waiting_since, progress) = (Instant::now(), seq.progress());
             }
         }

@@ -76,11 +76,27 @@ pub fn scan_time(
     integration_s: f64,
 ) -> ScanTime {
     let mut t = ScanTime::default();
-    let mut at = from;
-    for g in visit.filter_map(|i| spec.point(i)) {
-        t.add_point(cfg, &mut at, &g, settle_s, integration_s);
-    }
+    scan_steps(cfg, spec, visit, from, (settle_s, integration_s), &mut t, |_| {});
     t
+}
+
+/// [`scan_time`], calling `after` with the running total after each position.
+fn scan_steps(
+    cfg: &HeadConfig,
+    spec: &ScanSpec,
+    visit: impl Iterator<Item = u32>,
+    from: [i32; 3],
+    (settle_s, integration_s): (f64, f64),
+    t: &mut ScanTime,
+    mut after: impl FnMut(&ScanTime),
+) {
+    let mut at = from;
+    for i in visit {
+        if let Some(g) = spec.point(i) {
+            t.add_point(cfg, &mut at, &g, settle_s, integration_s);
+        }
+        after(t);
+    }
 }
 
 /// Duration of a sweep scan's positions in the order `visit` yields them,
@@ -96,42 +112,94 @@ pub fn sweep_time(
     spec: &ScanSpec,
     visit: impl Iterator<Item = u32>,
     from: [i32; 3],
-    (settle_s, acquire_s, prepare_s): (f64, f64, f64),
+    dwell: (f64, f64, f64),
     chop_hz: f32,
 ) -> ScanTime {
     let mut t = ScanTime::default();
+    sweep_steps(cfg, spec, visit, from, dwell, chop_hz, &mut t, |_| {});
+    t
+}
+
+/// [`sweep_time`], calling `after` with the running total after each position.
+#[allow(clippy::too_many_arguments)]
+fn sweep_steps(
+    cfg: &HeadConfig,
+    spec: &ScanSpec,
+    visit: impl Iterator<Item = u32>,
+    from: [i32; 3],
+    (settle_s, acquire_s, prepare_s): (f64, f64, f64),
+    chop_hz: f32,
+    t: &mut ScanTime,
+    mut after: impl FnMut(&ScanTime),
+) {
     let mut at = from;
     for (order, i) in (spec.first_order..).zip(visit) {
-        let row = match spec.visit(i, order) {
-            Some(Visit::Row(row)) => row,
-            Some(Visit::Point(g)) => {
-                t.add_point(cfg, &mut at, &g, settle_s, acquire_s);
-                continue;
-            }
-            None => continue,
-        };
-        let Ok(p) = sweep::row_plan(cfg, &row, chop_hz) else {
-            t.skipped += 1;
-            continue;
-        };
-        let (to_start, across, limits) = ([0, 1, 2].map(|k| p.start[k] - at[k]), p.delta(), p.limits);
-        // As `motion::plan` queues it: the stretches, or the slowest all
-        // along where they overflow the queue; planned before the arm starts.
-        let fallback = slowest(&p.levels);
-        let mut blocks = axis_blocks(cfg, across, limits, &p.levels, STEP_TICK_HZ);
-        let levels = match blocks.iter().all(|&b| b <= QUEUE) {
-            true => &p.levels[..],
-            false => {
-                blocks = axis_blocks(cfg, across, limits, &fallback, STEP_TICK_HZ);
-                &fallback[..]
-            }
-        };
-        t.planning_s += plan_s(blocks.iter().sum());
-        t.add_move(cfg, to_start);
-        t.settle_s += settle_s + prepare_s;
-        t.integration_s += profile_s(cfg, across, limits, levels);
-        t.measured += 1;
-        at = p.end;
+        match spec.visit(i, order) {
+            Some(Visit::Row(row)) => sweep_row(cfg, &row, chop_hz, (settle_s, prepare_s), &mut at, t),
+            Some(Visit::Point(g)) => t.add_point(cfg, &mut at, &g, settle_s, acquire_s),
+            None => {}
+        }
+        after(t);
     }
-    t
+}
+
+/// One row of a sweep scan from stage position `at` (left at its end).
+fn sweep_row(
+    cfg: &HeadConfig,
+    row: &gonio_shared::SweepRow,
+    chop_hz: f32,
+    (settle_s, prepare_s): (f64, f64),
+    at: &mut [i32; 3],
+    t: &mut ScanTime,
+) {
+    let Ok(p) = sweep::row_plan(cfg, row, chop_hz) else {
+        t.skipped += 1;
+        return;
+    };
+    let (to_start, across, limits) = ([0, 1, 2].map(|k| p.start[k] - at[k]), p.delta(), p.limits);
+    // As `motion::plan` queues it: the stretches, or the slowest all
+    // along where they overflow the queue; planned before the arm starts.
+    let fallback = slowest(&p.levels);
+    let mut blocks = axis_blocks(cfg, across, limits, &p.levels, STEP_TICK_HZ);
+    let levels = match blocks.iter().all(|&b| b <= QUEUE) {
+        true => &p.levels[..],
+        false => {
+            blocks = axis_blocks(cfg, across, limits, &fallback, STEP_TICK_HZ);
+            &fallback[..]
+        }
+    };
+    t.planning_s += plan_s(blocks.iter().sum());
+    t.add_move(cfg, to_start);
+    t.settle_s += settle_s + prepare_s;
+    t.integration_s += profile_s(cfg, across, limits, levels);
+    t.measured += 1;
+    *at = p.end;
+}
+
+/// The head time still to run before each position of `spec` from its
+/// `first_order` in the order `visit` yields them (s), then 0 after the last:
+/// element 0 is the whole estimate. The dwell is the detection's
+/// ([`dwell_s`]), a sweep scan's rows as [`sweep_time`] counts them.
+pub fn time_left_s(cfg: &HeadConfig, spec: &ScanSpec, visit: impl Iterator<Item = u32>, from: [i32; 3], det: &DetectionReport) -> Vec<f64> {
+    let (settle, acquire) = dwell_s(det);
+    let mut done = vec![0.0];
+    let mut t = ScanTime::default();
+    let record = |t: &ScanTime| done.push(t.total_s());
+    if spec.sweep.is_some() {
+        let ranging = acquire - det.integration_s as f64;
+        sweep_steps(
+            cfg,
+            spec,
+            visit,
+            from,
+            (settle, acquire, ranging),
+            det.settings.chop_hz,
+            &mut t,
+            record,
+        );
+    } else {
+        scan_steps(cfg, spec, visit, from, (settle, acquire), &mut t, record);
+    }
+    let total = t.total_s();
+    done.into_iter().map(|d| total - d).collect()
 }

@@ -17,7 +17,7 @@ mod duration;
 mod tour;
 
 pub use bound::{lower_bound, MoveBound, BOUND_CAPACITY};
-pub use duration::{dwell_s, scan_time, sweep_time, ScanTime};
+pub use duration::{dwell_s, scan_time, sweep_time, time_left_s, ScanTime};
 
 use gonio_firmware::config::HeadConfig;
 use gonio_firmware::kinematics;

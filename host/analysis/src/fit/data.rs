@@ -129,7 +129,7 @@ impl Dataset {
         let negative = self.observations.iter().filter(|o| o.value < 0.0).count();
         if negative > 0 {
             out.push(format!(
-                "{negative} of {n} values are negative (noise about zero, or an offset?); a BRDF is not"
+                "{negative} of {n} values are negative (noise about zero, or an offset?), where a BRDF cannot be: they are fitted as they are"
             ));
         }
         if n > 0 && self.observations.iter().all(|o| o.value == 0.0) {

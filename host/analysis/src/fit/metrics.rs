@@ -13,6 +13,19 @@ pub struct Metrics {
 }
 
 impl Metrics {
+    /// The four figures as text, `RMSE` and `L2` in the data's units: four
+    /// significant digits, NCC to five decimals.
+    pub fn summary(&self) -> String {
+        use crate::rounding::{figure, significant};
+        format!(
+            "RMSE {}  NRMSE {}  NCC {}  L2 {}",
+            significant(self.rmse, 4),
+            significant(self.nrmse, 4),
+            figure(self.ncc, 5),
+            significant(self.l2, 4)
+        )
+    }
+
     pub fn new(measured: &[f64], model: &[f64]) -> Metrics {
         let n = measured.len() as f64;
         let ssr: f64 = measured.iter().zip(model).map(|(m, r)| (m - r) * (m - r)).sum();

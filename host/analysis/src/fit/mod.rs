@@ -100,6 +100,24 @@ pub struct Fit {
     pub covariance: Option<DMatrix<f64>>,
 }
 
+impl Fit {
+    /// Parameter `k` as text: rounded to its standard error, and marked
+    /// where it ended on its search box (its ± then says how the fit bends
+    /// there, not where the optimum lies).
+    pub fn parameter_text(&self, k: usize) -> String {
+        let (name, value) = (self.material.model.param_names()[k], self.material.params[k]);
+        let text = match self.stderr[k] {
+            Some(u) => crate::rounding::with_uncertainty(value, u),
+            None => crate::rounding::significant(value, 6),
+        };
+        if self.at_bound.contains(&name) {
+            format!("{text} (on its bound)")
+        } else {
+            text
+        }
+    }
+}
+
 /// Builds the least-squares problem of a data set.
 pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
     let model = spec.model;

@@ -307,10 +307,13 @@ pub fn write(data: &Dataset) -> String {
     let _ = writeln!(s, "#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI");
     let _ = writeln!(s, "#PARAM_OUT {}", unit_name(data.units));
     let _ = writeln!(s, "#VS {}", if intervals { 2 } else { 0 });
+    let note = format!("confidence: the value's k = {K_COVERAGE} interval [lower upper]");
     if intervals {
-        let _ = writeln!(s, "# confidence: the value's k = {K_COVERAGE} interval [lower upper]");
+        let _ = writeln!(s, "# {note}");
     }
-    for m in &data.metadata {
+    // The note a file this wrote was read back with is the writer's own,
+    // written above when it still holds: not kept twice.
+    for m in data.metadata.iter().filter(|m| **m != note) {
         let _ = writeln!(s, "# {m}");
     }
     for o in &data.observations {

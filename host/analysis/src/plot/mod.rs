@@ -1,17 +1,26 @@
 //! Pictures of a data set and its fits (PNG and SVG, `plotters`), per
-//! incidence angle: the incidence-plane plot of the papers (Belcour Figs 7–9,
-//! Spieringhs Fig 7) in log-polar form with the retro and mirror directions
-//! marked, a projected-hemisphere map `(θo·cosΔφ, θo·sinΔφ)` of the
-//! measured values, and a map of the first fit's relative residuals.
+//! incidence angle: the incidence plane in log-polar form (`plane`), f_r
+//! against θo per plane of view (`cuts`), f_r against the observation angle
+//! near the retro peak (`retro`), the projected hemisphere of the measured
+//! values (`hemisphere`) and of the first fit's residuals in σ. Every axis
+//! has ticks and its unit, every map a colour bar, every sample its k = 2
+//! error bar where the data carry σ; the text is sized for the report,
+//! which shows the pictures at their own size.
 
 pub mod coefficients;
+pub mod colour_scale;
+mod cuts;
+mod hemisphere;
+mod plane;
+mod retro;
+
+pub use colour_scale::Scale;
 
 use crate::fit::{data::theta_in, Dataset, Observation};
 use anyhow::{anyhow, Context, Result};
-use gonio_brdf::{Directions, Material};
+use gonio_brdf::Material;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use plotters::style::colors::colormaps::ViridisRGB;
 use std::path::{Path, PathBuf};
 
 /// The font every picture's text is set in, shipped with the tool
@@ -59,63 +68,136 @@ fn fr(o: &Observation, data: &Dataset) -> f64 {
     o.value / o.unit_factor(data.units)
 }
 
-/// The pictures drawn per incidence angle.
+/// An axis tick's label: three significant digits, no trailing zeros.
+pub(crate) fn tick(v: f64) -> String {
+    let s = crate::rounding::significant(v, 3);
+    match s.split_once('×') {
+        None if s.contains('.') => s.trim_end_matches('0').trim_end_matches('.').to_string(),
+        _ => s,
+    }
+}
+
+/// How the maps colour f_r.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Options {
+    pub scale: Scale,
+    /// The colour bar's range of f_r (sr⁻¹); the data's 1st to 99th
+    /// percentile when `None`.
+    pub range: Option<(f64, f64)>,
+}
+
+/// Text sizes (pixels), for pictures shown at their own size.
 #[derive(Debug, Clone, Copy)]
-enum Picture {
+pub(crate) struct Style {
+    pub title: u32,
+    pub label: u32,
+}
+
+pub(crate) const STYLE: Style = Style { title: 21, label: 16 };
+
+/// The pictures drawn per incidence angle, in the order a report shows them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Picture {
     Plane,
+    Cuts,
+    Retro,
     Hemisphere,
     Residuals,
 }
 
 impl Picture {
-    fn name(self) -> &'static str {
+    pub const ALL: [Picture; 5] = [
+        Picture::Plane,
+        Picture::Cuts,
+        Picture::Retro,
+        Picture::Hemisphere,
+        Picture::Residuals,
+    ];
+
+    pub fn name(self) -> &'static str {
         match self {
             Picture::Plane => "plane",
+            Picture::Cuts => "cuts",
+            Picture::Retro => "retro",
             Picture::Hemisphere => "hemisphere",
             Picture::Residuals => "residuals",
         }
     }
 
-    fn size(self) -> (u32, u32) {
+    /// What the picture shows, for a caption.
+    pub fn describe(self) -> &'static str {
         match self {
-            Picture::Plane => (1000, 560),
-            _ => (720, 720),
+            Picture::Plane => "incidence plane, log-polar (data ± U and the best fits; retro and mirror directions marked)",
+            Picture::Cuts => "f_r against θo per plane of view (data ± U, the best fit as lines)",
+            Picture::Retro => "f_r against the observation angle α near the retro peak",
+            Picture::Hemisphere => "projected hemisphere (θo·cosΔφ, θo·sinΔφ) of the measured f_r, interpolated",
+            Picture::Residuals => "the best fit's residuals in units of each sample's σ",
         }
     }
 
-    fn draw<DB: DrawingBackend>(self, root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
+    /// The picture named `name` (a file stem's first part).
+    pub fn named(name: &str) -> Option<Picture> {
+        Picture::ALL.into_iter().find(|p| p.name() == name)
+    }
+
+    fn size(self) -> (u32, u32) {
         match self {
-            Picture::Plane => incidence_plane(root, data, ti, fits),
-            Picture::Hemisphere => hemisphere(root, data, ti, None),
-            Picture::Residuals => hemisphere(root, data, ti, fits.first()),
+            Picture::Hemisphere | Picture::Residuals => (700, 580),
+            _ => (780, 540),
         }
     }
 }
 
+/// A picture with what it needs computed once for both formats.
+enum Prepared {
+    Plane,
+    Cuts,
+    Retro,
+    Map(hemisphere::Map),
+}
+
+fn prepare(kind: Picture, data: &Dataset, ti: f64, fits: &[Material], o: &Options) -> Option<Prepared> {
+    match kind {
+        Picture::Plane => Some(Prepared::Plane),
+        Picture::Cuts => Some(Prepared::Cuts),
+        Picture::Retro => (retro::near_peak(data).len() >= retro::MIN_SAMPLES).then_some(Prepared::Retro),
+        Picture::Hemisphere => Some(Prepared::Map(hemisphere::measured(data, ti, o.scale, o.range))),
+        Picture::Residuals => fits.first().map(|m| Prepared::Map(hemisphere::residuals(data, ti, m))),
+    }
+}
+
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &Prepared, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
+    match p {
+        Prepared::Plane => plane::draw(root, data, ti, fits, STYLE),
+        Prepared::Cuts => cuts::draw(root, data, ti, fits.first(), STYLE),
+        Prepared::Retro => retro::draw(root, data, ti, fits, STYLE),
+        Prepared::Map(m) => hemisphere::draw(root, m, STYLE),
+    }
+}
+
 /// Draws every picture for every incidence angle (residuals only with a
-/// fit); returns the files written.
-pub fn render(data: &Dataset, fits: &[Material], dir: &Path) -> Result<Vec<PathBuf>> {
+/// fit, the retro peak only where samples lie near it); returns the files
+/// written, `{picture}-{θi}.svg` and `.png`.
+pub fn render(data: &Dataset, fits: &[Material], dir: &Path, options: &Options) -> Result<Vec<PathBuf>> {
     register_font()?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
-    let kinds: &[Picture] = if fits.is_empty() {
-        &[Picture::Plane, Picture::Hemisphere]
-    } else {
-        &[Picture::Plane, Picture::Hemisphere, Picture::Residuals]
-    };
     let mut files = Vec::new();
     for ti in data.incidence_angles_deg() {
         let at = data.filter(|o| theta_in(o.theta_i, &[ti]));
-        for &kind in kinds {
+        for kind in Picture::ALL {
+            let Some(prepared) = prepare(kind, &at, ti, fits, options) else {
+                continue;
+            };
             let stem = format!("{}-{ti}", kind.name());
             let p = dir.join(format!("{stem}.svg"));
             let root = SVGBackend::new(&p, kind.size()).into_drawing_area();
-            kind.draw(&root, &at, ti, fits)?;
+            draw(&root, &prepared, &at, ti, fits)?;
             root.present().map_err(err)?;
             drop(root);
             files.push(p);
             let p = dir.join(format!("{stem}.png"));
             let root = BitMapBackend::new(&p, kind.size()).into_drawing_area();
-            kind.draw(&root, &at, ti, fits)?;
+            draw(&root, &prepared, &at, ti, fits)?;
             root.present().map_err(err)?;
             drop(root);
             files.push(p);
@@ -124,150 +206,139 @@ pub fn render(data: &Dataset, fits: &[Material], dir: &Path) -> Result<Vec<PathB
     Ok(files)
 }
 
-fn incidence_plane<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
-    root.fill(&WHITE).map_err(err)?;
-    let points: Vec<(f64, f64)> = data
-        .observations
-        .iter()
-        .filter_map(|o| in_plane(o).map(|t| (t, fr(o, data))))
-        .filter(|p| p.1 > 0.0)
-        .collect();
-    let curve = |m: &Material| -> Vec<(f64, f64)> {
-        (-890..=890)
-            .map(|k| {
-                let t = k as f64 / 10.0;
-                let f = m.eval(&Directions::from_degrees(ti, t.abs(), if t >= 0.0 { 0.0 } else { 180.0 }));
-                (t, f)
-            })
-            .collect()
-    };
-    let curves: Vec<Vec<(f64, f64)>> = fits.iter().map(curve).collect();
-    let all = points.iter().chain(curves.iter().flatten()).map(|p| p.1).filter(|f| *f > 0.0);
-    let (lo, hi) = all.fold((f64::INFINITY, 0.0f64), |(lo, hi), f| (lo.min(f), hi.max(f)));
-    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (1e-3, 1.0) };
-    let floor = 10f64.powf(lo.log10().floor());
-    let decades = (hi / floor).log10().ceil().max(1.0);
-    let radius = |f: f64| (f.max(floor) / floor).log10();
-    let to_xy = |t: f64, f: f64| (radius(f) * t.to_radians().sin(), radius(f) * t.to_radians().cos());
-    let mut chart = ChartBuilder::on(root)
-        .caption(format!("incidence plane, θi = {ti}° (log-polar f_r, sr⁻¹)"), ("sans-serif", 22))
-        .margin(12)
-        .build_cartesian_2d(-decades * 1.05..decades * 1.05, -0.02 * decades..decades * 1.08)
-        .map_err(err)?;
-    for d in 1..=decades as i32 {
-        let ring: Vec<(f64, f64)> = (-90..=90)
-            .map(|a| (d as f64 * (a as f64).to_radians().sin(), d as f64 * (a as f64).to_radians().cos()))
-            .collect();
-        chart.draw_series(LineSeries::new(ring, RGBColor(200, 200, 200))).map_err(err)?;
-        let label = format!("{:.0e}", floor * 10f64.powi(d));
-        chart
-            .draw_series(std::iter::once(Text::new(label, (0.02 * decades, d as f64), ("sans-serif", 13))))
-            .map_err(err)?;
-    }
-    for (t, name, color) in [(ti, "retro", RGBColor(120, 120, 120)), (-ti, "mirror", RGBColor(120, 120, 120))] {
-        let end = (decades * t.to_radians().sin(), decades * t.to_radians().cos());
-        chart
-            .draw_series(LineSeries::new(vec![(0.0, 0.0), end], color.stroke_width(1)))
-            .map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(name, (end.0 * 1.02, end.1 * 1.02), ("sans-serif", 15))))
-            .map_err(err)?;
-    }
-    for (k, (m, c)) in fits.iter().zip(&curves).enumerate() {
-        let color = PALETTE[k % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(c.iter().map(|&(t, f)| to_xy(t, f)), color.stroke_width(2)))
-            .map_err(err)?
-            .label(m.model.name())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
-    }
-    chart
-        .draw_series(points.iter().map(|&(t, f)| Circle::new(to_xy(t, f), 3, BLACK.filled())))
-        .map_err(err)?
-        .label("measured")
-        .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font(("sans-serif", 15))
-        .background_style(WHITE.mix(0.8))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
-    Ok(())
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::Units;
+    use crate::uncertainty::SHARED;
 
-/// Projected hemisphere at one θi: measured `log10 f_r` (viridis), or with
-/// `fit`, the relative residual `(f_m − f_r)/f_r` (blue −20 % … red +20 %).
-fn hemisphere<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fit: Option<&Material>) -> Result<()> {
-    root.fill(&WHITE).map_err(err)?;
-    let title = match fit {
-        None => format!("measured log₁₀ f_r, θi = {ti}° (θo·cosΔφ, θo·sinΔφ)"),
-        Some(m) => format!("residual (measured − {})/{}, θi = {ti}°", m.model.name(), m.model.name()),
-    };
-    let mut chart = ChartBuilder::on(root)
-        .caption(title, ("sans-serif", 18))
-        .margin(12)
-        .build_cartesian_2d(-95.0..95.0, -95.0..95.0)
-        .map_err(err)?;
-    let edge: Vec<(f64, f64)> = (0..=360)
-        .map(|a| (90.0 * (a as f64).to_radians().cos(), 90.0 * (a as f64).to_radians().sin()))
-        .collect();
-    chart.draw_series(LineSeries::new(edge, BLACK)).map_err(err)?;
-    let values: Vec<(f64, f64, f64)> = data
-        .observations
-        .iter()
-        .map(|o| {
-            let (x, y) = (o.theta_o.to_degrees() * o.dphi.cos(), o.theta_o.to_degrees() * o.dphi.sin());
-            let v = match fit {
-                None => fr(o, data).max(1e-12).log10(),
-                Some(m) => {
-                    let model = m.eval(&o.directions());
-                    ((fr(o, data) - model) / model.abs().max(1e-12)).clamp(-0.2, 0.2)
+    /// A tape at θi = 30° on the default grid plus rings about the light,
+    /// each sample with a 2 % σ.
+    fn tape() -> Dataset {
+        let m = Material::tape();
+        let mut directions: Vec<(f64, f64)> = (0..30)
+            .flat_map(|o| (-18..18).map(move |p| (3.0 * o as f64, 10.0 * p as f64)))
+            .collect();
+        directions.extend(
+            (1..=8)
+                .flat_map(|r| (0..16).map(move |k| (r as f64 * 0.5, k as f64 * 22.5)))
+                .map(|(alpha, around)| {
+                    // A ring of observation angle α about the light, θi = 30°.
+                    let (a, b) = (alpha.to_radians(), around.to_radians());
+                    let l = [30f64.to_radians().sin(), 0.0, 30f64.to_radians().cos()];
+                    let (e1, e2) = ([l[2], 0.0, -l[0]], [0.0, 1.0, 0.0]);
+                    let v: Vec<f64> = (0..3)
+                        .map(|i| a.cos() * l[i] + a.sin() * (b.cos() * e1[i] + b.sin() * e2[i]))
+                        .collect();
+                    (v[2].acos().to_degrees(), v[1].atan2(v[0]).to_degrees())
+                }),
+        );
+        let observations = directions
+            .into_iter()
+            .map(|(to, dp)| {
+                let value = m.eval(&gonio_brdf::Directions::from_degrees(30.0, to, dp));
+                Observation {
+                    theta_i: 30f64.to_radians(),
+                    theta_o: to.to_radians(),
+                    dphi: dp.to_radians(),
+                    value,
+                    sigma: Some(0.02 * value),
+                    shared: [0.0; SHARED.len()],
                 }
-            };
-            (x, y, v)
-        })
-        .collect();
-    let (lo, hi) = values
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| (lo.min(v.2), hi.max(v.2)));
-    let color = |v: f64| -> RGBColor {
-        match fit {
-            None => ViridisRGB::get_color_normalized(v, lo, hi.max(lo + 1e-9)),
-            Some(_) => {
-                let u = v / 0.2;
-                let w = |c: f64| (255.0 * (1.0 - u.abs()) + c * u.abs()) as u8;
-                if u < 0.0 {
-                    RGBColor(w(31.0), w(119.0), w(180.0))
-                } else {
-                    RGBColor(w(214.0), w(39.0), w(40.0))
-                }
-            }
+            })
+            .collect();
+        Dataset {
+            units: Units::Fr,
+            observations,
+            metadata: Vec::new(),
+            units_stated: true,
+            warnings: Vec::new(),
         }
-    };
-    chart
-        .draw_series(values.iter().map(|&(x, y, v)| Circle::new((x, y), 5, color(v).filled())))
-        .map_err(err)?;
-    let light = (ti, 0.0);
-    chart
-        .draw_series(std::iter::once(Cross::new(light, 7, BLACK.stroke_width(2))))
-        .map_err(err)?;
-    chart
-        .draw_series(std::iter::once(Text::new("retro", (ti + 2.0, 3.0), ("sans-serif", 14))))
-        .map_err(err)?;
-    chart
-        .draw_series(std::iter::once(Cross::new((-ti, 0.0), 7, BLACK.stroke_width(2))))
-        .map_err(err)?;
-    chart
-        .draw_series(std::iter::once(Text::new("mirror", (-ti + 2.0, 3.0), ("sans-serif", 14))))
-        .map_err(err)?;
-    let legend = match fit {
-        None => format!("colour: log₁₀ f_r from {lo:.2} to {hi:.2}"),
-        Some(_) => "colour: −20 % (blue) … 0 (white) … +20 % (red)".to_string(),
-    };
-    chart
-        .draw_series(std::iter::once(Text::new(legend, (-90.0, -93.0), ("sans-serif", 14))))
-        .map_err(err)?;
-    Ok(())
+    }
+
+    fn svg(dir: &Path, stem: &str) -> String {
+        std::fs::read_to_string(dir.join(format!("{stem}.svg"))).unwrap()
+    }
+
+    /// What a reader needs is in the SVG as text: the colour bars with
+    /// their unit, scale and end values, the angle ticks with units, the
+    /// axis titles, and error bars where the samples carry σ.
+    #[test]
+    fn every_picture_carries_its_scales_and_units() {
+        let dir = tempfile::tempdir().unwrap();
+        let data = tape();
+        let mut off = Material::tape();
+        off.params[1] = 300.0; // a wider lobe than the data's
+        let files = render(&data, &[off], dir.path(), &Options::default()).unwrap();
+        assert_eq!(files.len(), 2 * Picture::ALL.len(), "{files:?}");
+        let map = svg(dir.path(), "hemisphere-30");
+        for text in [
+            "f_r (sr⁻¹), log scale",
+            "θo = 30°",
+            "θo = 60°",
+            "Δφ = 0°",
+            "90°",
+            "270°",
+            "retro",
+            "mirror",
+        ] {
+            assert!(map.contains(text), "hemisphere map without `{text}`");
+        }
+        // The mirror and retro peaks lie above the 99th percentile: the
+        // bar's top says its colour holds more.
+        assert!(map.contains("≥ "), "the clipped top of the bar is marked");
+        assert!(map.matches("10⁻").count() + map.matches("10⁰").count() >= 1, "decade ticks");
+        let residuals = svg(dir.path(), "residuals-30");
+        assert!(residuals.contains("residual / σ (k = 1)") && residuals.contains("(measured − retro-phong) / σ"));
+        let plane = svg(dir.path(), "plane-30");
+        for text in ["-60°", "60°", "sr⁻¹", "θo (°), + on the side of the light", "measured (± U, k = 2)"] {
+            assert!(plane.contains(text), "plane without `{text}`");
+        }
+        let cuts = svg(dir.path(), "cuts-30");
+        for text in ["θo (°)", "f_r (sr⁻¹)", "Δφ = 0° / 180°", "Δφ = 90° / 270°", "lines: retro-phong"] {
+            assert!(
+                cuts.contains(text),
+                "cuts without `{text}`: {:?}",
+                cuts.lines().filter(|l| !l.starts_with('<')).collect::<Vec<_>>()
+            );
+        }
+        let retro = svg(dir.path(), "retro-30");
+        assert!(retro.contains("observation angle α (°)") && retro.contains("f_r (sr⁻¹)"));
+        // Error bars: plotters draws each as three segments, the whiskers
+        // included; a sample without σ draws none.
+        let bars = |s: &str| s.matches("<line ").count() + s.matches("<polyline").count();
+        let mut bare = data.clone();
+        bare.observations.iter_mut().for_each(|o| o.sigma = None);
+        let plain = tempfile::tempdir().unwrap();
+        render(&bare, &[], plain.path(), &Options::default()).unwrap();
+        assert!(
+            bars(&retro) > bars(&svg(plain.path(), "retro-30")) + 3 * 16,
+            "error bars near the peak"
+        );
+        assert!(!plain.path().join("residuals-30.svg").exists(), "residuals only with a fit");
+    }
+
+    #[test]
+    fn a_chosen_range_and_a_linear_scale_reach_the_bar() {
+        let dir = tempfile::tempdir().unwrap();
+        let o = Options {
+            scale: Scale::Linear,
+            range: Some((0.05, 2.0)),
+        };
+        render(&tape(), &[], dir.path(), &o).unwrap();
+        let map = svg(dir.path(), "hemisphere-30");
+        assert!(map.contains("f_r (sr⁻¹), linear scale"));
+        assert!(
+            map.contains("≤ 0.050") && map.contains("≥ 2.0"),
+            "the range's ends, marked as clipped"
+        );
+    }
+
+    #[test]
+    fn ticks_drop_trailing_zeros() {
+        assert_eq!(tick(10.0), "10");
+        assert_eq!(tick(-80.0), "-80");
+        assert_eq!(tick(0.1), "0.1");
+        assert_eq!(tick(2.5e-6), "2.50×10⁻⁶");
+    }
 }

@@ -5,6 +5,7 @@
 use anyhow::{bail, Context, Result};
 use gonio_analysis::calibration::{self, Budget, CalibratedRow, Calibration};
 use gonio_analysis::fit::{self, FitSpec};
+use gonio_analysis::rounding::{significant, with_uncertainty};
 use gonio_analysis::uncertainty::HeadUncertainty;
 use gonio_brdf::{Material, ModelId, Param};
 use gonio_scan_dir::samples;
@@ -217,11 +218,9 @@ pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
     }
     let cal = &c.cal;
     println!(
-        "scale K = {:.6e} A·sr (±{:.2} %), splitter T = {:.4} (±{:.2} %, {}), from {} plate samples",
-        cal.scale_a_sr,
-        100.0 * cal.scale_rel_sd,
-        cal.splitter,
-        100.0 * cal.splitter_rel_sd,
+        "scale K = {} A·sr, splitter T = {} ({}), from {} plate samples (± k = 1)",
+        with_uncertainty(cal.scale_a_sr, cal.scale_a_sr * cal.scale_rel_sd),
+        with_uncertainty(cal.splitter, cal.splitter * cal.splitter_rel_sd),
         if cal.splitter_measured { "measured" } else { "given" },
         cal.reference_samples
     );
@@ -235,7 +234,16 @@ pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
         ),
     }
     match &c.slope {
-        Some(m) => println!("angle component from the slope of {} {}", m.model.name(), m.params_string()),
+        Some(m) => {
+            let params: Vec<String> = m
+                .model
+                .param_names()
+                .iter()
+                .zip(&m.params)
+                .map(|(n, v)| format!("{n} = {}", significant(*v, 4)))
+                .collect();
+            println!("angle component from the slope of {} ({})", m.model.name(), params.join(", "))
+        }
         None => println!("no angle component (--slope-model none)"),
     }
     for b in calibration::budget_by_incidence(&c.rows) {

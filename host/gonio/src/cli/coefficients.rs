@@ -218,8 +218,8 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
     }
     println!("at {WAVELENGTH_NM} nm (the laser's wavelength), not photometric; u: standard uncertainty (k = 1)");
     println!(
-        "{:<4} {:>6} {:>7} {:>6} {:>8} {:>8} {:>8} {:>13} {:>11}  {:<12} unit",
-        "", "α°", "β°", "ε°", "θi°", "θo°", "Δφ°", "value", "u", "rests on"
+        "{:<4} {:>6} {:>7} {:>6} {:>8} {:>8} {:>8} {:>25}  {:<12} unit",
+        "", "α°", "β°", "ε°", "θi°", "θo°", "Δφ°", "value ± u (k = 1)", "rests on"
     );
     for c in &values {
         let g = &c.request.geometry;
@@ -235,31 +235,30 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
         };
         if c.estimate.value.is_nan() {
             println!(
-                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>13} {:>11}  {rests_on:<12} {}",
+                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>25}  {rests_on:<12} {}",
                 g.alpha_deg,
                 g.beta_deg(),
                 g.epsilon_deg,
                 "refused",
-                "",
                 c.request.kind.unit()
             );
         } else {
             println!(
-                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>13.5e} {:>11.3e}  {rests_on:<12} {}",
+                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>25}  {rests_on:<12} {}",
                 g.alpha_deg,
                 g.beta_deg(),
                 g.epsilon_deg,
-                c.estimate.value,
-                c.estimate.u,
+                gonio_analysis::rounding::with_uncertainty(c.estimate.value, c.estimate.u),
                 c.request.kind.unit()
             );
         }
         if let Some(b) = c.estimate.basis.as_ref().filter(|b| b.provenance == Provenance::Extrapolated) {
             match (c.estimate.model, c.estimate.u_model) {
                 (Some(m), Some(um)) => println!(
-                    "       {}: carried by {m}; {} adequate models, their spread ±{um:.2e}",
+                    "       {}: carried by {m}; {} adequate models, their spread ±{}",
                     b.why,
-                    c.estimate.models.len()
+                    c.estimate.models.len(),
+                    gonio_analysis::rounding::significant(um, 2)
                 ),
                 _ => println!("       {}: no data there to interpolate", b.why),
             }

@@ -4,6 +4,7 @@
 use anyhow::{bail, Context, Result};
 use gonio_analysis::coefficients::{Coefficient, Fitted, Source, Support};
 use gonio_analysis::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
+use gonio_analysis::rounding::{figure, significant};
 use gonio_brdf::{ModelId, Param};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -123,28 +124,35 @@ pub struct Domain {
 
 pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
     let data = super::load_data(path, o.units)?;
+    // What the file holds, for the messages below: the restrictions may
+    // leave nothing to name.
+    let held = degrees(&data.incidence_angles_deg());
     let data = data.filter(|s| (!o.retro_only || s.on_retro_side()) && (o.theta_i.is_empty() || theta_in(s.theta_i, &o.theta_i)));
-    let all_angles = data.incidence_angles_deg();
     let (train, holdout) = if o.holdout_theta_i.is_empty() {
         (data, None)
     } else {
         let h = data.filter(|s| theta_in(s.theta_i, &o.holdout_theta_i));
         if h.observations.is_empty() {
             bail!(
-                "no samples at the held-out incidence angles {:?}°; the data has {:?}°",
-                o.holdout_theta_i,
-                all_angles
+                "no samples to hold out at θi = {}: {} holds θi = {held}",
+                degrees(&o.holdout_theta_i),
+                path.display()
             );
         }
         (data.filter(|s| !theta_in(s.theta_i, &o.holdout_theta_i)), Some(h))
     };
     if train.observations.is_empty() {
         bail!(
-            "no samples left to fit after the domain restriction (data has θi {:?}°)",
-            all_angles
+            "no samples left to fit after the restrictions (--theta-i, --retro-only, --holdout-theta-i): {} holds θi = {held}",
+            path.display()
         );
     }
     Ok(Domain { train, holdout })
+}
+
+/// `15°, 30°, 60°`.
+fn degrees(angles: &[f64]) -> String {
+    angles.iter().map(|a| format!("{a}°")).collect::<Vec<_>>().join(", ")
 }
 
 /// `--bounds` for one model: `(index, lo, hi)`. With `every_model`
@@ -222,34 +230,25 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         super::export::write_brdf(&f.material, &a.file.display().to_string(), out)?;
     }
     if let Some(dir) = &a.plot {
-        gonio_analysis::plot::render(&d.train, std::slice::from_ref(&f.material), dir)?;
+        gonio_analysis::plot::render(&d.train, std::slice::from_ref(&f.material), dir, &Default::default())?;
     }
     if a.options.json {
         println!("{v}");
         return Ok(());
     }
     println!("{} ({} samples, {:.2} s)", model.name(), f.samples, f.seconds);
-    for ((n, p), e) in model.param_names().iter().zip(&f.material.params).zip(&f.stderr) {
-        match e {
-            Some(e) => println!("  {n:>8} = {p:<14.6e} ± {e:.2e}"),
-            None if a.fix.iter().any(|s| s.split('=').next().map(str::trim) == Some(n)) => println!("  {n:>8} = {p:<14.6e} (fixed)"),
-            None => println!("  {n:>8} = {p:<14.6e}"),
-        }
+    for (k, n) in model.param_names().iter().enumerate() {
+        let fixed = a.fix.iter().any(|s| s.split('=').next().map(str::trim) == Some(n));
+        println!("  {n:>8} = {}{}", f.parameter_text(k), if fixed { " (fixed)" } else { "" });
     }
-    println!(
-        "  rmse {:.4e}  nrmse {:.4e}  ncc {:.5}  l2 {:.4e}  aic {:.1}  bic {:.1}",
-        f.metrics.rmse, f.metrics.nrmse, f.metrics.ncc, f.metrics.l2, f.aic, f.bic
-    );
+    println!("  {}  AIC {:.1}  BIC {:.1}", f.metrics.summary(), f.aic, f.bic);
     for name in &f.at_bound {
         eprintln!(
             "warning: {name} ended on the edge of its search box: the optimum may lie beyond it (widen the box with --bounds {name}=LO:HI)"
         );
     }
     if let Some(h) = &holdout {
-        println!(
-            "  held out θi {:?}°: rmse {:.4e}  nrmse {:.4e}  ncc {:.5}",
-            a.options.holdout_theta_i, h.rmse, h.nrmse, h.ncc
-        );
+        println!("  held out θi {:?}°: {}", a.options.holdout_theta_i, h.summary());
     }
     Ok(())
 }
@@ -343,11 +342,11 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
         let m = &f.metrics;
         let k = f.material.params.len();
         println!(
-            "{:<16} {k:>6} {:>12.4e} {:>12.4e} {:>9.5} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2}  {}",
+            "{:<16} {k:>6} {:>12} {:>12} {:>9} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2}  {}",
             f.material.model.name(),
-            m.rmse,
-            m.nrmse,
-            m.ncc,
+            significant(m.rmse, 4),
+            significant(m.nrmse, 4),
+            figure(m.ncc, 5),
             f.aic,
             f.bic,
             ranks[i][1],

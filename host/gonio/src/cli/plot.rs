@@ -16,6 +16,13 @@ pub struct PlotArgs {
     /// A fit written by `gonio fit --out FIT.json` to draw over the data (repeatable).
     #[arg(long)]
     pub fit: Vec<PathBuf>,
+    /// How the hemisphere maps colour f_r.
+    #[arg(long, value_enum, default_value = "log")]
+    pub scale: plot::Scale,
+    /// The maps' colour range of f_r, LO:HI in sr⁻¹ (default: the data's 1st
+    /// to 99th percentile, so that a mirror lobe does not set it).
+    #[arg(long, value_name = "LO:HI", value_parser = colour_range)]
+    pub range: Option<(f64, f64)>,
     /// Print one JSON object: the files written (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
@@ -24,10 +31,26 @@ pub struct PlotArgs {
 pub fn plot_cmd(a: PlotArgs) -> Result<()> {
     let data = super::load_data(&a.file, None)?;
     let fits: Vec<Material> = a.fit.iter().map(|p| fit::file::read_material(p)).collect::<Result<_>>()?;
-    let files = plot::render(&data, &fits, &a.out)?;
+    let options = plot::Options {
+        scale: a.scale,
+        range: a.range,
+    };
+    let files = plot::render(&data, &fits, &a.out, &options)?;
     match a.json {
         true => println!("{}", serde_json::json!({ "written": files })),
         false => eprintln!("{} pictures written to {}", files.len(), a.out.display()),
     }
     Ok(())
+}
+
+/// `LO:HI`, two finite values with LO < HI, both > 0 (a log scale needs it,
+/// and f_r is not negative).
+fn colour_range(s: &str) -> Result<(f64, f64), String> {
+    let (lo, hi) = s.split_once(':').ok_or_else(|| format!("`{s}` is not LO:HI"))?;
+    let num = |x: &str| x.trim().parse::<f64>().map_err(|_| format!("`{x}` is not a number"));
+    let (lo, hi) = (num(lo)?, num(hi)?);
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
+        return Err(format!("{lo}:{hi} must be finite with 0 < LO < HI (sr⁻¹)"));
+    }
+    Ok((lo, hi))
 }

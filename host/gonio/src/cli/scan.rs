@@ -9,6 +9,7 @@ use super::{interrupt, simulated};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
 use gonio_acquire::scan::directory::{hms, positions, resume_from, scan_into, Destination};
+use gonio_analysis::rounding::{figure, significant, with_uncertainty};
 use gonio_scan_dir::record::{parse_geometry, Monitor, RecordedHead, ScanRecord};
 use gonio_scan_dir::run::ScanOutcome;
 use gonio_shared::{ScanSpec, SweepRequest, SweepScan};
@@ -153,11 +154,10 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         (
             "calibration".to_string(),
             format!(
-                "reference plate ρ = {}: K = {:.5e} A·sr (±{:.3} %), splitter {:.4}",
+                "reference plate ρ = {}: K = {} A·sr, splitter {} (± k = 1)",
                 gonio_sim::PLATE_RHO,
-                calibrated.cal.scale_a_sr,
-                100.0 * calibrated.cal.scale_rel_sd,
-                calibrated.cal.splitter
+                with_uncertainty(calibrated.cal.scale_a_sr, calibrated.cal.scale_a_sr * calibrated.cal.scale_rel_sd),
+                with_uncertainty(calibrated.cal.splitter, calibrated.cal.splitter * calibrated.cal.splitter_rel_sd)
             ),
         ),
         ("data".to_string(), calibrated.csv.display().to_string()),
@@ -183,12 +183,12 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
     } else {
         println!("material: {}", truth.describe());
         println!(
-            "calibrated: {} of {} samples usable; best model {} (RMSE {:.3e} sr⁻¹, NCC {:.4})",
+            "calibrated: {} of {} samples usable; best model {} (RMSE {} sr⁻¹, NCC {})",
             calibrated.usable,
             calibrated.rows.len(),
             best.fit.material.model.name(),
-            best.fit.metrics.rmse,
-            best.fit.metrics.ncc
+            significant(best.fit.metrics.rmse, 4),
+            figure(best.fit.metrics.ncc, 4)
         );
         println!("report: {}", report.display());
     }

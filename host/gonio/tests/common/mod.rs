@@ -47,15 +47,38 @@ pub fn check_report(dir: &std::path::Path, models: &[&str], theta_i: &[&str]) ->
         assert!(html.contains(&format!("<td class=\"l\">{m}</td>")), "row of {m}");
         assert!(html.contains(&format!("href=\"fits/{m}.brdf\"")) && html.contains(&format!("href=\"fits/{m}.json\"")));
     }
+    // One row per θi, holding that θi's pictures and no other's; the
+    // retro-peak picture only where samples lie near the light.
+    let mut pictures = 0;
     for ti in theta_i {
-        for kind in ["plane", "hemisphere", "residuals"] {
+        let start = html
+            .find(&format!("<h3>θi = {ti}°</h3>"))
+            .unwrap_or_else(|| panic!("row of θi {ti}"));
+        let row = &html[start..start + html[start..].find("</div>").unwrap()];
+        for kind in ["plane", "cuts", "hemisphere", "residuals"] {
             assert!(
-                html.contains(&format!("src=\"plots/{kind}-{ti}.png\"")),
-                "{kind} picture of θi {ti}"
+                row.contains(&format!("src=\"plots/{kind}-{ti}.png\"")),
+                "{kind} picture in the row of θi {ti}"
             );
         }
+        assert_eq!(
+            row.matches(&format!("-{ti}.png\"")).count(),
+            row.matches("<img").count(),
+            "θi {ti}'s row"
+        );
+        pictures += row.matches("<img").count();
     }
-    // The fits, the pictures per θi, and the R_A picture.
-    assert_eq!(links, 2 * models.len() + 2 * 3 * theta_i.len() + 1, "links in the report");
+    // The fits, the pictures (PNG and SVG), and the R_A picture.
+    assert_eq!(links, 2 * models.len() + 2 * pictures + 1, "links in the report");
+    // Numbers as a physicist writes them: no machine exponents in the text.
+    let body = &html[html.find("<body>").unwrap()..];
+    let machine = body
+        .split(|c: char| !(c.is_ascii_alphanumeric() || c == '.' || c == '-'))
+        .find(|w| {
+            w.contains('e')
+                && w.split('e')
+                    .all(|p| !p.is_empty() && p.trim_start_matches('-').replace('.', "").chars().all(|c| c.is_ascii_digit()))
+        });
+    assert_eq!(machine, None, "a number printed as the machine holds it");
     html
 }

@@ -1,0 +1,121 @@
+//! What the operator sees of a running scan: the positions done, what was
+//! measured and what was unreachable, and the time left. The time left is
+//! the plan's own estimate of the positions still to visit (head time, from
+//! `scan_order::duration`), scaled by how the head time spent so far
+//! compares with the plan's estimate of the positions done: the ratio
+//! starts at 1 and earns its weight as the scan runs, so the figure neither
+//! starts from a wall-clock guess nor swings on the first few points.
+
+use crate::operator::Operator;
+use indicatif::{ProgressBar, ProgressStyle};
+
+/// Head time (s) the correction is held at 1 for, at most: the first
+/// minute of a scan says little about its rate (the first move, ranging).
+const PRIOR_S: f64 = 60.0;
+
+/// The progress of one session of a scan.
+pub struct Progress {
+    bar: ProgressBar,
+    /// Head time still to run before each position from `first` (s), then 0.
+    left_s: Vec<f64>,
+    first: u32,
+}
+
+impl Progress {
+    /// A scan's progress from position `first`, with the plan's `left_s`
+    /// ([`crate::scan_order::duration::time_left_s`]); `items` names the
+    /// positions (points, positions).
+    pub fn new(operator: Operator, left_s: Vec<f64>, first: u32, items: &str) -> Progress {
+        let positions = left_s.len().saturating_sub(1) as u64;
+        let bar = if operator == Operator::Silent {
+            ProgressBar::hidden()
+        } else {
+            ProgressBar::new(positions)
+        };
+        bar.set_style(
+            ProgressStyle::with_template(&format!("{{spinner}} scanning [{{bar:24}}] {{pos}}/{{len}} {items}, {{msg}}"))
+                .unwrap_or_else(|_| ProgressStyle::default_bar())
+                .progress_chars("=> "),
+        );
+        Progress { bar, left_s, first }
+    }
+
+    /// The plan's estimate of the whole session (head time, s).
+    pub fn estimate_s(&self) -> f64 {
+        self.left_s.first().copied().unwrap_or(0.0)
+    }
+
+    /// The head time left (s) with position `next` the next to visit, after
+    /// `spent_s` of head time in this session.
+    pub fn left_s(&self, next: u32, spent_s: f64) -> f64 {
+        let k = (next.saturating_sub(self.first) as usize).min(self.left_s.len().saturating_sub(1));
+        let (total, left) = (self.estimate_s(), self.left_s.get(k).copied().unwrap_or(0.0));
+        let done = total - left;
+        let prior = PRIOR_S.min(0.05 * total);
+        let rate = match done + prior {
+            w if w > 0.0 => (spent_s + prior) / w,
+            _ => 1.0,
+        };
+        left * rate
+    }
+
+    /// Shows position `next` as the next to visit.
+    pub fn update(&self, next: u32, spent_s: f64, measured: u32, unreachable: u32) {
+        self.bar.set_position(next.saturating_sub(self.first) as u64);
+        self.bar.set_message(format!(
+            "{measured} measured, {unreachable} unreachable, {} left",
+            super::directory::hms(self.left_s(next, spent_s))
+        ));
+    }
+
+    /// Runs `f` (a notice) with the bar hidden.
+    pub fn suspend<R>(&self, f: impl FnOnce() -> R) -> R {
+        self.bar.suspend(f)
+    }
+
+    pub fn finish(&self) {
+        self.bar.finish_and_clear();
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 100 positions of 10 s each, from position 20 of a resumed scan.
+    fn even() -> Progress {
+        Progress::new(Operator::Silent, (0..=100).rev().map(|k| 10.0 * k as f64).collect(), 20, "points")
+    }
+
+    #[test]
+    fn on_plan_the_time_left_is_the_plans() {
+        let p = even();
+        assert_eq!(p.estimate_s(), 1000.0);
+        assert_eq!(p.left_s(20, 0.0), 1000.0);
+        assert!((p.left_s(70, 500.0) - 500.0).abs() < 1e-9);
+        assert_eq!(p.left_s(120, 1000.0), 0.0);
+    }
+
+    #[test]
+    fn a_slower_head_scales_what_is_left_once_it_has_run_a_while() {
+        let p = even();
+        // Twice as slow as planned: the first few seconds barely move the
+        // estimate, half-way it is the head's rate.
+        let early = p.left_s(21, 20.0);
+        assert!((early / 990.0 - 1.0) < 0.25, "{early}");
+        let half = p.left_s(70, 1000.0);
+        assert!((half / 1000.0 - 1.0).abs() < 0.1, "{half}");
+    }
+
+    #[test]
+    fn at_a_steady_rate_the_figure_closes_on_the_truth() {
+        let p = even();
+        // A head 1.5 × slower than planned: 15 s a position.
+        let error: Vec<f64> = (20..120)
+            .map(|k| p.left_s(k, 15.0 * (k - 20) as f64) / (15.0 * (120 - k) as f64) - 1.0)
+            .map(f64::abs)
+            .collect();
+        assert!(error.windows(2).all(|w| w[1] <= w[0]), "{error:?}");
+        assert!(error[50] < 0.05, "half-way: {}", error[50]);
+    }
+}
