@@ -15,7 +15,7 @@ use std::sync::Arc;
 /// outcome and the rows stored in `dir`. Panics on any error: for tests.
 pub async fn scan_and_read(session: &mut Session, spec: &ScanSpec, dir: &Path) -> (ScanOutcome, Vec<Row>) {
     let mut out = SampleWriter::create(dir).unwrap();
-    let progress = scan::progress::Progress::new(Operator::Silent, vec![0.0], spec.first_order, "points");
+    let progress = scan::progress::Progress::new(Operator::Silent, vec![0.0], spec.first_order, "points", Default::default());
     let outcome = scan::run(session, spec, &mut out, &progress, None).await.unwrap();
     let rows = samples::read(&out.finish().unwrap()).unwrap();
     (outcome, rows)

@@ -5,3 +5,4 @@
 //! (`gonio-sim`) is plugged in as a target ([`cli::simulated`]).
 
 pub mod cli;
+pub mod live;

@@ -472,6 +472,10 @@ fn every_subcommand_speaks_json_on_failure_and_success() {
             1,
         ),
         (vec!["fit", "--model", "lambert"], "usage", 2),
+        (vec!["pause", &out], "io", 1),
+        (vec!["continue", &out], "io", 1),
+        (vec!["abort", &out], "io", 1),
+        (vec!["rearm", "--port", "/nonexistent/tty"], "input", 1),
     ];
     for (args, kind, code) in failing {
         let o = gonio(&[&args[..], &["--json"]].concat());
@@ -493,4 +497,80 @@ fn every_subcommand_speaks_json_on_failure_and_success() {
         let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}: {}", text(&o)));
         assert!(key.is_empty() || !v[key].is_null(), "{args:?}: {v}");
     }
+}
+
+/// A scan paused from another terminal holds (no sample stored while it
+/// waits, the head kept awake), continues where it stopped when asked, and
+/// ends with every point; the live view's record is gone with the scan.
+#[test]
+fn a_scan_pauses_and_continues_from_another_terminal() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scan");
+    let o = out.to_str().unwrap();
+    let scan = std::process::Command::new(env!("CARGO_BIN_EXE_gonio"))
+        .args([
+            "scan",
+            "--sim",
+            "--out",
+            o,
+            "--theta-i",
+            "30",
+            "--theta-o",
+            "0:87:3",
+            "--dphi",
+            "-180:170:10",
+            "--json",
+        ])
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    let live = out.join("live.json");
+    let waited = std::time::Instant::now();
+    while !live.exists() {
+        assert!(waited.elapsed().as_secs() < 60, "no live.json");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    let p = gonio(&["pause", o, "--json"]);
+    assert!(p.status.success(), "{}", text(&p));
+    let v: serde_json::Value = serde_json::from_slice(&p.stdout).unwrap();
+    assert_eq!(v["request"], "pause", "{v}");
+    let url: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&live).unwrap()).unwrap();
+    let state = || -> serde_json::Value {
+        let text = ureq::get(format!("{}api/state", url["url"].as_str().unwrap()))
+            .call()
+            .unwrap()
+            .body_mut()
+            .read_to_string()
+            .unwrap();
+        serde_json::from_str(&text).unwrap()
+    };
+    while state()["state"]["state"] != "paused" {
+        assert!(waited.elapsed().as_secs() < 120, "never paused: {}", state()["state"]);
+        std::thread::sleep(std::time::Duration::from_millis(50));
+    }
+    let held = state()["samples"].as_array().unwrap().len();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    assert_eq!(state()["samples"].as_array().unwrap().len(), held, "samples while paused");
+    let c = gonio(&["continue", o]);
+    assert!(c.status.success(), "{}", text(&c));
+    let done = scan.wait_with_output().unwrap();
+    assert!(done.status.success(), "{}", text(&done));
+    let outcome: serde_json::Value = serde_json::from_slice(&done.stdout).unwrap();
+    // The grid's 1 080 points and the lobe pattern's rings about the light.
+    let points = outcome["points"].as_u64().unwrap();
+    assert!(
+        points > 1080 && (held as u64) < points,
+        "paused before the end ({held} of {points})"
+    );
+    assert_eq!(
+        outcome["measured"].as_u64().unwrap() + outcome["skipped"].as_u64().unwrap(),
+        points,
+        "{outcome}"
+    );
+    assert!(
+        outcome["recoveries"].as_object().unwrap().is_empty(),
+        "a pause is not a recovery: {outcome}"
+    );
+    assert!(!live.exists(), "live.json outlives its scan");
 }

@@ -73,6 +73,12 @@ impl<'a> ScanDir<'a> {
     }
 
     /// What a new scan must not overwrite: a completed scan's samples and record.
+    /// Where a running scan's live view listens (`{"url", "pid"}`), for
+    /// `gonio pause|continue|abort DIR`; there only while the scan runs.
+    pub fn live(&self) -> PathBuf {
+        self.root.join("live.json")
+    }
+
     pub fn finished_files(&self) -> [PathBuf; 2] {
         [self.samples(), self.run_record()]
     }

@@ -265,6 +265,7 @@ fn imperfect_scan(
         &ScanSpec::belcour_with_patterns(),
         dir.path(),
         &OutputArgs { force: false, json: true },
+        &Default::default(),
     ))?;
     let c = calibrate::calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
     Ok((dir, imperfections, c))

@@ -218,7 +218,7 @@ fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<Fitted> {
     let dir = tempfile::tempdir()?;
     let rt = tokio::runtime::Builder::new_current_thread().enable_time().build()?;
     let quiet = OutputArgs { force: false, json: true };
-    let (outcome, _) = rt.block_on(demo_scan(sim, spec, dir.path(), &quiet))?;
+    let (outcome, _) = rt.block_on(demo_scan(sim, spec, dir.path(), &quiet, &Default::default()))?;
     let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
     let blind = (SimConfig::default().machine.optics.blind_max_deg as f64).to_radians();
     let mut data = gonio_analysis::formats::load(&calibrated.csv)?.filter(|o| {

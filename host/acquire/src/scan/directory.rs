@@ -4,6 +4,7 @@
 //! `run.json`. Files are written only once the head answers and the scan is
 //! known to be possible; Ctrl-C stops the head and says how to resume.
 
+use super::live::Live;
 use super::progress::Progress;
 use super::run;
 use crate::operator::Operator;
@@ -39,14 +40,16 @@ pub struct Destination<'a> {
     pub force: bool,
 }
 
-/// Runs `record` on the head at `target` into `to`; `stop` resolving (the
-/// operator's Ctrl-C) stops the head and ends the scan with [`Interrupted`].
-/// Returns the counts and the samples file.
+/// Runs `record` on the head at `target` into `to`, shown and steered on
+/// `live`; `stop` resolving (the operator's Ctrl-C) or an abort asked on
+/// `live` stops the head and ends the scan with [`Interrupted`]. Returns
+/// the counts and the samples file.
 pub async fn scan_into(
     record: &ScanRecord,
     target: Arc<dyn Target>,
     to: Destination<'_>,
     operator: Operator,
+    live: &Live,
     stop: impl Future<Output = ()>,
 ) -> Result<(ScanOutcome, PathBuf)> {
     let (dir, resume) = (to.dir, to.resume);
@@ -79,6 +82,7 @@ pub async fn scan_into(
         prepare_dir(dir, to.force)?;
         record.write(dir)?;
     }
+    let _announced = live.announce(dir)?;
     session.start().await?;
     let reconnected_before_scan = session.reconnections;
     let detection = session.detection.context("the head's detection settings")?;
@@ -92,6 +96,7 @@ pub async fn scan_into(
         time_left_s(&config, spec, rest, PARK, &detection),
         spec.first_order,
         positions(spec),
+        live.clone(),
     );
     let estimate = progress.estimate_s();
     if spec.sweep.is_some() {
@@ -129,10 +134,12 @@ pub async fn scan_into(
         tokio::select! {
             r = &mut scanning => Some(r),
             () = stop => None,
+            () = live.aborted() => None,
         }
     };
     let Some(ended) = ended else {
         progress.finish();
+        live.state("interrupted: stopped by the operator");
         // The scan is dropped between two events: every row on disk is whole.
         let safe = session.head().request::<AbortEndpoint>(&()).await.is_ok();
         session.close().await;

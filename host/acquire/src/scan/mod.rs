@@ -3,6 +3,7 @@
 //! [`directory`] wraps it in a scan directory.
 
 pub mod directory;
+pub mod live;
 pub mod progress;
 pub mod sequencer;
 
@@ -79,11 +80,16 @@ pub async fn run(
             first_order: first,
             ..spec.clone()
         };
+        pb.live().state("scanning");
         match run.stretch(&stretch, stop_at).await? {
             Stretch::Finished => break,
             Stretch::Paused(next) => {
                 first = next;
-                read_monitor_now = true;
+                // Held for the operator: the monitor waits for its turn.
+                read_monitor_now = !pb.live().pause_requested();
+                if !read_monitor_now {
+                    run.hold(next).await?;
+                }
             }
             Stretch::Interrupted(next, why) => {
                 run.recover(why, next).await?;
@@ -96,6 +102,7 @@ pub async fn run(
         while !run.visit_monitor(m, run.outcome.points).await? {}
     }
     pb.finish();
+    pb.live().state("finished");
     let mut outcome = run.outcome;
     outcome.head_time_s = run.clock.span_s();
     outcome.wall_time_s = t0.elapsed().as_secs_f64();
@@ -133,6 +140,7 @@ impl ScanDriver<'_> {
             );
         }
         *self.outcome.recoveries.entry(why.name()).or_default() += 1;
+        self.pb.live().state(format!("recovering: {}", why.name()));
         let operator = self.session.operator;
         self.pb
             .suspend(|| operator.notice(format_args!("scan interrupted: {}; continuing from position {next}", why.name())));
@@ -151,6 +159,35 @@ impl ScanDriver<'_> {
                 .with_context(|| format!("homing after a stalled move; resume from position {next}")),
             Interruption::Gap | Interruption::Transient(_) => Ok(()),
         }
+    }
+
+    /// Holds the scan, paused before position `next`, until the operator
+    /// asks it to go on; the head hears from the host meanwhile (its status,
+    /// every heartbeat), so that it does not take the silence for a lost host.
+    async fn hold(&mut self, next: u32) -> Result<()> {
+        let live = self.pb.live().clone();
+        live.state("paused");
+        let operator = self.session.operator;
+        self.pb.suspend(|| {
+            operator.notice(format_args!(
+                "paused before position {next}: the head holds (laser off, stages at rest); continue from the live page or with `gonio continue DIR`"
+            ))
+        });
+        loop {
+            tokio::select! {
+                () = live.resumed() => break,
+                () = tokio::time::sleep(self.session.heartbeat() / 2) => {
+                    if let Err(e) = self.session.head().request::<StatusEndpoint>(&()).await {
+                        if !is_link_loss(&e) {
+                            return Err(e.context("keeping the paused head awake"));
+                        }
+                        self.recover(Interruption::LinkLost(format!("{e:#}")), next).await?;
+                    }
+                }
+            }
+        }
+        live.state("scanning");
+        Ok(())
     }
 
     /// One visit to the monitor before position `next`; a lost link is
@@ -213,7 +250,7 @@ impl ScanDriver<'_> {
         let mut beat = Instant::now();
         let (mut waiting_since, mut progress) = (Instant::now(), seq.progress());
         loop {
-            let actions = match tokio::time::timeout(POLL, events.recv()).await {
+            let mut actions = match tokio::time::timeout(POLL, events.recv()).await {
                 Ok(None) => {
                     return Ok(Stretch::Interrupted(
                         seq.expected(),
@@ -242,14 +279,21 @@ impl ScanDriver<'_> {
                     }
                 }
             };
+            if pb.live().pause_requested() {
+                actions.extend(seq.pause());
+            }
             for action in actions {
                 match action {
                     Action::Store(s) => {
                         out.push(&s)?;
                         clock.saw(s.timestamp_us);
+                        pb.sample(&s.reached, &s.signal);
                     }
                     Action::StoreRow(row) => {
                         out.push_swept(&row)?;
+                        for s in &row {
+                            pb.sample(&gonio_scan_dir::swept::geometry(s), &s.signal);
+                        }
                         if let Some(last) = row.last() {
                             clock.saw(last.start_us + (last.duration_s as f64 * 1e6) as u64);
                         }
@@ -260,7 +304,7 @@ impl ScanDriver<'_> {
                     },
                     Action::Pause => {
                         if let Err(e) = head.request::<PauseEndpoint>(&()).await {
-                            return lost(e.context("pausing the scan for the laser-drift monitor"), seq.expected());
+                            return lost(e.context("pausing the scan"), seq.expected());
                         }
                     }
                     Action::Gap => return gap(head, seq.expected()).await,

@@ -1,12 +1,15 @@
-//! What the operator sees of a running scan: the positions done, what was
-//! measured and what was unreachable, and the time left. The time left is
+//! What the operator sees of a running scan, on the terminal's bar and on
+//! the live page ([`Live`]): the positions done, what was measured and what
+//! was unreachable, and the time left. The time left is
 //! the plan's own estimate of the positions still to visit (head time, from
 //! `scan_order::duration`), scaled by how the head time spent so far
 //! compares with the plan's estimate of the positions done: the ratio
 //! starts at 1 and earns its weight as the scan runs, so the figure neither
 //! starts from a wall-clock guess nor swings on the first few points.
 
+use super::live::{Live, Update};
 use crate::operator::Operator;
+use gonio_shared::{Geometry, Signal};
 use indicatif::{ProgressBar, ProgressStyle};
 
 /// Head time (s) the correction is held at 1 for, at most: the first
@@ -19,13 +22,14 @@ pub struct Progress {
     /// Head time still to run before each position from `first` (s), then 0.
     left_s: Vec<f64>,
     first: u32,
+    live: Live,
 }
 
 impl Progress {
     /// A scan's progress from position `first`, with the plan's `left_s`
     /// ([`crate::scan_order::duration::time_left_s`]); `items` names the
     /// positions (points, positions).
-    pub fn new(operator: Operator, left_s: Vec<f64>, first: u32, items: &str) -> Progress {
+    pub fn new(operator: Operator, left_s: Vec<f64>, first: u32, items: &str, live: Live) -> Progress {
         let positions = left_s.len().saturating_sub(1) as u64;
         let bar = if operator == Operator::Silent {
             ProgressBar::hidden()
@@ -37,7 +41,7 @@ impl Progress {
                 .unwrap_or_else(|_| ProgressStyle::default_bar())
                 .progress_chars("=> "),
         );
-        Progress { bar, left_s, first }
+        Progress { bar, left_s, first, live }
     }
 
     /// The plan's estimate of the whole session (head time, s).
@@ -61,11 +65,35 @@ impl Progress {
 
     /// Shows position `next` as the next to visit.
     pub fn update(&self, next: u32, spent_s: f64, measured: u32, unreachable: u32) {
+        let left_s = self.left_s(next, spent_s);
         self.bar.set_position(next.saturating_sub(self.first) as u64);
         self.bar.set_message(format!(
             "{measured} measured, {unreachable} unreachable, {} left",
-            super::directory::hms(self.left_s(next, spent_s))
+            super::directory::hms(left_s)
         ));
+        self.live.publish(Update::Progress {
+            done: next,
+            of: self.first + self.left_s.len().saturating_sub(1) as u32,
+            measured,
+            unreachable,
+            left_s,
+        });
+    }
+
+    /// Shows a measured position on the live page.
+    pub fn sample(&self, at: &Geometry, signal: &Signal) {
+        self.live.publish(Update::Sample {
+            theta_i_deg: at.theta_i_deg,
+            theta_o_deg: at.theta_o_deg,
+            dphi_deg: at.dphi_deg,
+            signal_v: signal.amplitude_v,
+            gain_v_per_a: signal.gain_v_per_a,
+        });
+    }
+
+    /// The live page's side: state to show, requests to obey.
+    pub fn live(&self) -> &Live {
+        &self.live
     }
 
     /// Runs `f` (a notice) with the bar hidden.
@@ -84,7 +112,13 @@ mod tests {
 
     /// 100 positions of 10 s each, from position 20 of a resumed scan.
     fn even() -> Progress {
-        Progress::new(Operator::Silent, (0..=100).rev().map(|k| 10.0 * k as f64).collect(), 20, "points")
+        Progress::new(
+            Operator::Silent,
+            (0..=100).rev().map(|k| 10.0 * k as f64).collect(),
+            20,
+            "points",
+            Live::default(),
+        )
     }
 
     #[test]

@@ -15,7 +15,7 @@ pub const EVENT_TIMEOUT: Duration = Duration::from_secs(180);
 #[derive(Debug, PartialEq)]
 pub enum Stretch {
     Finished,
-    /// Paused for the monitor; continue at this visit position.
+    /// Paused for the monitor or the operator; continue at this visit position.
     Paused(u32),
     /// Cut short; continue at this visit position once recovered.
     Interrupted(u32, Interruption),
@@ -55,7 +55,8 @@ pub enum Action {
     StoreRow(Vec<SweptSample>),
     /// Send the head more of the visit order, from [`Sequencer::queued`].
     Refill,
-    /// Ask the head to hold the scan (the drift monitor is due).
+    /// Ask the head to hold the scan (the drift monitor is due, or the
+    /// operator asked).
     Pause,
     /// Abort the head's scan: events were lost or came out of order; the
     /// stretch ends `Interrupted(expected, Gap)`.
@@ -205,6 +206,16 @@ impl Sequencer {
             actions.push(Action::Pause);
         }
         actions
+    }
+
+    /// The operator asks to hold the scan: paused before the next position
+    /// (asked once), unless the scan is done; the stretch then ends
+    /// `Paused`, as for the monitor.
+    pub fn pause(&mut self) -> Option<Action> {
+        (!self.pausing && self.expected < self.points).then(|| {
+            self.pausing = true;
+            Action::Pause
+        })
     }
 
     fn on_swept_sample(&mut self, s: SweptSample, outcome: &mut ScanOutcome) -> Vec<Action> {

@@ -2,6 +2,7 @@
 
 pub mod calibrate;
 mod coefficients;
+mod control;
 mod convert;
 mod detector;
 mod devices;
@@ -10,6 +11,7 @@ pub mod failure;
 pub mod fit;
 pub mod grid;
 pub mod interrupt;
+pub mod live;
 pub mod material;
 mod model_eval;
 mod plot;
@@ -61,6 +63,14 @@ pub enum Command {
     Eval(model_eval::EvalArgs),
     /// Directional-hemispherical reflectance of a model, and its energy check.
     Dhr(model_eval::DhrArgs),
+    /// Hold a running scan before its next position (from another terminal; the live page's Pause).
+    Pause(control::ControlArgs),
+    /// Let a held scan go on where it stopped.
+    Continue(control::ControlArgs),
+    /// Stop a running scan as Ctrl-C would: every sample kept, resumable.
+    Abort(control::ControlArgs),
+    /// Arm a head again after its E-STOP, once the input is closed.
+    Rearm(control::RearmArgs),
 }
 
 impl Command {
@@ -81,6 +91,8 @@ impl Command {
             Command::Export(a) => a.json,
             Command::Eval(a) => a.json,
             Command::Dhr(a) => a.json,
+            Command::Pause(a) | Command::Continue(a) | Command::Abort(a) => a.json,
+            Command::Rearm(a) => a.json,
         }
     }
 }
@@ -127,5 +139,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Export(a) => export::export_cmd(a),
         Command::Eval(a) => model_eval::eval_cmd(a),
         Command::Dhr(a) => model_eval::dhr_cmd(a),
+        Command::Pause(a) => control::control_cmd(control::Request::Pause, a),
+        Command::Continue(a) => control::control_cmd(control::Request::Continue, a),
+        Command::Abort(a) => control::control_cmd(control::Request::Abort, a),
+        Command::Rearm(a) => rt.block_on(control::rearm_cmd(a)),
     }
 }

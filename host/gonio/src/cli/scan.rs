@@ -4,11 +4,13 @@ use super::calibrate;
 use super::detector::DetectorArgs;
 use super::fit::{self, FitOptions};
 use super::grid::{GridArgs, LobeArgs};
+use super::live::LiveArgs;
 use super::material::SimHeadArgs;
 use super::{interrupt, simulated};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
 use gonio_acquire::scan::directory::{hms, positions, resume_from, scan_into, Destination};
+use gonio_acquire::scan::live::Live;
 use gonio_analysis::rounding::{figure, significant, with_uncertainty};
 use gonio_scan_dir::record::{parse_geometry, Monitor, RecordedHead, ScanRecord};
 use gonio_scan_dir::run::ScanOutcome;
@@ -34,6 +36,8 @@ pub struct DemoArgs {
     pub lobe: LobeArgs,
     #[command(flatten)]
     pub output: OutputArgs,
+    #[command(flatten)]
+    pub live: LiveArgs,
 }
 
 /// How results are written.
@@ -95,6 +99,8 @@ pub struct ScanArgs {
     pub sim_head: SimHeadArgs,
     #[command(flatten)]
     pub output: OutputArgs,
+    #[command(flatten)]
+    pub live: LiveArgs,
 }
 
 /// The whole chain on the simulated head: the reference plate and the
@@ -115,7 +121,8 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         false => None,
     };
     let spec = ScanSpec { sweep, ..belcour };
-    let (outcome, samples) = demo_scan(sim, &spec, &a.out, &a.output).await?;
+    let live = super::live::start(&a.live, Operator::for_json(a.output.json)).await?;
+    let (outcome, samples) = demo_scan(sim, &spec, &a.out, &a.output, &live).await?;
     let retro = spec.retro_points();
     let json = a.output.json;
     if !json {
@@ -206,7 +213,7 @@ pub const DEMO_SWEEP: SweepScan = SweepScan {
 /// The demo's scan of a simulated head into `dir`: the reference plate,
 /// then `spec` (quiet with `output.json`). Returns the outcome and the
 /// samples file.
-pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &OutputArgs) -> Result<(ScanOutcome, PathBuf)> {
+pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &OutputArgs, live: &Live) -> Result<(ScanOutcome, PathBuf)> {
     let mut record = ScanRecord::simulated(&sim, spec, &DetectorArgs::demo().checked()?);
     record.reference_plate = true;
     let to = Destination {
@@ -219,6 +226,7 @@ pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &Out
         simulated::target(&record.head, sim.faults),
         to,
         Operator::for_json(output.json),
+        live,
         interrupt::requested(),
     )
     .await
@@ -238,7 +246,16 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         };
         // A resume runs on the repaired head: no faults.
         let target = simulated::target(&record.head, Faults::default());
-        let (outcome, samples) = scan_into(&record, target, to, Operator::for_json(a.output.json), interrupt::requested()).await?;
+        let live = super::live::start(&a.live, Operator::for_json(a.output.json)).await?;
+        let (outcome, samples) = scan_into(
+            &record,
+            target,
+            to,
+            Operator::for_json(a.output.json),
+            &live,
+            interrupt::requested(),
+        )
+        .await?;
         return summarise(&record.spec, &outcome, &samples, a.output.json);
     }
     let (spec, det) = (a.grid.spec()?, &a.detector.checked()?);
@@ -268,7 +285,16 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         force: a.output.force,
     };
     let target = simulated::target(&record.head, faults);
-    let (outcome, samples) = scan_into(&record, target, to, Operator::for_json(a.output.json), interrupt::requested()).await?;
+    let live = super::live::start(&a.live, Operator::for_json(a.output.json)).await?;
+    let (outcome, samples) = scan_into(
+        &record,
+        target,
+        to,
+        Operator::for_json(a.output.json),
+        &live,
+        interrupt::requested(),
+    )
+    .await?;
     summarise(&spec, &outcome, &samples, a.output.json)
 }
 
