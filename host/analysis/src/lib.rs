@@ -15,6 +15,7 @@ pub mod fit;
 pub mod formats;
 pub mod lobe;
 pub mod plot;
+pub mod repeatability;
 pub mod report;
 pub mod rounding;
 pub mod uncertainty;

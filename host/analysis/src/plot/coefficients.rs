@@ -4,7 +4,7 @@
 //! carries it (extrapolated), with the k = 2 band shaded. A tape maker reads
 //! off where the numbers are measurements and where they are not.
 
-use super::{err, register_font, PALETTE};
+use super::{err, legend, register_font, PALETTE};
 use crate::coefficients::{self, Provenance, Source, ASTM_APERTURES, ASTM_BETAS};
 use crate::uncertainty::K_COVERAGE;
 use anyhow::{Context, Result};
@@ -115,13 +115,6 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, curves: &[(f64, Vec<A
             .label(label)
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 24, y)], color.stroke_width(3)));
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font(("sans-serif", 16))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
+    legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     Ok(())
 }

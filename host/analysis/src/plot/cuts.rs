@@ -3,7 +3,7 @@
 //! each sample with its k = 2 error bar and the best fit drawn in the same
 //! colour. The incidence plane (Δφ = 0°) is the first.
 
-use super::{err, fr, tick, Style};
+use super::{err, fr, legend, tick, Style};
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
@@ -132,14 +132,7 @@ pub fn draw<DB: DrawingBackend>(
             chart.draw_series(LineSeries::new(line, colour.stroke_width(1))).map_err(err)?;
         }
     }
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font(("sans-serif", style.label))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
+    legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     if let Some(m) = fit {
         let note = TextStyle::from(("sans-serif", style.label).into_font()).pos(Pos::new(HPos::Right, VPos::Top));
         chart

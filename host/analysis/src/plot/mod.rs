@@ -12,6 +12,7 @@ pub mod colour_scale;
 mod cuts;
 mod hemisphere;
 mod plane;
+pub mod repeatability;
 mod retro;
 
 pub use colour_scale::Scale;
@@ -68,12 +69,32 @@ fn fr(o: &Observation, data: &Dataset) -> f64 {
     o.value / o.unit_factor(data.units)
 }
 
+/// A chart's legend, the same on every picture: the series' labels on a
+/// light box in a corner, in the label size.
+pub(crate) fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    at: SeriesLabelPosition,
+) -> Result<()> {
+    chart
+        .configure_series_labels()
+        .position(at)
+        .label_font(("sans-serif", STYLE.label))
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .draw()
+        .map_err(err)
+}
+
 /// An axis tick's label: three significant digits, no trailing zeros.
 pub(crate) fn tick(v: f64) -> String {
     let s = crate::rounding::significant(v, 3);
+    let trim = |m: &str| match m.contains('.') {
+        true => m.trim_end_matches('0').trim_end_matches('.').to_string(),
+        false => m.to_string(),
+    };
     match s.split_once('×') {
-        None if s.contains('.') => s.trim_end_matches('0').trim_end_matches('.').to_string(),
-        _ => s,
+        Some((m, p)) => format!("{}×{p}", trim(m)),
+        None => trim(&s),
     }
 }
 
@@ -339,6 +360,7 @@ mod tests {
         assert_eq!(tick(10.0), "10");
         assert_eq!(tick(-80.0), "-80");
         assert_eq!(tick(0.1), "0.1");
-        assert_eq!(tick(2.5e-6), "2.50×10⁻⁶");
+        assert_eq!(tick(2.5e-6), "2.5×10⁻⁶");
+        assert_eq!(tick(1e-5), "1×10⁻⁵");
     }
 }

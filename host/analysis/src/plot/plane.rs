@@ -4,7 +4,7 @@
 //! mirror directions are marked, each sample carries its k = 2 error bar and
 //! the fits are drawn over the data.
 
-use super::{err, fr, in_plane, Style, PALETTE};
+use super::{err, fr, in_plane, legend, Style, PALETTE};
 use crate::fit::Dataset;
 use crate::rounding::superscript;
 use crate::uncertainty::K_COVERAGE;
@@ -131,13 +131,6 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
             "measured".to_string()
         })
         .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperLeft)
-        .label_font(("sans-serif", style.label))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
+    legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     Ok(())
 }

@@ -4,7 +4,7 @@
 //! incidence plane towards the normal. A retroreflector's figure of merit
 //! lives here, where a hemisphere map is a few pixels wide.
 
-use super::{err, fr, tick, Style, PALETTE};
+use super::{err, fr, legend, tick, Style, PALETTE};
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
@@ -100,13 +100,6 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         .map_err(err)?
         .label(format!("measured, every Δφ about the light (± U, k = {K_COVERAGE})"))
         .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
-    chart
-        .configure_series_labels()
-        .position(SeriesLabelPosition::UpperRight)
-        .label_font(("sans-serif", style.label))
-        .background_style(WHITE.mix(0.85))
-        .border_style(BLACK)
-        .draw()
-        .map_err(err)?;
+    legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     Ok(())
 }

@@ -15,6 +15,7 @@ pub mod live;
 pub mod material;
 mod model_eval;
 mod plot;
+mod repeatability;
 pub mod scan;
 mod sim;
 pub mod simulated;
@@ -63,6 +64,8 @@ pub enum Command {
     Eval(model_eval::EvalArgs),
     /// Directional-hemispherical reflectance of a model, and its energy check.
     Dhr(model_eval::DhrArgs),
+    /// Repeated scans of one sample compared geometry by geometry: mean, s and the budget's σ.
+    Repeatability(repeatability::RepeatabilityArgs),
     /// Hold a running scan before its next position (from another terminal; the live page's Pause).
     Pause(control::ControlArgs),
     /// Let a held scan go on where it stopped.
@@ -91,6 +94,7 @@ impl Command {
             Command::Export(a) => a.json,
             Command::Eval(a) => a.json,
             Command::Dhr(a) => a.json,
+            Command::Repeatability(a) => a.json,
             Command::Pause(a) | Command::Continue(a) | Command::Abort(a) => a.json,
             Command::Rearm(a) => a.json,
         }
@@ -139,6 +143,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Export(a) => export::export_cmd(a),
         Command::Eval(a) => model_eval::eval_cmd(a),
         Command::Dhr(a) => model_eval::dhr_cmd(a),
+        Command::Repeatability(a) => repeatability::repeatability_cmd(a),
         Command::Pause(a) => control::control_cmd(control::Request::Pause, a),
         Command::Continue(a) => control::control_cmd(control::Request::Continue, a),
         Command::Abort(a) => control::control_cmd(control::Request::Abort, a),
