@@ -40,7 +40,7 @@ fn fitted(fits: &[Fit]) -> Vec<Fitted> {
 fn coefficient_cell(e: &Estimate) -> String {
     let provenance = e.basis.as_ref().map(|b| b.provenance);
     let title = e.basis.as_ref().map_or(String::new(), |b| escape(&b.why));
-    let text = rounding::with_uncertainty(e.value, e.u);
+    let text = format!("<span class=\"n\">{}</span>", rounding::with_uncertainty(e.value, e.u));
     match provenance {
         Some(Provenance::Extrapolated) => format!(
             "<td class=\"ex\" title=\"{title}\">{text}<br><small>extrapolated ({}, models ±{})</small></td>",
@@ -153,7 +153,7 @@ fn params_cell(f: &Fit) -> String {
     names
         .iter()
         .enumerate()
-        .map(|(k, n)| format!("{n} = {}", f.parameter_text(k)))
+        .map(|(k, n)| format!("<span class=\"n\">{n} = {}</span>", f.parameter_text(k)))
         .collect::<Vec<_>>()
         .join("<br>")
 }
@@ -182,7 +182,7 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
          table {{ border-collapse: collapse; }}\n\
          td, th {{ border: 1px solid #bbb; padding: 0.3em 0.6em; text-align: right; vertical-align: top; }}\n\
          td.l, th.l {{ text-align: left; }}\n\
-         td {{ white-space: nowrap; }}\n\
+         span.n {{ white-space: nowrap; }}\n\
          tr.best {{ background: #eef6ee; }}\n\
          td.ex {{ background: #f3eee2; font-style: italic; }}\n\
          div.row {{ display: flex; gap: 0.8em; overflow-x: auto; }}\n\

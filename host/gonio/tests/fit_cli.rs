@@ -84,6 +84,10 @@ fn fit_json_has_the_contract_fields_and_recovers_the_material() {
         assert!((got - want).abs() <= 1e-6 * want.abs(), "{name}: {got} vs {want}");
     }
     assert!(v["ncc"].as_f64().unwrap() > 0.999_999);
+    // Unweighted: no χ²; the correlations of the free parameters are there.
+    assert!(v["goodness"].is_null());
+    assert_eq!(v["correlation"]["params"].as_array().unwrap().len(), 6);
+    assert_eq!(v["correlation"]["matrix"][2][2], 1.0);
 }
 
 #[test]
@@ -581,4 +585,35 @@ fn search_boxes_follow_the_data_and_say_when_they_bind() {
     ranks.sort();
     assert_eq!(ranks, (1..=8).collect::<Vec<u64>>());
     assert!(rows.iter().all(|r| r["at_bound"].is_array() && r["bic"].is_f64()));
+}
+
+/// With `--weights sigma` the fit says whether it is adequate within the
+/// samples' uncertainties: χ², degrees of freedom, p-value, and a verdict.
+#[test]
+fn a_sigma_weighted_fit_reports_its_chi2() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut data = dataset(&tape(), Units::Fr);
+    data.observations
+        .iter_mut()
+        .for_each(|o| o.sigma = Some(0.01 * o.value.abs().max(1e-6)));
+    let p = dir.path().join("sigma.dat");
+    std::fs::write(&p, alta::write(&data)).unwrap();
+    let f = p.to_str().unwrap();
+    // Exact data: χ² far below its degrees of freedom, the σ overstated.
+    let o = gonio(&["fit", f, "--model", "retro-phong", "--weights", "sigma"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(
+        text(&o).contains("degrees of freedom") && text(&o).contains("overstated"),
+        "{}",
+        text(&o)
+    );
+    let o = gonio(&["fit", f, "--model", "lambert", "--weights", "sigma", "--json"]);
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["goodness"]["dof"], 3239);
+    assert!(
+        v["goodness"]["reduced_chi2"].as_f64().unwrap() > 10.0 && v["goodness"]["p_value"].as_f64().unwrap() < 1e-12,
+        "{v}"
+    );
+    let t = gonio(&["fit", f, "--model", "lambert", "--weights", "sigma"]);
+    assert!(text(&t).contains("misses the data by more than their uncertainty"), "{}", text(&t));
 }

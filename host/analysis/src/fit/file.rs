@@ -26,6 +26,13 @@ pub fn to_json(f: &Fit, units: Units, holdout: Option<&Metrics>) -> Value {
         let rows: Vec<Vec<f64>> = (0..c.nrows()).map(|i| c.row(i).iter().copied().collect()).collect();
         v["covariance"] = json!(rows);
     }
+    if let Some(c) = &f.correlation {
+        let rows: Vec<Vec<f64>> = (0..c.rho.nrows()).map(|i| c.rho.row(i).iter().copied().collect()).collect();
+        v["correlation"] = json!({ "params": c.names, "matrix": rows });
+    }
+    if let Some(g) = &f.goodness {
+        v["goodness"] = json!(g);
+    }
     if let Some(h) = holdout {
         v["holdout"] = json!(h);
     }

@@ -7,6 +7,7 @@ mod area;
 pub mod data;
 pub mod file;
 mod global;
+pub mod goodness;
 mod local;
 pub mod metrics;
 mod problem;
@@ -98,6 +99,11 @@ pub struct Fit {
     /// rows and columns of fixed ones are zero): the samples' scatter and
     /// the inputs they share; `None` where the normal matrix is singular.
     pub covariance: Option<DMatrix<f64>>,
+    /// The free parameters' correlations, from the covariance.
+    pub correlation: Option<goodness::Correlation>,
+    /// χ², its degrees of freedom and p-value: only for a fit weighted by
+    /// the samples' σ, where the cost is χ².
+    pub goodness: Option<goodness::Goodness>,
 }
 
 impl Fit {
@@ -252,7 +258,18 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         .collect();
     let (nf, kf) = (problem.y.len() as f64, problem.free.len() as f64);
     let log_mean = (cost / nf).max(f64::MIN_POSITIVE).ln();
+    let correlation = covariance
+        .as_ref()
+        .and_then(|c| goodness::correlation(c, &problem.free))
+        .map(|rho| goodness::Correlation {
+            names: problem.free.iter().map(|&i| names[i]).collect(),
+            rho,
+        });
     Ok(Fit {
+        goodness: (spec.weighting == Weighting::Sigma)
+            .then(|| goodness::Goodness::of(cost, problem.y.len(), problem.free.len()))
+            .flatten(),
+        correlation,
         aic: nf * log_mean + 2.0 * kf,
         bic: nf * log_mean + kf * nf.ln(),
         at_bound,

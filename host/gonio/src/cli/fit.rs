@@ -3,6 +3,7 @@
 
 use anyhow::{bail, Context, Result};
 use gonio_analysis::coefficients::{Coefficient, Fitted, Source, Support};
+use gonio_analysis::fit::goodness::Goodness;
 use gonio_analysis::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
 use gonio_analysis::rounding::{figure, significant};
 use gonio_brdf::{ModelId, Param};
@@ -242,6 +243,17 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         println!("  {n:>8} = {}{}", f.parameter_text(k), if fixed { " (fixed)" } else { "" });
     }
     println!("  {}  AIC {:.1}  BIC {:.1}", f.metrics.summary(), f.aic, f.bic);
+    if let Some(g) = &f.goodness {
+        println!("  {}", goodness_text(g));
+    }
+    if let Some(c) = &f.correlation {
+        for (a, b, r) in c.strong(STRONG_CORRELATION) {
+            println!(
+                "  {a} and {b} are correlated, ρ = {}: the data tell mostly their combination",
+                figure(r, 3)
+            );
+        }
+    }
     for name in &f.at_bound {
         eprintln!(
             "warning: {name} ended on the edge of its search box: the optimum may lie beyond it (widen the box with --bounds {name}=LO:HI)"
@@ -251,6 +263,31 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         println!("  held out θi {:?}°: {}", a.options.holdout_theta_i, h.summary());
     }
     Ok(())
+}
+
+/// |ρ| beyond which two parameters are named as correlated.
+const STRONG_CORRELATION: f64 = 0.95;
+
+/// χ² in words: its degrees of freedom, the reduced value against its 99 %
+/// interval for a right model with right σ, and the p-value.
+fn goodness_text(g: &Goodness) -> String {
+    let (lo, hi) = Goodness::interval(g.dof, 0.99);
+    let verdict = if g.reduced_chi2 > hi {
+        "the model misses the data by more than their uncertainty"
+    } else if g.reduced_chi2 < lo {
+        "closer than the uncertainties allow: they are overstated"
+    } else {
+        "adequate within the stated uncertainties"
+    };
+    format!(
+        "χ² = {} for {} degrees of freedom: reduced {} (99 % of a right fit: {}–{}), p = {}; {verdict}",
+        significant(g.chi2, 4),
+        g.dof,
+        significant(g.reduced_chi2, 3),
+        significant(lo, 2),
+        significant(hi, 2),
+        significant(g.p_value, 2)
+    )
 }
 
 /// Every model fitted to the same data, in catalogue order.
@@ -332,8 +369,8 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
         d.train.units
     );
     println!(
-        "{:<16} {:>6} {:>12} {:>12} {:>9} {:>13} {:>13} {:>4} {:>4} {:>8}  at bound",
-        "model", "coeffs", "RMSE", "NRMSE", "NCC", "AIC", "BIC", "#AIC", "#BIC", "s"
+        "{:<16} {:>6} {:>12} {:>12} {:>9} {:>13} {:>13} {:>4} {:>4} {:>8} {:>8}  at bound",
+        "model", "coeffs", "RMSE", "NRMSE", "NCC", "AIC", "BIC", "#AIC", "#BIC", "s", "χ²/dof"
     );
     let mut order: Vec<usize> = (0..rows.len()).collect();
     order.sort_by_key(|&i| ranks[i][0]);
@@ -342,7 +379,7 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
         let m = &f.metrics;
         let k = f.material.params.len();
         println!(
-            "{:<16} {k:>6} {:>12} {:>12} {:>9} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2}  {}",
+            "{:<16} {k:>6} {:>12} {:>12} {:>9} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2} {:>8}  {}",
             f.material.model.name(),
             significant(m.rmse, 4),
             significant(m.nrmse, 4),
@@ -352,6 +389,7 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
             ranks[i][1],
             ranks[i][2],
             f.seconds,
+            f.goodness.map_or("–".to_string(), |g| significant(g.reduced_chi2, 3)),
             f.at_bound.join(", ")
         );
     }
