@@ -48,24 +48,90 @@ pub struct Bound {
     /// amplitude): its upper bound follows the data's scale, so data in
     /// relative units (ALTA files often are) fit in the box.
     pub scales: bool,
+    /// Which edges (low, high) are only a default, not a physical limit: a
+    /// fit that ends on one widens the box there and goes on
+    /// (`Bound::widened`). Zero under a quantity that cannot be negative,
+    /// 1 over a Fresnel `r0`, π/2 over a roughness angle, an exponent's
+    /// floor of 1 stay.
+    pub open: (bool, bool),
 }
 
+/// A box whose high edge is a default and whose low edge a limit.
 const fn b(lo: f64, hi: f64, spread: Spread) -> Bound {
     Bound {
         lo,
         hi,
         spread,
         scales: false,
+        open: (false, true),
     }
 }
 
 /// An amplitude: `b` whose upper bound follows the data's scale.
 const fn a(lo: f64, hi: f64, spread: Spread) -> Bound {
     Bound {
-        lo,
-        hi,
-        spread,
         scales: true,
+        ..b(lo, hi, spread)
+    }
+}
+
+/// A box held at both edges by physics.
+const fn held(lo: f64, hi: f64, spread: Spread) -> Bound {
+    Bound {
+        open: (false, false),
+        ..b(lo, hi, spread)
+    }
+}
+
+/// A box open at both edges (a signed shape parameter).
+const fn free(lo: f64, hi: f64, spread: Spread) -> Bound {
+    Bound {
+        open: (true, true),
+        ..b(lo, hi, spread)
+    }
+}
+
+/// A box open below only (a parameter ≤ 0 by the model's geometry).
+const fn below(lo: f64, hi: f64, spread: Spread) -> Bound {
+    Bound {
+        open: (true, false),
+        ..b(lo, hi, spread)
+    }
+}
+
+impl Bound {
+    /// How far a box grows at an open edge, per widening.
+    pub const GROWTH: f64 = 10.0;
+
+    /// The box widened at its open edges among `(low, high)`: ×10 in width
+    /// (×10 beyond the edge on a log spread); `None` where neither is open.
+    pub fn widened(&self, (low, high): (bool, bool)) -> Option<Bound> {
+        let (low, high) = (low && self.open.0, high && self.open.1);
+        if !(low || high) {
+            return None;
+        }
+        let grow = Self::GROWTH - 1.0;
+        let (mut lo, mut hi) = (self.lo, self.hi);
+        match self.spread {
+            Spread::Log if lo > 0.0 => {
+                if low {
+                    lo /= Self::GROWTH;
+                }
+                if high {
+                    hi *= Self::GROWTH;
+                }
+            }
+            _ => {
+                let width = hi - lo;
+                if low {
+                    lo -= grow * width;
+                }
+                if high {
+                    hi += grow * width;
+                }
+            }
+        }
+        Some(Bound { lo, hi, ..*self })
     }
 }
 
@@ -98,10 +164,17 @@ use Spread::{Amplitude as A, Linear as L, Log as G};
 // opened to 0.01, fit-bench).
 const KD: Bound = a(0.0, 4.0, L);
 const EXPONENT: Bound = b(1.0, 1e4, G);
-const RETRO_PHONG: &[Bound] = &[KD, EXPONENT, a(0.0, 10.0, A), a(0.0, 10.0, A), a(0.0, 10.0, A), b(-20.0, 20.0, L)];
+const RETRO_PHONG: &[Bound] = &[
+    KD,
+    EXPONENT,
+    a(0.0, 10.0, A),
+    a(0.0, 10.0, A),
+    a(0.0, 10.0, A),
+    free(-20.0, 20.0, L),
+];
 const ABC_RETRO: &[Bound] = &[
     KD,
-    b(0.0, 1.0, L),
+    held(0.0, 1.0, L),
     a(0.0, 100.0, A),
     b(0.0, 1e4, A),
     b(0.0, 100.0, A),
@@ -109,19 +182,19 @@ const ABC_RETRO: &[Bound] = &[
     b(0.0, 1e4, A),
     b(0.0, 100.0, A),
 ];
-const BECKMANN_RETRO: &[Bound] = &[KD, b(1e-3, 1e4, G), b(0.0, 1.0, L)];
+const BECKMANN_RETRO: &[Bound] = &[KD, b(1e-3, 1e4, G), held(0.0, 1.0, L)];
 const BLINN_RETRO: &[Bound] = &[KD, b(1.0, 1e6, G), b(1.0, 1e6, G)];
 const LAFORTUNE: &[Bound] = &[
     KD,
-    b(-2.0, 0.0, L),
+    below(-2.0, 0.0, L),
     b(0.0, 2.0, L),
     EXPONENT,
     b(0.0, 2.0, L),
     b(0.0, 2.0, L),
     EXPONENT,
 ];
-const OREN_NAYAR: &[Bound] = &[KD, b(0.0, std::f64::consts::FRAC_PI_2, L)];
-const FIVE_PARAM: &[Bound] = &[a(0.0, 100.0, A), b(0.01, 100.0, G), b(0.01, 20.0, G), b(-100.0, 10.0, L), KD];
+const OREN_NAYAR: &[Bound] = &[KD, held(0.0, std::f64::consts::FRAC_PI_2, L)];
+const FIVE_PARAM: &[Bound] = &[a(0.0, 100.0, A), b(0.01, 100.0, G), b(0.01, 20.0, G), free(-100.0, 10.0, L), KD];
 
 impl ModelId {
     pub const ALL: [ModelId; 8] = [

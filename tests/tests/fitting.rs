@@ -87,6 +87,47 @@ fn reduced_chi2_of_right_fits_lies_in_its_interval() {
     assert!(g.reduced_chi2 > 10.0 && g.p_value < 1e-12, "{g:?}");
 }
 
+/// Lobes whose amplitudes lie beyond their default box (abc-retro's A_b
+/// and A_r at 521 and 553, as a measured tape's are, the box's edge at
+/// 100): the fit widens the boxes, says so, and finds them; a box the user
+/// gave stays, and the parameter on its edge is named.
+#[test]
+fn a_default_box_widens_where_the_optimum_lies_beyond_it() {
+    let mut truth = synthetic::reference(ModelId::AbcRetro);
+    // Narrow lobes (B = 3 000, C = 2), so that the data's median, which
+    // scales the amplitudes' boxes, stays the diffuse level.
+    truth.params[2..5].copy_from_slice(&[521.0, 3000.0, 2.0]);
+    truth.params[5..8].copy_from_slice(&[553.0, 3000.0, 2.0]);
+    let data = synthetic::samples(&truth, 3000, 0.01, 5);
+    let spec = FitSpec {
+        weighting: Weighting::Sigma,
+        ..FitSpec::new(ModelId::AbcRetro)
+    };
+    let f = fit::fit(&data, &spec).unwrap();
+    let widened: Vec<&str> = f.widened.iter().map(|w| w.0).collect();
+    assert!(
+        widened.contains(&"ab") && widened.contains(&"ar"),
+        "{widened:?} {:?} {:?}",
+        f.material.params,
+        f.at_bound
+    );
+    assert!(f.at_bound.is_empty(), "still on a bound: {:?}", f.at_bound);
+    for i in [2, 5] {
+        let (got, want) = (f.material.params[i], truth.params[i]);
+        assert!((got / want - 1.0).abs() < 0.05, "param {i}: {got} vs {want}");
+    }
+    let boxed = fit::fit(
+        &data,
+        &FitSpec {
+            bounds: vec![(2, 0.0, 100.0)],
+            ..spec
+        },
+    )
+    .unwrap();
+    assert!(boxed.at_bound.contains(&"ab") && !boxed.widened.iter().any(|w| w.0 == "ab"));
+    assert!(boxed.metrics.rmse > f.metrics.rmse);
+}
+
 /// Every model reaches NCC ≥ 0.99 on noise-free data generated from itself,
 /// found by the global search alone, in both retro parametrizations.
 #[test]

@@ -30,6 +30,10 @@ pub fn to_json(f: &Fit, units: Units, holdout: Option<&Metrics>) -> Value {
         let rows: Vec<Vec<f64>> = (0..c.rho.nrows()).map(|i| c.rho.row(i).iter().copied().collect()).collect();
         v["correlation"] = json!({ "params": c.names, "matrix": rows });
     }
+    if !f.widened.is_empty() {
+        let w: Map<String, Value> = f.widened.iter().map(|(n, b)| (n.to_string(), json!([b.lo, b.hi]))).collect();
+        v["widened"] = Value::Object(w);
+    }
     if let Some(g) = &f.goodness {
         v["goodness"] = json!(g);
     }

@@ -18,7 +18,7 @@ pub use metrics::Metrics;
 pub use problem::Problem;
 
 use anyhow::{bail, Result};
-use gonio_brdf::{Material, ModelId, Param};
+use gonio_brdf::{Bound, Material, ModelId, Param};
 use nalgebra::DMatrix;
 use std::time::Instant;
 
@@ -99,6 +99,9 @@ pub struct Fit {
     /// rows and columns of fixed ones are zero): the samples' scatter and
     /// the inputs they share; `None` where the normal matrix is singular.
     pub covariance: Option<DMatrix<f64>>,
+    /// Default boxes the fit widened, each time it ended on an edge that is
+    /// not a physical limit: `(parameter, the box it ended in)`.
+    pub widened: Vec<Widened>,
     /// The free parameters' correlations, from the covariance.
     pub correlation: Option<goodness::Correlation>,
     /// χ², its degrees of freedom and p-value: only for a fit weighted by
@@ -230,8 +233,7 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
 /// Fits a model to a data set.
 pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
     let t0 = Instant::now();
-    let problem = problem(data, spec)?;
-    let x = solve(&problem, spec.start.as_deref(), spec.seed);
+    let (problem, x, widened) = widening(data, spec)?;
     let material = Material {
         model: spec.model,
         params: problem.full(&x),
@@ -266,6 +268,7 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
             rho,
         });
     Ok(Fit {
+        widened,
         goodness: (spec.weighting == Weighting::Sigma)
             .then(|| goodness::Goodness::of(cost, problem.y.len(), problem.free.len()))
             .flatten(),
@@ -281,6 +284,52 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         cost,
         material,
     })
+}
+
+/// A default box a fit widened: the parameter and the box it ended in.
+pub type Widened = (&'static str, Bound);
+
+/// Widenings of one box at most: ×10⁴ in width.
+const WIDENINGS: usize = 4;
+
+/// The fit of `spec`, its default boxes widened where the optimum ends on an
+/// edge that is not a physical limit (`Bound::open`), each time going on
+/// from the optimum found, until it lies inside, a limit holds it, or
+/// `WIDENINGS` have been spent. A box the user gave (`--bounds`) is theirs
+/// and stays. Returns the last problem, its optimum and the widened boxes.
+fn widening(data: &Dataset, spec: &FitSpec) -> Result<(Problem, Vec<f64>, Vec<Widened>)> {
+    let mut spec = spec.clone();
+    let mut problem = problem(data, &spec)?;
+    let mut x = solve(&problem, spec.start.as_deref(), spec.seed);
+    let names = spec.model.param_names();
+    let mut widened: Vec<Widened> = Vec::new();
+    let given: Vec<usize> = spec.bounds.iter().map(|b| b.0).collect();
+    for _ in 0..WIDENINGS {
+        let full = problem.full(&x);
+        let grown: Vec<(usize, Bound)> = problem
+            .free
+            .iter()
+            .filter(|i| !given.contains(i))
+            .filter_map(|&i| {
+                let b = problem.bounds_all[i];
+                let tol = 1e-6 * (b.hi - b.lo);
+                b.widened(((full[i] - b.lo).abs() <= tol, (b.hi - full[i]).abs() <= tol))
+                    .map(|w| (i, w))
+            })
+            .collect();
+        if grown.is_empty() {
+            break;
+        }
+        for (i, w) in grown {
+            spec.bounds.retain(|b| b.0 != i);
+            spec.bounds.push((i, w.lo, w.hi));
+            widened.retain(|(n, _)| *n != names[i]);
+            widened.push((names[i], w));
+        }
+        problem = self::problem(data, &spec)?;
+        x = solve(&problem, Some(&full), spec.seed);
+    }
+    Ok((problem, x, widened))
 }
 
 /// Threads a fit runs on: rayon's pool, one per core unless

@@ -55,6 +55,7 @@ mod tests {
                 hi: 200.0,
                 spread,
                 scales: false,
+                open: (false, true),
             };
             for x in [0.5, 0.51, 3.0, 199.0, 200.0] {
                 assert!((to_external(&b, to_internal(&b, x)) - x).abs() < 1e-9 * x);
@@ -66,6 +67,7 @@ mod tests {
             hi: 3.0,
             spread: Spread::Linear,
             scales: false,
+            open: (true, true),
         };
         assert_eq!(to_external(&b, -std::f64::consts::FRAC_PI_2), -1.0);
         assert_eq!(to_external(&b, std::f64::consts::FRAC_PI_2), 3.0);

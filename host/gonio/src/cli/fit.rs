@@ -254,6 +254,13 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
             );
         }
     }
+    for (name, b) in &f.widened {
+        eprintln!(
+            "note: {name} ended on the edge of its default box, which is no physical limit: the box grew to [{}, {}] and the fit went on",
+            significant(b.lo, 3),
+            significant(b.hi, 3)
+        );
+    }
     for name in &f.at_bound {
         eprintln!(
             "warning: {name} ended on the edge of its search box: the optimum may lie beyond it (widen the box with --bounds {name}=LO:HI)"
