@@ -3,7 +3,7 @@
 //! each sample with its k = 2 error bar and the best fit drawn in the same
 //! colour. The incidence plane (Δφ = 0°) is the first.
 
-use super::{err, fr, legend, tick, Style};
+use super::{err, fr, legend, tick, STYLE};
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
@@ -71,13 +71,7 @@ fn cuts(data: &Dataset) -> Vec<Cut> {
         .collect()
 }
 
-pub fn draw<DB: DrawingBackend>(
-    root: &DrawingArea<DB, Shift>,
-    data: &Dataset,
-    ti: f64,
-    fit: Option<&Material>,
-    style: Style,
-) -> Result<()> {
+pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fit: Option<&Material>) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     let cuts = cuts(data);
     let model = |p: f64, t: f64| -> f64 {
@@ -92,10 +86,10 @@ pub fn draw<DB: DrawingBackend>(
         .fold((f64::INFINITY, 0.0f64), |(lo, hi), f| (lo.min(f), hi.max(f)));
     let (lo, hi) = if lo.is_finite() { (lo / 1.5, hi * 1.5) } else { (1e-3, 1.0) };
     let mut chart = ChartBuilder::on(root)
-        .caption(format!("f_r against θo per plane of view, θi = {ti}°"), ("sans-serif", style.title))
+        .caption(format!("f_r against θo per plane of view, θi = {ti}°"), ("sans-serif", STYLE.title))
         .margin(10)
-        .x_label_area_size(3 * style.label)
-        .y_label_area_size(5 * style.label)
+        .x_label_area_size(3 * STYLE.label)
+        .y_label_area_size(5 * STYLE.label)
         .build_cartesian_2d(-90.0..90.0, (lo..hi).log_scale())
         .map_err(err)?;
     chart
@@ -105,8 +99,8 @@ pub fn draw<DB: DrawingBackend>(
         .x_labels(13)
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
-        .label_style(("sans-serif", style.label))
-        .axis_desc_style(("sans-serif", style.label))
+        .label_style(("sans-serif", STYLE.label))
+        .axis_desc_style(("sans-serif", STYLE.label))
         .light_line_style(WHITE)
         .draw()
         .map_err(err)?;
@@ -134,7 +128,7 @@ pub fn draw<DB: DrawingBackend>(
     }
     legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
     if let Some(m) = fit {
-        let note = TextStyle::from(("sans-serif", style.label).into_font()).pos(Pos::new(HPos::Right, VPos::Top));
+        let note = TextStyle::from(("sans-serif", STYLE.label).into_font()).pos(Pos::new(HPos::Right, VPos::Top));
         chart
             .draw_series(std::iter::once(Text::new(
                 format!("lines: {}; bars: ± U (k = {K_COVERAGE})", m.model.name()),

@@ -6,7 +6,7 @@
 //! the value's unit.
 
 use super::colour_scale::{ColourScale, Scale, LEVELS};
-use super::{err, fr, Style};
+use super::{err, fr, STYLE};
 use crate::fit::{Dataset, Observation};
 use anyhow::Result;
 use gonio_brdf::Material;
@@ -158,12 +158,12 @@ fn interpolate(samples: &[(f64, f64)], values: &[f64], p: (f64, f64), gap: f64) 
     Some(sum / weight)
 }
 
-pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, map: &Map, style: Style) -> Result<()> {
+pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, map: &Map) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     let (_, h) = root.dim_in_pixel();
     let (area, bar) = root.split_horizontally(h);
     let mut chart = ChartBuilder::on(&area)
-        .caption(&map.title, ("sans-serif", style.title))
+        .caption(&map.title, ("sans-serif", STYLE.title))
         .margin(8)
         .build_cartesian_2d(-122.0..122.0, -112.0..112.0)
         .map_err(err)?;
@@ -185,7 +185,7 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, map: &Map, style:
     chart
         .draw_series(map.samples.iter().map(|&p| Circle::new(p, 1, BLACK.mix(0.35).filled())))
         .map_err(err)?;
-    let label = TextStyle::from(("sans-serif", style.label).into_font());
+    let label = TextStyle::from(("sans-serif", STYLE.label).into_font());
     for t in [30.0, 60.0, 90.0] {
         chart.draw_series(LineSeries::new(circle(t), BLACK.mix(0.6))).map_err(err)?;
         let a = 112f64.to_radians();
@@ -231,8 +231,8 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, map: &Map, style:
         .draw_series(std::iter::once(Text::new(
             format!("dots: samples; grey: none within {:.0}°", map.gap),
             (-121.0, -104.0),
-            ("sans-serif", style.label),
+            ("sans-serif", STYLE.label),
         )))
         .map_err(err)?;
-    map.scale.draw_bar(&bar, style.label)
+    map.scale.draw_bar(&bar, STYLE.label)
 }

@@ -189,10 +189,10 @@ fn prepare(kind: Picture, data: &Dataset, ti: f64, fits: &[Material], o: &Option
 
 fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &Prepared, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
     match p {
-        Prepared::Plane => plane::draw(root, data, ti, fits, STYLE),
-        Prepared::Cuts => cuts::draw(root, data, ti, fits.first(), STYLE),
-        Prepared::Retro => retro::draw(root, data, ti, fits, STYLE),
-        Prepared::Map(m) => hemisphere::draw(root, m, STYLE),
+        Prepared::Plane => plane::draw(root, data, ti, fits),
+        Prepared::Cuts => cuts::draw(root, data, ti, fits.first()),
+        Prepared::Retro => retro::draw(root, data, ti, fits),
+        Prepared::Map(m) => hemisphere::draw(root, m),
     }
 }
 

@@ -4,7 +4,7 @@
 //! mirror directions are marked, each sample carries its k = 2 error bar and
 //! the fits are drawn over the data.
 
-use super::{err, fr, in_plane, legend, Style, PALETTE};
+use super::{err, fr, in_plane, legend, PALETTE, STYLE};
 use crate::fit::Dataset;
 use crate::rounding::superscript;
 use crate::uncertainty::K_COVERAGE;
@@ -14,7 +14,7 @@ use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[Material], style: Style) -> Result<()> {
+pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     // (signed θo, f_r, expanded uncertainty of f_r)
     let points: Vec<(f64, f64, Option<f64>)> = data
@@ -51,12 +51,12 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
     let mut chart = ChartBuilder::on(root)
         .caption(
             format!("incidence plane, θi = {ti}°: log-polar f_r (sr⁻¹)"),
-            ("sans-serif", style.title),
+            ("sans-serif", STYLE.title),
         )
         .margin(10)
         .build_cartesian_2d(-decades * 1.12..decades * 1.12, -0.06 * decades..decades * 1.1)
         .map_err(err)?;
-    let label = TextStyle::from(("sans-serif", style.label).into_font());
+    let label = TextStyle::from(("sans-serif", STYLE.label).into_font());
     let grey = RGBColor(200, 200, 200);
     for d in 1..=decades as i32 {
         let ring: Vec<(f64, f64)> = (-90..=90).map(|a| to_xy(a as f64, d as f64)).collect();

@@ -4,7 +4,7 @@
 //! incidence plane towards the normal. A retroreflector's figure of merit
 //! lives here, where a hemisphere map is a few pixels wide.
 
-use super::{err, fr, legend, tick, Style, PALETTE};
+use super::{err, fr, legend, tick, PALETTE, STYLE};
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
@@ -33,7 +33,7 @@ pub fn near_peak(data: &Dataset) -> Vec<(f64, f64, Option<f64>)> {
         .collect()
 }
 
-pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[Material], style: Style) -> Result<()> {
+pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     let points = near_peak(data);
     // A fit along the incidence plane, the view tilted from the light
@@ -62,11 +62,11 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
     let mut chart = ChartBuilder::on(root)
         .caption(
             format!("near the retro peak, θi = {ti}°: f_r against α"),
-            ("sans-serif", style.title),
+            ("sans-serif", STYLE.title),
         )
         .margin(10)
-        .x_label_area_size(3 * style.label)
-        .y_label_area_size(5 * style.label)
+        .x_label_area_size(3 * STYLE.label)
+        .y_label_area_size(5 * STYLE.label)
         .build_cartesian_2d(0.0..ALPHA_MAX_DEG, (lo..hi).log_scale())
         .map_err(err)?;
     chart
@@ -75,8 +75,8 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         .y_desc("f_r (sr⁻¹)")
         .x_label_formatter(&|v| tick(*v))
         .y_label_formatter(&|v| tick(*v))
-        .label_style(("sans-serif", style.label))
-        .axis_desc_style(("sans-serif", style.label))
+        .label_style(("sans-serif", STYLE.label))
+        .axis_desc_style(("sans-serif", STYLE.label))
         .light_line_style(WHITE)
         .draw()
         .map_err(err)?;
