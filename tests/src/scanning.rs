@@ -3,8 +3,10 @@
 
 use gonio_acquire::operator::Operator;
 use gonio_acquire::scan;
+use gonio_acquire::scan_order::visit_order;
 use gonio_acquire::session::{Session, Setup};
 use gonio_acquire::target::Target;
+use gonio_firmware::motion::PARK;
 use gonio_scan_dir::run::ScanOutcome;
 use gonio_scan_dir::samples::{self, Row, SampleWriter};
 use gonio_shared::{DetectionSettings, ScanSpec};
@@ -16,7 +18,8 @@ use std::sync::Arc;
 pub async fn scan_and_read(session: &mut Session, spec: &ScanSpec, dir: &Path) -> (ScanOutcome, Vec<Row>) {
     let mut out = SampleWriter::create(dir).unwrap();
     let progress = scan::progress::Progress::new(Operator::Silent, vec![0.0], spec.first_order, "points", Default::default());
-    let outcome = scan::run(session, spec, &mut out, &progress, None).await.unwrap();
+    let order = visit_order(session.head().config(), spec, PARK).collect();
+    let outcome = scan::run(session, spec, order, &mut out, &progress, None).await.unwrap();
     let rows = samples::read(&out.finish().unwrap()).unwrap();
     (outcome, rows)
 }

@@ -90,7 +90,8 @@ pub async fn scan_into(
         plate::measure_plate(session.head(), target.as_ref(), dir, operator).await?;
     }
     let config = *session.head().config();
-    let rest = visit_order(&config, spec, PARK).skip(spec.first_order as usize);
+    let order: Vec<u32> = visit_order(&config, spec, PARK).collect();
+    let rest = order.iter().copied().skip(spec.first_order as usize);
     let progress = Progress::new(
         operator,
         time_left_s(&config, spec, rest, PARK, &detection),
@@ -129,7 +130,7 @@ pub async fn scan_into(
         None => SampleWriter::create(dir)?,
     };
     let ended = {
-        let scanning = run(&mut session, spec, &mut writer, &progress, record.monitor.as_ref());
+        let scanning = run(&mut session, spec, order, &mut writer, &progress, record.monitor.as_ref());
         tokio::pin!(scanning);
         tokio::select! {
             r = &mut scanning => Some(r),

@@ -8,10 +8,8 @@ pub mod progress;
 pub mod sequencer;
 
 use crate::client::{is_link_loss, HeadClient};
-use crate::scan_order::visit_order;
 use crate::session::Session;
 use anyhow::{bail, Context, Result};
-use gonio_firmware::motion::PARK;
 use gonio_scan_dir::record::Monitor;
 use gonio_scan_dir::run::ScanOutcome;
 use gonio_scan_dir::samples::SampleWriter;
@@ -29,23 +27,24 @@ const MAX_RECOVERIES: u32 = 5;
 /// How long the host waits for an event before asking the head how it is.
 const POLL: Duration = Duration::from_secs(1);
 
-/// Runs `spec` to the end, appending every sample (and every monitor
-/// reading, a row without scan position) to `out`. Lost, damaged,
-/// duplicated or reordered events, a lost link and transient faults are
-/// recovered: no position is stored twice or left out.
+/// Runs `spec` to the end in the visit `order` (canonical index per visit
+/// position, the whole scan's: [`crate::scan_order::visit_order`] for the
+/// mechanics the head reported, planned once by the caller, which times
+/// the scan by it; the head keeps only the next `VISIT_QUEUE` of it),
+/// appending every sample (and every monitor reading, a row without scan
+/// position) to `out`. Lost, damaged, duplicated or reordered events, a
+/// lost link and transient faults are recovered: no position is stored
+/// twice or left out.
 pub async fn run(
     session: &mut Session,
     spec: &ScanSpec,
+    order: Vec<u32>,
     out: &mut SampleWriter,
     pb: &Progress,
     monitor: Option<&Monitor>,
 ) -> Result<ScanOutcome> {
     let t0 = Instant::now();
     let mut first = spec.first_order;
-    // The whole visit order, planned here once (the head keeps only the next
-    // `VISIT_QUEUE` points) for the mechanics the head reported, as the
-    // duration estimate.
-    let order = visit_order(session.head().config(), spec, PARK).collect();
     let mut run = ScanDriver {
         session,
         out,
