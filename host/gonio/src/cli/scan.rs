@@ -245,18 +245,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
             force: false,
         };
         // A resume runs on the repaired head: no faults.
-        let target = simulated::target(&record.head, Faults::default());
-        let live = super::live::start(&a.live, Operator::for_json(a.output.json)).await?;
-        let (outcome, samples) = scan_into(
-            &record,
-            target,
-            to,
-            Operator::for_json(a.output.json),
-            &live,
-            interrupt::requested(),
-        )
-        .await?;
-        return summarise(&record.spec, &outcome, &samples, a.output.json);
+        return scan_and_summarise(&record, Faults::default(), to, &a).await;
     }
     let (spec, det) = (a.grid.spec()?, &a.detector.checked()?);
     let (mut record, faults) = match (&a.port, a.sim) {
@@ -278,24 +267,23 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         });
     }
     record.reference_plate = a.reference_plate;
-    let out = a.out.context("--out is required")?;
+    let out = a.out.clone().context("--out is required")?;
     let to = Destination {
         dir: &out,
         resume: None,
         force: a.output.force,
     };
+    scan_and_summarise(&record, faults, to, &a).await
+}
+
+/// Runs `record` (its head with `faults` if simulated) into `to`, its live
+/// view served, stoppable with Ctrl-C, and prints the summary.
+async fn scan_and_summarise(record: &ScanRecord, faults: Faults, to: Destination<'_>, a: &ScanArgs) -> Result<()> {
+    let operator = Operator::for_json(a.output.json);
     let target = simulated::target(&record.head, faults);
-    let live = super::live::start(&a.live, Operator::for_json(a.output.json)).await?;
-    let (outcome, samples) = scan_into(
-        &record,
-        target,
-        to,
-        Operator::for_json(a.output.json),
-        &live,
-        interrupt::requested(),
-    )
-    .await?;
-    summarise(&spec, &outcome, &samples, a.output.json)
+    let live = super::live::start(&a.live, operator).await?;
+    let (outcome, samples) = scan_into(record, target, to, operator, &live, interrupt::requested()).await?;
+    summarise(&record.spec, &outcome, &samples, a.output.json)
 }
 
 /// Head time against the lower bound, in words.
