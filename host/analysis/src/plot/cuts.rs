@@ -3,7 +3,7 @@
 //! each sample with its k = 2 error bar and the best fit drawn in the same
 //! colour. The incidence plane (Δφ = 0°) is the first.
 
-use super::{err, fr, legend, tick, STYLE};
+use super::{err, fr, legend, samples_with_bars, tick, STYLE};
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
@@ -106,18 +106,7 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         .map_err(err)?;
     for (k, (p, points)) in cuts.iter().enumerate() {
         let colour = COLOURS[k % COLOURS.len()];
-        chart
-            .draw_series(
-                points
-                    .iter()
-                    .filter_map(|&(t, f, u)| u.map(|u| ErrorBar::new_vertical(t, (f - u).max(lo), f, f + u, colour.mix(0.8), 6))),
-            )
-            .map_err(err)?;
-        chart
-            .draw_series(points.iter().map(|&(t, f, _)| Circle::new((t, f), 3, colour.filled())))
-            .map_err(err)?
-            .label(format!("Δφ = {p:.0}° / {:.0}°", p + 180.0))
-            .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
+        samples_with_bars(&mut chart, points, lo, colour, format!("Δφ = {p:.0}° / {:.0}°", p + 180.0))?;
         if fit.is_some() {
             let line = (-890..=890)
                 .map(|k| k as f64 / 10.0)

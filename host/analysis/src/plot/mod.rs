@@ -85,6 +85,35 @@ pub(crate) fn legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTran
         .map_err(err)
 }
 
+/// A chart of f_r (log) against an angle, as `cuts` and `retro` draw them.
+pub(crate) type FrChart<'a, DB> =
+    ChartContext<'a, DB, Cartesian2d<plotters::coord::types::RangedCoordf64, plotters::coord::combinators::LogCoord<f64>>>;
+
+/// Samples `(angle, f_r, U)` as dots in `colour`, each with its error bar
+/// from f − U (no lower than `lo`, the axis' floor) to f + U, and `label`
+/// in the legend.
+pub(crate) fn samples_with_bars<'a, DB: DrawingBackend + 'a>(
+    chart: &mut FrChart<'a, DB>,
+    points: &[(f64, f64, Option<f64>)],
+    lo: f64,
+    colour: RGBColor,
+    label: String,
+) -> Result<()> {
+    chart
+        .draw_series(
+            points
+                .iter()
+                .filter_map(|&(x, f, u)| u.map(|u| ErrorBar::new_vertical(x, (f - u).max(lo), f, f + u, colour.mix(0.7), 5))),
+        )
+        .map_err(err)?;
+    chart
+        .draw_series(points.iter().map(|&(x, f, _)| Circle::new((x, f), 3, colour.filled())))
+        .map_err(err)?
+        .label(label)
+        .legend(move |(x, y)| Circle::new((x + 10, y), 4, colour.filled()));
+    Ok(())
+}
+
 /// An axis tick's label: three significant digits, no trailing zeros.
 pub(crate) fn tick(v: f64) -> String {
     let s = crate::rounding::significant(v, 3);

@@ -4,7 +4,7 @@
 //! incidence plane towards the normal. A retroreflector's figure of merit
 //! lives here, where a hemisphere map is a few pixels wide.
 
-use super::{err, fr, legend, tick, PALETTE, STYLE};
+use super::{err, fr, legend, samples_with_bars, tick, PALETTE, STYLE};
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
@@ -88,18 +88,8 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
             .label(format!("{} (in the incidence plane)", m.model.name()))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
     }
-    chart
-        .draw_series(
-            points
-                .iter()
-                .filter_map(|&(a, f, u)| u.map(|u| ErrorBar::new_vertical(a, (f - u).max(lo), f, f + u, BLACK.mix(0.6), 4))),
-        )
-        .map_err(err)?;
-    chart
-        .draw_series(points.iter().map(|&(a, f, _)| Circle::new((a, f), 3, BLACK.filled())))
-        .map_err(err)?
-        .label(format!("measured, every Δφ about the light (± U, k = {K_COVERAGE})"))
-        .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
+    let label = format!("measured, every Δφ about the light (± U, k = {K_COVERAGE})");
+    samples_with_bars(&mut chart, &points, lo, BLACK, label)?;
     legend(&mut chart, SeriesLabelPosition::UpperRight)?;
     Ok(())
 }
