@@ -129,6 +129,11 @@ impl Live {
         (seen, rx)
     }
 
+    /// The last state published, without the samples.
+    pub fn current_state(&self) -> Option<Update> {
+        self.seen.lock().ok().and_then(|s| s.state.clone())
+    }
+
     /// Asks the scan to hold before its next position.
     pub fn pause(&self) {
         self.requests.send_replace(Request::Pause);
@@ -198,6 +203,7 @@ mod tests {
         let (seen, mut rx) = live.subscribe();
         assert_eq!(seen.samples, [sample(1.0)]);
         assert_eq!(seen.state, Some(Update::State { state: "scanning".into() }));
+        assert_eq!(live.current_state(), seen.state);
         live.publish(sample(2.0));
         assert_eq!(rx.recv().await.unwrap(), sample(2.0));
     }

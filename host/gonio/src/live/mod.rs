@@ -65,8 +65,7 @@ pub async fn serve(live: Live, addr: SocketAddr) -> Result<String> {
 }
 
 fn accepted(live: &Live) -> impl IntoResponse {
-    let (seen, _) = live.subscribe();
-    Json(serde_json::json!({ "accepted": true, "state": seen.state }))
+    Json(serde_json::json!({ "accepted": true, "state": live.current_state() }))
 }
 
 async fn state(State(live): State<Live>) -> impl IntoResponse {
