@@ -7,13 +7,14 @@
 //! `gonio-brdf` (`docs/models.md`); [`coefficients`] gives R_A and R_L with
 //! what each rests on; [`formats`] reads and writes other tools' files;
 //! [`plot`] and [`report`] draw and tabulate; [`lobe`] places the points a
-//! narrow lobe needs.
+//! narrow lobe needs; [`moments`] measures a retro lobe's shape.
 
 pub mod calibration;
 pub mod coefficients;
 pub mod fit;
 pub mod formats;
 pub mod lobe;
+pub mod moments;
 pub mod plot;
 pub mod repeatability;
 pub mod report;

@@ -11,6 +11,7 @@ pub mod coefficients;
 pub mod colour_scale;
 mod cuts;
 mod hemisphere;
+pub mod moments;
 mod plane;
 pub mod repeatability;
 mod retro;

@@ -84,7 +84,6 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, r: &Repeatability) ->
         }
     }
     let mut incidences: Vec<f64> = r.geometries.iter().map(|g| g.theta_i_deg).collect();
-    incidences.dedup();
     incidences.sort_by(f64::total_cmp);
     incidences.dedup();
     for (k, ti) in incidences.iter().enumerate() {

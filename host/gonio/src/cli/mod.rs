@@ -14,6 +14,7 @@ pub mod interrupt;
 pub mod live;
 pub mod material;
 mod model_eval;
+mod moments;
 mod plot;
 mod repeatability;
 pub mod scan;
@@ -64,6 +65,8 @@ pub enum Command {
     Eval(model_eval::EvalArgs),
     /// Directional-hemispherical reflectance of a model, and its energy check.
     Dhr(model_eval::DhrArgs),
+    /// The retro lobe's central moments per incidence in the back and light-view planes (Belcour §3.D).
+    Moments(moments::MomentsArgs),
     /// Repeated scans of one sample compared geometry by geometry: mean, s and the budget's σ.
     Repeatability(repeatability::RepeatabilityArgs),
     /// Hold a running scan before its next position (from another terminal; the live page's Pause).
@@ -94,6 +97,7 @@ impl Command {
             Command::Export(a) => a.json,
             Command::Eval(a) => a.json,
             Command::Dhr(a) => a.json,
+            Command::Moments(a) => a.json,
             Command::Repeatability(a) => a.json,
             Command::Pause(a) | Command::Continue(a) | Command::Abort(a) => a.json,
             Command::Rearm(a) => a.json,
@@ -143,6 +147,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Export(a) => export::export_cmd(a),
         Command::Eval(a) => model_eval::eval_cmd(a),
         Command::Dhr(a) => model_eval::dhr_cmd(a),
+        Command::Moments(a) => moments::moments_cmd(a),
         Command::Repeatability(a) => repeatability::repeatability_cmd(a),
         Command::Pause(a) => control::control_cmd(control::Request::Pause, a),
         Command::Continue(a) => control::control_cmd(control::Request::Continue, a),
