@@ -40,8 +40,8 @@ const RULE: [([f64; 3], f64); 7] = {
 fn integral(pieces: &[[Node; 3]], g: impl Fn(f64, f64) -> f64) -> f64 {
     pieces
         .iter()
-        .map(|[a, b, c]| {
-            let area = ((b.p[0] - a.p[0]) * (c.p[1] - a.p[1]) - (c.p[0] - a.p[0]) * (b.p[1] - a.p[1])).abs() / 2.0;
+        .map(|piece| {
+            let [a, b, c] = piece;
             let sum: f64 = RULE
                 .iter()
                 .map(|(w, weight)| {
@@ -49,7 +49,7 @@ fn integral(pieces: &[[Node; 3]], g: impl Fn(f64, f64) -> f64) -> f64 {
                     weight * g(at(0), at(1)) * (w[0] * a.f + w[1] * b.f + w[2] * c.f)
                 })
                 .sum();
-            area * sum
+            Node::area(piece) * sum
         })
         .sum()
 }

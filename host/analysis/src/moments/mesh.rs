@@ -17,6 +17,14 @@ pub struct Node {
     pub f: f64,
 }
 
+impl Node {
+    /// The area of the triangle `c`.
+    pub fn area(c: &[Node; 3]) -> f64 {
+        let [a, b, d] = c.map(|n| n.p);
+        ((b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1])).abs() / 2.0
+    }
+}
+
 pub struct Mesh {
     nodes: Vec<Node>,
     faces: Vec<[usize; 3]>,
@@ -187,11 +195,7 @@ mod tests {
         let (seed, f0) = m.at([0.0, 0.0]).unwrap();
         assert!((f0 - 5.0).abs() < 1e-12);
         let lobe = m.lobe(seed, 2.0);
-        let area: f64 = lobe
-            .pieces
-            .iter()
-            .map(|[a, b, c]| ((b.p[0] - a.p[0]) * (c.p[1] - a.p[1]) - (c.p[0] - a.p[0]) * (b.p[1] - a.p[1])).abs() / 2.0)
-            .sum();
+        let area: f64 = lobe.pieces.iter().map(Node::area).sum();
         assert!((area / (9.0 * std::f64::consts::PI) - 1.0).abs() < 0.01, "{area}");
         assert!(!lobe.truncated);
         // Grid edges 0.5, diagonals 0.71.

@@ -15,7 +15,7 @@ mod integrate;
 mod mesh;
 pub mod plane;
 
-use crate::fit::{Dataset, Units};
+use crate::fit::{data::theta_in, Dataset, Units};
 use anyhow::{bail, Result};
 pub use integrate::ORDER;
 use mesh::{Mesh, Node};
@@ -133,7 +133,7 @@ pub fn analyse(data: &Dataset, threshold: Threshold) -> Result<Vec<Entry>> {
         let at: Vec<_> = data
             .observations
             .iter()
-            .filter(|o| (o.theta_i.to_degrees() - ti).abs() < 0.005 && o.value.is_finite())
+            .filter(|o| theta_in(o.theta_i, &[ti]) && o.value.is_finite())
             .collect();
         let mirrored = !at.iter().any(|o| o.dphi.sin() < -1e-9);
         for parametrization in Parametrization::BOTH {
