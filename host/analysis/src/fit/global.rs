@@ -93,8 +93,10 @@ fn halton(k: usize, dim: usize) -> Vec<f64> {
         .collect()
 }
 
-/// Free parameters of the best optimum found, from a seeded search.
-pub fn search(problem: &Problem, seed: u64) -> Vec<f64> {
+/// Free parameters of the best optimum found, from a seeded search; `known`
+/// points (free parameters in the box) enter the race as they are: a
+/// widened fit's optimum on the old edge, which the new probes must beat.
+pub fn search(problem: &Problem, seed: u64, known: Vec<Vec<f64>>) -> Vec<f64> {
     let n = problem.free.len();
     let bounds = problem.bounds();
     let thin = problem.subset(thinned_size(problem.y.len()));
@@ -129,6 +131,7 @@ pub fn search(problem: &Problem, seed: u64) -> Vec<f64> {
     let probed: Vec<Vec<f64>> = starts
         .into_par_iter()
         .map(|z| local::minimize_within(&probe_set, &to_x(&z), PROBE_ITERATIONS))
+        .chain(known)
         .collect();
     race(problem, probed).unwrap_or_else(|| to_x(&vec![0.5; n]))
 }
