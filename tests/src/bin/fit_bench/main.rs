@@ -31,16 +31,27 @@
 //!   (ours / the peer's best; bar ≤ 1 + 1e-9), `time_ratio` (our whole
 //!   global fit / the peer's 24 fits; bar ≤ 1/3) and our `at_bound`.
 //!
+//! - `widen`: every misfit case fitted again from default boxes cut at
+//!   their open edges to about a tenth (`widen.rs`): per case `rmse_ratio`
+//!   (cut / full box; bar ≤ 1 + 1e-9 where the boxes the fit ended in
+//!   hold the full-box optimum), what widened and what did not hold it;
+//! - `gof`: per model the share of 200 σ-weighted fits to its own data
+//!   whose reduced χ² lies in its 99 % interval (`gof.rs`; bar ≥ 0.98).
+//!
 //! Ours evaluates the samples and the global search's candidates on every
 //! core (`threads`), as the peer's BLAS does.
 //!
 //! Installs scipy (pinned) with pip if it is missing or another version;
 //! prints one JSON object, with the peer's versions and BLAS.
 
+mod cases;
+mod gof;
+mod misfit;
+mod widen;
+
 use gonio_analysis::fit::{self, transform, FitSpec, Problem};
-use gonio_brdf::{Directions, GeometryTerms, GlassBeads, ModelId};
+use gonio_brdf::{GeometryTerms, ModelId};
 use gonio_tests::synthetic;
-use rand::{Rng, SeedableRng};
 use serde_json::{json, Map, Value};
 use std::io::Write;
 use std::process::{Command, Stdio};
@@ -51,8 +62,6 @@ const SAMPLES: usize = 7000;
 /// 3.95 on one machine and 2.05 on another).
 const SCIPY: &str = "1.17.1";
 const NUMPY: &str = "2.4.6";
-/// Random starts of the peer's multi-start fit in the misfit cases.
-const PEER_STARTS: usize = 24;
 const NOISE: f64 = 0.02;
 const SEEDS: u64 = 20;
 /// Timed runs of each same-start fit, both sides; the median is reported.
@@ -107,20 +116,46 @@ fn scipy(job: &Value) -> Value {
     serde_json::from_slice(&out.stdout).expect("fit_scipy.py prints JSON")
 }
 
+/// The parameters the peer answered (NaN where it wrote none).
+fn peer_params(answer: &Value) -> Vec<f64> {
+    answer["params"]
+        .as_array()
+        .expect("the peer answers its params")
+        .iter()
+        .map(|v| v.as_f64().unwrap_or(f64::NAN))
+        .collect()
+}
+
 fn rmse(p: &Problem, x: &[f64]) -> f64 {
     (p.cost(x) / p.y.len() as f64).sqrt()
 }
 
 fn main() {
-    ensure_scipy();
     let mut report = Map::new();
-    // `fit-bench misfit [N [FILTER]]`: the misfit table alone (its first N
+    // `fit-bench misfit|widen [N [FILTER]]`: that table alone (its first N
     // cases, those whose `SAMPLES/MATERIAL/MODEL` holds FILTER);
-    // `fit-bench models [MODEL]`: the per-model figures alone.
+    // `fit-bench models [MODEL]`: the per-model figures alone;
+    // `fit-bench gof`: the χ² trials alone. `widen` and `gof` need no peer.
     let mode = std::env::args().nth(1).unwrap_or_default();
-    let (misfit_only, models_only) = (mode == "misfit", mode == "models");
     let cases: usize = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(usize::MAX);
     let filter = std::env::args().nth(3).unwrap_or_default();
+    match mode.as_str() {
+        "widen" => {
+            widen_section(&mut report, cases, &filter);
+            report.insert("threads".into(), fit::threads().into());
+            println!("{}", Value::Object(report));
+            return;
+        }
+        "gof" => {
+            gof_section(&mut report);
+            report.insert("threads".into(), fit::threads().into());
+            println!("{}", Value::Object(report));
+            return;
+        }
+        _ => {}
+    }
+    ensure_scipy();
+    let (misfit_only, models_only) = (mode == "misfit", mode == "models");
     let only_model = std::env::args().nth(2).filter(|_| models_only);
     let mut worst = (f64::INFINITY, 0.0f64, SEEDS);
     for model in ModelId::ALL
@@ -164,12 +199,7 @@ fn main() {
         times.sort_by(f64::total_cmp);
         let local_seconds = times[REPEATS / 2];
         let sp = scipy(&job(json!({ "repeats": REPEATS })));
-        let sp_params: Vec<f64> = sp["params"]
-            .as_array()
-            .expect("params")
-            .iter()
-            .map(|v| v.as_f64().unwrap_or(f64::NAN))
-            .collect();
+        let sp_params = peer_params(&sp);
         let sp_seconds = sp["seconds"].as_f64().unwrap_or(f64::NAN);
         let sp_rmse = rmse(&problem, &sp_params);
 
@@ -211,10 +241,14 @@ fn main() {
         println!("{}", Value::Object(report));
         return;
     }
-    let (misfit, worst_rmse, worst_time) = misfit(cases, &filter);
+    let (misfit, worst_rmse, worst_time) = misfit::misfit(cases, &filter);
     report.insert("misfit".into(), misfit);
     report.insert("misfit_max_rmse_ratio".into(), worst_rmse.into());
     report.insert("misfit_max_time_ratio".into(), worst_time.into());
+    if !misfit_only {
+        widen_section(&mut report, cases, &filter);
+        gof_section(&mut report);
+    }
     report.insert("peer".into(), scipy(&json!({"versions": true})));
     report.insert("threads".into(), fit::threads().into());
     report.insert("samples".into(), SAMPLES.into());
@@ -225,115 +259,14 @@ fn main() {
     println!("{}", Value::Object(report));
 }
 
-/// A material the misfit cases are generated from.
-struct Generator {
-    name: &'static str,
-    brdf: Box<dyn Fn(&Directions) -> f64>,
-    /// The model it is, if any (not fitted to its own data).
-    model: Option<ModelId>,
+fn widen_section(report: &mut Map<String, Value>, cases: usize, filter: &str) {
+    let (table, worst) = widen::widen(cases, filter);
+    report.insert("widen".into(), table);
+    report.insert("widen_max_rmse_excess".into(), worst.into());
 }
 
-fn generators() -> Vec<Generator> {
-    let model = |m: ModelId| {
-        let mat = synthetic::reference(m);
-        Generator {
-            name: m.name(),
-            brdf: Box::new(move |d| mat.eval(d)),
-            model: Some(m),
-        }
-    };
-    let beads = GlassBeads::default();
-    vec![
-        Generator {
-            name: "glass-beads",
-            brdf: Box::new(move |d| beads.eval(d)),
-            model: None,
-        },
-        Generator {
-            name: "two-lobes",
-            brdf: Box::new(synthetic::two_lobes),
-            model: None,
-        },
-        model(ModelId::RetroPhong),
-        model(ModelId::AbcRetro),
-        model(ModelId::Lafortune),
-    ]
-}
-
-const RETRO_MODELS: [ModelId; 5] = [
-    ModelId::RetroPhong,
-    ModelId::AbcRetro,
-    ModelId::BeckmannRetro,
-    ModelId::BlinnRetro,
-    ModelId::Lafortune,
-];
-
-/// Ours against the peer's multi-start on data no model is exactly; returns
-/// the table and the worst RMSE and time ratios.
-fn misfit(limit: usize, filter: &str) -> (Value, f64, f64) {
-    let mut rng = rand::rngs::StdRng::seed_from_u64(24);
-    let mut cases = Vec::new();
-    let (mut worst_rmse, mut worst_time) = (0.0f64, 0.0f64);
-    for (samples, geos) in [(7000, synthetic::belcour_geometries()), (80_000, synthetic::dense_geometries())] {
-        for g in generators() {
-            // At 80 000 samples the outside materials only, fitted by the
-            // models the papers argue over (the peer takes minutes per case).
-            if samples > 7000 && g.model.is_some() {
-                continue;
-            }
-            let data = synthetic::samples_of(&g.brdf, &geos, samples, NOISE, 11);
-            for model in RETRO_MODELS {
-                if Some(model) == g.model
-                    || (samples > 7000 && model == ModelId::BeckmannRetro)
-                    || (samples > 7000 && model == ModelId::BlinnRetro)
-                    || cases.len() >= limit
-                {
-                    continue;
-                }
-                let spec = FitSpec::new(model);
-                let problem = fit::problem(&data, &spec).expect("misfit problem");
-                let bounds = problem.bounds_all.clone();
-                // Drawn for every case, so a case's starts do not depend on the filter.
-                let starts: Vec<Vec<f64>> = (0..PEER_STARTS)
-                    .map(|_| bounds.iter().map(|b| transform::from_unit(b, rng.random_range(0.0..1.0))).collect())
-                    .collect();
-                if !format!("{samples}/{}/{}", g.name, model.name()).contains(filter) {
-                    continue;
-                }
-                let ours = fit::fit(&data, &spec).expect("misfit fit");
-                let peer = scipy(&json!({
-                    "model": model.name(), "geometry": geometry_json(&problem), "y": problem.y, "weight": problem.weight,
-                    "scale": problem.scale, "starts": starts, "lo": bounds.iter().map(|b| b.lo).collect::<Vec<_>>(),
-                    "hi": bounds.iter().map(|b| b.hi).collect::<Vec<_>>(),
-                }));
-                let peer_params: Vec<f64> = peer["params"]
-                    .as_array()
-                    .expect("params")
-                    .iter()
-                    .map(|v| v.as_f64().unwrap_or(f64::NAN))
-                    .collect();
-                let ours_x: Vec<f64> = problem.free.iter().map(|&i| ours.material.params[i]).collect();
-                let (r_ours, r_peer) = (rmse(&problem, &ours_x), rmse(&problem, &peer_params));
-                let peer_seconds = peer["seconds"].as_f64().unwrap_or(f64::NAN);
-                let (rmse_ratio, time_ratio) = (r_ours / r_peer, ours.seconds / peer_seconds);
-                worst_rmse = worst_rmse.max(rmse_ratio);
-                worst_time = worst_time.max(time_ratio);
-                eprintln!(
-                    "misfit {samples:>6} {:<12} by {:<15} rmse ratio {rmse_ratio:.9}  time ratio {time_ratio:.3} ({:.2} s vs {:.2} s)  at bound {:?}",
-                    g.name,
-                    model.name(),
-                    ours.seconds,
-                    peer_seconds,
-                    ours.at_bound
-                );
-                cases.push(json!({
-                    "samples": samples, "material": g.name, "model": model.name(), "rmse": r_ours, "peer_rmse": r_peer,
-                    "rmse_ratio": rmse_ratio, "seconds": ours.seconds, "peer_seconds": peer_seconds, "time_ratio": time_ratio,
-                    "peer_failed_starts": peer["failed_starts"], "peer_params": peer_params,
-                    "at_bound": ours.at_bound, "params": ours.material.params,
-                }));
-            }
-        }
-    }
-    (Value::Array(cases), worst_rmse, worst_time)
+fn gof_section(report: &mut Map<String, Value>) {
+    let (table, worst) = gof::gof();
+    report.insert("gof".into(), table);
+    report.insert("gof_min_share_inside".into(), worst.into());
 }
