@@ -16,7 +16,8 @@ use serde_json::{json, Value};
 use crate::cases::cases;
 
 /// The box `b` cut at its open edges so that one widening restores it
-/// (empty where a log box spans less than the growth: it stays whole).
+/// (empty or inverted where a log box spans no more than the growth: the
+/// caller keeps those whole).
 fn cut(b: &Bound) -> Bound {
     let g = Bound::GROWTH;
     let (mut lo, mut hi) = (b.lo, b.hi);
