@@ -7,7 +7,9 @@
 //! `gonio-brdf` (`docs/models.md`); [`coefficients`] gives R_A and R_L with
 //! what each rests on; [`formats`] reads and writes other tools' files;
 //! [`plot`] and [`report`] draw and tabulate; [`lobe`] places the points a
-//! narrow lobe needs; [`moments`] measures a retro lobe's shape.
+//! narrow lobe needs; [`moments`] measures a retro lobe's shape;
+//! [`rational`] fits the non-parametric rational model through the data's
+//! intervals.
 
 pub mod calibration;
 pub mod coefficients;
@@ -16,6 +18,7 @@ pub mod formats;
 pub mod lobe;
 pub mod moments;
 pub mod plot;
+pub mod rational;
 pub mod repeatability;
 pub mod report;
 pub mod rounding;

@@ -1,0 +1,176 @@
+//! The polynomial basis of a rational function: products of Legendre
+//! polynomials in three coordinates of a geometry, of total degree at most
+//! `d`, each coordinate mapped onto [−1, 1] over the data's range.
+//!
+//! Legendre polynomials rather than monomials (ALTA's
+//! `rational_function_legendre`, which Belcour et al. 2014 fitted with): on
+//! [−1, 1] they are orthogonal, so the constraint matrix of a degree-8
+//! basis stays well conditioned where monomials' columns become nearly
+//! parallel. Terms are ordered by total degree, so the basis of degree `d`
+//! is a prefix of that of `d + 1`: a solution at a lower degree is one at
+//! every higher degree (zeros appended), which is what makes bisecting on
+//! the degree sound.
+
+use crate::moments::plane::Parametrization;
+use gonio_brdf::Directions;
+use serde::{Deserialize, Serialize};
+
+/// The coordinates a rational function is a function of: the incidence θi
+/// (degrees) and the view's place `(x, y)` in a retro plane (degrees,
+/// `moments::plane`), with the retro direction at the origin.
+pub fn coordinates(param: Parametrization, d: &Directions) -> [f64; 3] {
+    let [x, y] = param.coordinates(d);
+    [d.angles().0.to_degrees(), x, y]
+}
+
+/// The box the coordinates are mapped from: the data's range per coordinate.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Domain {
+    pub lo: [f64; 3],
+    pub hi: [f64; 3],
+}
+
+impl Domain {
+    /// The smallest box holding every point; a coordinate that does not
+    /// vary (one incidence) gets ±1 about its value, as ALTA does, so that
+    /// the map stays defined.
+    pub fn around(points: &[[f64; 3]]) -> Domain {
+        let mut lo = [f64::INFINITY; 3];
+        let mut hi = [f64::NEG_INFINITY; 3];
+        for p in points {
+            for k in 0..3 {
+                lo[k] = lo[k].min(p[k]);
+                hi[k] = hi[k].max(p[k]);
+            }
+        }
+        for k in 0..3 {
+            if hi[k] <= lo[k] {
+                lo[k] -= 1.0;
+                hi[k] += 1.0;
+            }
+        }
+        Domain { lo, hi }
+    }
+
+    /// `c` mapped onto [−1, 1]³, clamped to the box: outside its data a
+    /// polynomial grows without bound, so a rational function holds the
+    /// value at the nearest edge of what it was fitted to.
+    pub fn unit(&self, c: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|k| (2.0 * (c[k] - self.lo[k]) / (self.hi[k] - self.lo[k]) - 1.0).clamp(-1.0, 1.0))
+    }
+
+    /// Whether `c` lies in the box (within rounding).
+    pub fn holds(&self, c: [f64; 3]) -> bool {
+        (0..3).all(|k| c[k] >= self.lo[k] - 1e-9 && c[k] <= self.hi[k] + 1e-9)
+    }
+}
+
+/// The terms of total degree at most `degree`: exponent triples, by total
+/// degree, then lexicographically.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Basis {
+    pub degree: usize,
+    terms: Vec<[usize; 3]>,
+}
+
+impl Basis {
+    pub fn new(degree: usize) -> Basis {
+        let mut terms = Vec::with_capacity(Self::size(degree));
+        for total in 0..=degree {
+            for a in (0..=total).rev() {
+                for b in (0..=total - a).rev() {
+                    terms.push([a, b, total - a - b]);
+                }
+            }
+        }
+        Basis { degree, terms }
+    }
+
+    /// The number of terms of degree at most `degree` in three variables:
+    /// C(degree + 3, 3).
+    pub const fn size(degree: usize) -> usize {
+        (degree + 1) * (degree + 2) * (degree + 3) / 6
+    }
+
+    pub fn len(&self) -> usize {
+        self.terms.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.terms.is_empty()
+    }
+
+    /// Every term at `u` (a point of [−1, 1]³), into `out` (`len()` values).
+    pub fn values(&self, u: [f64; 3], out: &mut [f64]) {
+        let mut table = vec![[0.0; 3]; self.degree + 1];
+        for (k, &x) in u.iter().enumerate() {
+            let mut prev = 1.0;
+            let mut cur = x;
+            table[0][k] = 1.0;
+            if self.degree >= 1 {
+                table[1][k] = x;
+            }
+            // (n + 1) P_{n+1} = (2n + 1) x P_n − n P_{n−1}
+            for n in 1..self.degree {
+                let next = ((2 * n + 1) as f64 * x * cur - n as f64 * prev) / (n + 1) as f64;
+                prev = cur;
+                cur = next;
+                table[n + 1][k] = next;
+            }
+        }
+        for (o, [a, b, c]) in out.iter_mut().zip(&self.terms) {
+            *o = table[*a][0] * table[*b][1] * table[*c][2];
+        }
+    }
+
+    /// `Σ coefficients[j] · term_j(u)`.
+    pub fn eval(&self, coefficients: &[f64], u: [f64; 3]) -> f64 {
+        let mut v = vec![0.0; self.len()];
+        self.values(u, &mut v);
+        v.iter().zip(coefficients).map(|(t, c)| t * c).sum()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_and_nesting() {
+        for d in 0..9 {
+            let b = Basis::new(d);
+            assert_eq!(b.len(), Basis::size(d));
+            if d > 0 {
+                let lower = Basis::new(d - 1);
+                assert_eq!(&b.terms[..lower.len()], &lower.terms[..], "degree {d} must extend degree {}", d - 1);
+            }
+        }
+        assert_eq!(Basis::size(3), 20);
+    }
+
+    #[test]
+    fn legendre_polynomials_by_their_closed_forms() {
+        // P2 = (3x² − 1)/2, P3 = (5x³ − 3x)/2, P4 = (35x⁴ − 30x² + 3)/8.
+        let b = Basis::new(4);
+        let mut v = vec![0.0; b.len()];
+        for x in [-1.0, -0.3, 0.0, 0.55, 1.0] {
+            b.values([x, 0.2, -0.7], &mut v);
+            let at = |e: [usize; 3]| v[b.terms.iter().position(|t| *t == e).unwrap()];
+            assert!((at([2, 0, 0]) - (3.0 * x * x - 1.0) / 2.0).abs() < 1e-14);
+            assert!((at([3, 0, 0]) - (5.0 * x * x * x - 3.0 * x) / 2.0).abs() < 1e-14);
+            assert!((at([4, 0, 0]) - (35.0 * x.powi(4) - 30.0 * x * x + 3.0) / 8.0).abs() < 1e-14);
+            assert!((at([1, 1, 1]) - x * 0.2 * -0.7).abs() < 1e-15);
+            assert_eq!(at([0, 0, 0]), 1.0);
+        }
+    }
+
+    #[test]
+    fn the_domain_maps_its_corners_and_clamps_beyond() {
+        let d = Domain::around(&[[10.0, -5.0, 0.0], [50.0, 5.0, 0.0]]);
+        assert_eq!(d.lo[2], -1.0);
+        assert_eq!(d.unit([10.0, -5.0, 0.0]), [-1.0, -1.0, 0.0]);
+        assert_eq!(d.unit([50.0, 5.0, 0.0]), [1.0, 1.0, 0.0]);
+        assert_eq!(d.unit([70.0, 0.0, 3.0]), [1.0, 0.0, 1.0]);
+        assert!(!d.holds([70.0, 0.0, 0.0]));
+    }
+}

@@ -1,0 +1,294 @@
+//! The rational fit: the lowest degree whose function passes through every
+//! segment, bracketed by doubling the degree and found by bisection, up to
+//! the highest degree the samples allow; each degree is one programme
+//! (`qp`).
+
+use super::basis::{coordinates, Basis, Domain};
+use super::function::Rational;
+use super::qp::{self, Outcome, Row};
+use super::segments::{sample_text, SegmentSource, Segments};
+use crate::fit::{Dataset, Metrics, Units};
+use crate::moments::plane::Parametrization;
+use anyhow::{bail, Result};
+use serde::Serialize;
+use std::time::Instant;
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RationalSpec {
+    pub parametrization: Parametrization,
+    pub segments: SegmentSource,
+    /// The highest total degree tried (numerator and denominator alike).
+    pub max_degree: usize,
+}
+
+impl RationalSpec {
+    /// Degree 8 is 330 coefficients, beyond the 48–70 Belcour et al. 2014
+    /// needed for their tapes at ±0.5 sr⁻¹.
+    pub const MAX_DEGREE: usize = 8;
+}
+
+/// One degree tried.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Attempt {
+    pub degree: usize,
+    pub coefficients: usize,
+    pub feasible: bool,
+    pub seconds: f64,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct RationalFit {
+    pub function: Rational,
+    pub segments: SegmentSource,
+    /// Segments wholly below zero, moved up (`Segments::shifted`).
+    pub shifted: usize,
+    pub samples: usize,
+    pub seconds: f64,
+    /// Against the data, in the data's units.
+    pub metrics: Metrics,
+    /// The largest |measured − fitted|, in the data's units.
+    pub linf: f64,
+    /// The largest distance of a fitted value outside its segment, over the
+    /// segment's width (0: every segment holds the function).
+    pub worst_violation: f64,
+    /// Why the highest degree tried is what it is, when it is below the
+    /// spec's: more coefficients than samples interpolate anything.
+    pub capped: Option<String>,
+    pub attempts: Vec<Attempt>,
+}
+
+/// Violations beyond this (relative to a segment's width) make the solver's
+/// answer an error: the margins put a solution strictly inside.
+const VIOLATION_TOLERANCE: f64 = 1e-9;
+
+/// Fits `data` (any units; segments are taken in `f_r`).
+pub fn fit(data: &Dataset, spec: &RationalSpec) -> Result<RationalFit> {
+    let start = Instant::now();
+    let fr = data.in_units(Units::Fr)?;
+    let obs = &fr.observations;
+    let segs = Segments::new(obs, spec.segments)?;
+    let points: Vec<[f64; 3]> = obs.iter().map(|o| coordinates(spec.parametrization, &o.directions())).collect();
+    let domain = Domain::around(&points);
+    let mut rows = Vec::with_capacity(obs.len());
+    for (i, (o, s)) in obs.iter().zip(&segs.segments).enumerate() {
+        let d = o.directions();
+        let c = d.cos_i() * d.cos_o();
+        if c.is_nan() || c <= 1e-9 {
+            bail!("{}: grazing, where the cosine factor cosθi·cosθo is zero", sample_text(i, o));
+        }
+        rows.push(Row {
+            u: domain.unit(points[i]),
+            lo: s.lo / c,
+            hi: s.hi / c,
+        });
+    }
+    let m = obs.len();
+    let allowed = (0..=spec.max_degree).rev().find(|&d| 2 * Basis::size(d) <= m);
+    let Some(top) = allowed else {
+        bail!("{m} sample(s): too few for a rational function (a constant over a constant has 2 coefficients)");
+    };
+    let capped = (top < spec.max_degree).then(|| {
+        format!(
+            "degree {} has {} coefficients, more than the {m} samples: degrees up to {top} were tried",
+            spec.max_degree,
+            2 * Basis::size(spec.max_degree)
+        )
+    });
+    let mut attempts = Vec::new();
+    let mut attempt = |degree: usize| -> Result<(Basis, Outcome)> {
+        let t = Instant::now();
+        let basis = Basis::new(degree);
+        let out = qp::solve(&basis, &rows)?;
+        attempts.push(Attempt {
+            degree,
+            coefficients: 2 * basis.len(),
+            feasible: matches!(out, Outcome::Solved { .. }),
+            seconds: t.elapsed().as_secs_f64(),
+        });
+        Ok((basis, out))
+    };
+    // Galloping (degrees 1, 2, 4, … up to `top`) brackets the lowest
+    // feasible degree within a factor of two, so the costliest programme
+    // solved is at most twice the answer's degree; a bisection inside the
+    // bracket then finds it. Degrees below `lo` are infeasible.
+    let mut lo = 0;
+    let mut d = 1.min(top);
+    let (mut best, mut p, mut q) = loop {
+        match attempt(d)? {
+            (basis, Outcome::Solved { p, q }) => break (basis, p, q),
+            (_, Outcome::Infeasible { worst }) if d == top => bail!(
+                "no rational function of degree {top} ({} coefficients) passes through every segment; the sample most in conflict with the others is {}, segment [{}, {}]: widen the segments{}",
+                2 * Basis::size(top),
+                sample_text(worst, &obs[worst]),
+                segs.segments[worst].lo,
+                segs.segments[worst].hi,
+                if capped.is_some() { " or measure more samples" } else { " or raise --max-degree" }
+            ),
+            (_, Outcome::Infeasible { .. }) => {
+                lo = d + 1;
+                d = (2 * d).min(top);
+            }
+        }
+    };
+    let mut hi = d;
+    while lo < hi {
+        let mid = lo + (hi - lo) / 2;
+        match attempt(mid)? {
+            (basis, Outcome::Solved { p: pm, q: qm }) => {
+                (best, p, q) = (basis, pm, qm);
+                hi = mid;
+            }
+            (_, Outcome::Infeasible { .. }) => lo = mid + 1,
+        }
+    }
+    let function = Rational {
+        parametrization: spec.parametrization,
+        degree: best.degree,
+        domain,
+        numerator: p,
+        denominator: q,
+    };
+    let fitted: Vec<f64> = obs.iter().map(|o| function.eval_with(&best, &o.directions())).collect();
+    let mut worst = (0.0, 0);
+    for (i, (v, s)) in fitted.iter().zip(&segs.segments).enumerate() {
+        let out = (s.lo - v).max(v - s.hi).max(0.0) / (s.hi - s.lo);
+        if out.is_nan() || out > worst.0 {
+            worst = (out, i);
+        }
+    }
+    if worst.0.is_nan() || worst.0 > VIOLATION_TOLERANCE {
+        let i = worst.1;
+        bail!(
+            "the solver's function at degree {} misses the segment of {} by {:.3e} of its width (f_r = {}, segment [{}, {}])",
+            function.degree,
+            sample_text(i, &obs[i]),
+            worst.0,
+            fitted[i],
+            segs.segments[i].lo,
+            segs.segments[i].hi
+        );
+    }
+    // The figures in the data's own units, as every other fit reports them.
+    let measured: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
+    let model: Vec<f64> = data
+        .observations
+        .iter()
+        .zip(&fitted)
+        .map(|(o, f)| f * o.unit_factor(data.units))
+        .collect();
+    let linf = measured.iter().zip(&model).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    Ok(RationalFit {
+        metrics: Metrics::new(&measured, &model),
+        function,
+        segments: spec.segments,
+        shifted: segs.shifted,
+        samples: m,
+        seconds: start.elapsed().as_secs_f64(),
+        linf,
+        worst_violation: worst.0,
+        capped,
+        attempts,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::data::Observation;
+
+    /// Samples of `f` over three incidences and a fan of views.
+    fn data(f: impl Fn(f64, f64, f64) -> f64) -> Dataset {
+        let mut observations = Vec::new();
+        for ti in [10.0f64, 30.0, 50.0] {
+            for to in (0..=14).map(|k| 5.0 * k as f64) {
+                for dphi in [0.0f64, 45.0, 90.0, 135.0, 180.0] {
+                    let (ti, to, dphi) = (ti.to_radians(), to.to_radians(), dphi.to_radians());
+                    observations.push(Observation {
+                        theta_i: ti,
+                        theta_o: to,
+                        dphi,
+                        value: f(ti, to, dphi),
+                        sigma: None,
+                        shared: Default::default(),
+                    });
+                }
+            }
+        }
+        Dataset {
+            units: Units::Fr,
+            observations,
+            metadata: Vec::new(),
+            units_stated: true,
+            warnings: Vec::new(),
+        }
+    }
+
+    fn spec(segments: SegmentSource) -> RationalSpec {
+        RationalSpec {
+            parametrization: Parametrization::Back,
+            segments,
+            max_degree: RationalSpec::MAX_DEGREE,
+        }
+    }
+
+    #[test]
+    fn a_cosine_product_is_degree_zero() {
+        // f = 0.3 cosθi cosθo is the cosine factor times a constant.
+        let d = data(|ti, to, _| 0.3 * ti.cos() * to.cos());
+        let f = fit(&d, &spec(SegmentSource::Relative(0.01))).unwrap();
+        assert_eq!(f.function.degree, 0);
+        assert_eq!(f.worst_violation, 0.0);
+        assert!(f.linf < 0.01 * 0.3, "{}", f.linf);
+    }
+
+    #[test]
+    fn a_lobe_needs_a_higher_degree_and_every_segment_holds() {
+        // A Lambertian floor and a retro lobe: no constant passes within 2 %.
+        let lobe = |ti: f64, to: f64, dphi: f64| {
+            let d = gonio_brdf::Directions::from_angles(ti, to, dphi);
+            let c = gonio_brdf::frame::dot(d.l, d.v).max(0.0);
+            0.1 + 2.0 * c.powi(8)
+        };
+        let d = data(lobe);
+        let f = fit(&d, &spec(SegmentSource::Relative(0.02))).unwrap();
+        assert!(f.function.degree >= 1, "{:?}", f.attempts);
+        assert!(f.worst_violation <= VIOLATION_TOLERANCE);
+        for (o, &v) in d
+            .observations
+            .iter()
+            .zip(&d.observations.iter().map(|o| f.function.eval(&o.directions())).collect::<Vec<_>>())
+        {
+            assert!((v - o.value).abs() <= 0.02 * o.value * (1.0 + 1e-9), "{v} against {}", o.value);
+        }
+        // The degree found is the lowest: the one below was tried and failed.
+        let below = f
+            .attempts
+            .iter()
+            .find(|a| a.degree + 1 == f.function.degree)
+            .expect("the degree below was tried");
+        assert!(!below.feasible);
+    }
+
+    #[test]
+    fn contradicting_segments_name_a_sample_and_too_few_samples_are_refused() {
+        let mut d = data(|_, _, _| 1.0);
+        // The same geometry twice, with disjoint segments.
+        let mut twin = d.observations[7];
+        twin.value = 2.0;
+        d.observations.push(twin);
+        let e = fit(&d, &spec(SegmentSource::Absolute(0.1))).unwrap_err().to_string();
+        assert!(e.contains("no rational function of degree") && e.contains("sample"), "{e}");
+        let one = Dataset {
+            observations: d.observations[..1].to_vec(),
+            ..d.clone()
+        };
+        let e = fit(&one, &spec(SegmentSource::Absolute(0.1))).unwrap_err().to_string();
+        assert!(e.contains("too few"), "{e}");
+        let few = Dataset {
+            observations: d.observations[..30].to_vec(),
+            ..d
+        };
+        let f = fit(&few, &spec(SegmentSource::Absolute(0.1))).unwrap();
+        assert!(f.capped.is_some() && f.attempts.iter().all(|a| a.coefficients <= 30));
+    }
+}

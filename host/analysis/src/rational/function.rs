@@ -1,0 +1,41 @@
+//! A fitted rational function as a BRDF: `f_r = cosθi · cosθo · P(u)/Q(u)`,
+//! the cosine factor of Belcour et al. 2014 §6.B (ALTA's
+//! `rational_function_cosine`: the product of the light's and the view's
+//! cosines), which takes the fall towards grazing out of what the
+//! polynomials must follow.
+
+use super::basis::{coordinates, Basis, Domain};
+use crate::moments::plane::Parametrization;
+use gonio_brdf::Directions;
+use serde::{Deserialize, Serialize};
+
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct Rational {
+    /// The retro plane the view's coordinates are taken in.
+    pub parametrization: Parametrization,
+    /// Total degree of numerator and denominator.
+    pub degree: usize,
+    /// The coordinates' box, mapped onto [−1, 1]³.
+    pub domain: Domain,
+    pub numerator: Vec<f64>,
+    pub denominator: Vec<f64>,
+}
+
+impl Rational {
+    /// The number of coefficients, numerator and denominator.
+    pub fn coefficients(&self) -> usize {
+        self.numerator.len() + self.denominator.len()
+    }
+
+    /// `f_r` at `d` (sr⁻¹). Outside the fitted box the coordinates are held
+    /// at its edge (`Domain::unit`).
+    pub fn eval(&self, d: &Directions) -> f64 {
+        self.eval_with(&Basis::new(self.degree), d)
+    }
+
+    /// As `eval`, with the basis built once by the caller.
+    pub fn eval_with(&self, basis: &Basis, d: &Directions) -> f64 {
+        let u = self.domain.unit(coordinates(self.parametrization, d));
+        d.cos_i() * d.cos_o() * basis.eval(&self.numerator, u) / basis.eval(&self.denominator, u)
+    }
+}

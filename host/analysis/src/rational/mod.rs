@@ -1,0 +1,22 @@
+//! The non-parametric model of Belcour et al. 2014 (§5.B, Table 1): a
+//! rational function through the *vertical segments* of the data
+//! (Pacanowski et al. 2012, "Rational BRDF"), times a cosine factor.
+//! Where a parametric model is fitted in the least-squares sense, this one
+//! is the least-norm function that stays within every sample's interval:
+//! with `--segments sigma` the measurement's own k = 2 uncertainty, so that
+//! the function fits within what was measured, or says which sample no
+//! function of the allowed degree can reach.
+//!
+//! `basis` the Legendre terms and the coordinates' box, `segments` the
+//! intervals, `qp` one degree's quadratic programme (Clarabel), `fit` the
+//! bisection on the degree, `function` the result as a BRDF.
+
+pub mod basis;
+pub mod fit;
+pub mod function;
+pub mod qp;
+pub mod segments;
+
+pub use fit::{fit, Attempt, RationalFit, RationalSpec};
+pub use function::Rational;
+pub use segments::SegmentSource;

@@ -1,0 +1,181 @@
+//! The vertical segments a rational function must pass through (Pacanowski
+//! et al. 2012): an interval of `f_r` per sample, from the measurement's
+//! own uncertainty or of a width the user gives.
+
+use crate::fit::data::Observation;
+use crate::uncertainty::K_COVERAGE;
+use anyhow::{bail, Result};
+use serde::Serialize;
+use std::fmt;
+use std::str::FromStr;
+
+/// Where the segments come from (`--segments`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(rename_all = "kebab-case", tag = "kind", content = "width")]
+pub enum SegmentSource {
+    /// The sample's k = 2 interval, `value ± 2σ`: the calibrated CSV's
+    /// `brdf_lo_sr`–`brdf_hi_sr`, ALTA's `#VS 2`.
+    Sigma,
+    /// `value ± width` (sr⁻¹): Belcour et al. 2014 used 0.5 (1.0 for the
+    /// orange coating).
+    Absolute(f64),
+    /// `value · (1 ± width)`.
+    Relative(f64),
+}
+
+impl FromStr for SegmentSource {
+    type Err = anyhow::Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        let width = |w: &str| -> Result<f64> {
+            match w.trim().parse::<f64>() {
+                Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
+                _ => bail!("the width in `--segments {s}` must be a positive number"),
+            }
+        };
+        match s.split_once(':') {
+            None if s.trim() == "sigma" => Ok(SegmentSource::Sigma),
+            Some(("abs", w)) => Ok(SegmentSource::Absolute(width(w)?)),
+            Some(("rel", w)) => Ok(SegmentSource::Relative(width(w)?)),
+            _ => bail!("`--segments {s}`: expected `sigma`, `abs:WIDTH` or `rel:WIDTH`"),
+        }
+    }
+}
+
+impl fmt::Display for SegmentSource {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SegmentSource::Sigma => write!(f, "sigma (value ± {K_COVERAGE}σ)"),
+            SegmentSource::Absolute(w) => write!(f, "abs:{w} (value ± {w} sr⁻¹)"),
+            SegmentSource::Relative(w) => write!(f, "rel:{w} (value × (1 ± {w}))"),
+        }
+    }
+}
+
+/// One sample's interval of `f_r`, `0 ≤ lo < hi`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Segment {
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// The segments of every sample (values in `f_r`), and how many lay wholly
+/// below zero.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Segments {
+    pub segments: Vec<Segment>,
+    /// Segments whose upper end was below zero, moved up to start at zero
+    /// with their width kept: a BRDF is not negative, and a measurement of
+    /// a dark spot whose noise went below zero says it is within about that
+    /// width of zero.
+    pub shifted: usize,
+}
+
+/// Where a sample is, for messages: its index in the file's order and its
+/// angles.
+pub fn sample_text(i: usize, o: &Observation) -> String {
+    format!(
+        "sample {} (θi = {:.2}°, θo = {:.2}°, Δφ = {:.2}°, f_r = {})",
+        i + 1,
+        o.theta_i.to_degrees(),
+        o.theta_o.to_degrees(),
+        o.dphi.to_degrees(),
+        o.value
+    )
+}
+
+impl Segments {
+    /// The segments of `observations` (values in `f_r`), clamped to
+    /// non-negative values. A value or σ that is not a number, a missing σ
+    /// with `sigma`, or a segment of zero width is an error naming the
+    /// sample.
+    pub fn new(observations: &[Observation], source: SegmentSource) -> Result<Segments> {
+        let mut segments = Vec::with_capacity(observations.len());
+        let mut shifted = 0;
+        for (i, o) in observations.iter().enumerate() {
+            if !o.value.is_finite() {
+                bail!("{}: the value is not a number", sample_text(i, o));
+            }
+            let half = match source {
+                SegmentSource::Sigma => match o.sigma {
+                    Some(s) if s.is_finite() => K_COVERAGE * s,
+                    Some(_) => bail!("{}: its uncertainty is not a number", sample_text(i, o)),
+                    None => bail!(
+                        "{}: no uncertainty, which `--segments sigma` needs (a calibrated CSV or an ALTA file with #VS); give `--segments abs:WIDTH` or `rel:WIDTH`",
+                        sample_text(i, o)
+                    ),
+                },
+                SegmentSource::Absolute(w) => w,
+                SegmentSource::Relative(w) => w * o.value.abs(),
+            };
+            if half.is_nan() || half <= 0.0 {
+                bail!(
+                    "{}: its segment has zero width (σ = 0, or a relative width of a zero value); a rational function cannot pass exactly through a point",
+                    sample_text(i, o)
+                );
+            }
+            let (lo, hi) = (o.value - half, o.value + half);
+            let s = if hi <= 0.0 {
+                shifted += 1;
+                Segment { lo: 0.0, hi: 2.0 * half }
+            } else {
+                Segment { lo: lo.max(0.0), hi }
+            };
+            segments.push(s);
+        }
+        Ok(Segments { segments, shifted })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn obs(value: f64, sigma: Option<f64>) -> Observation {
+        Observation {
+            theta_i: 0.5,
+            theta_o: 0.5,
+            dphi: 0.0,
+            value,
+            sigma,
+            shared: Default::default(),
+        }
+    }
+
+    #[test]
+    fn parses_the_three_sources_and_refuses_the_rest() {
+        assert_eq!("sigma".parse::<SegmentSource>().unwrap(), SegmentSource::Sigma);
+        assert_eq!("abs:0.5".parse::<SegmentSource>().unwrap(), SegmentSource::Absolute(0.5));
+        assert_eq!("rel:0.1".parse::<SegmentSource>().unwrap(), SegmentSource::Relative(0.1));
+        for bad in ["abs:0", "rel:-1", "abs:nan", "abs:", "sig", "pct:3"] {
+            assert!(bad.parse::<SegmentSource>().is_err(), "{bad}");
+        }
+    }
+
+    #[test]
+    fn clamps_below_zero_and_shifts_what_lies_under_it() {
+        let s = Segments::new(
+            &[obs(1.0, Some(0.1)), obs(0.05, Some(0.1)), obs(-0.3, Some(0.1))],
+            SegmentSource::Sigma,
+        )
+        .unwrap();
+        assert_eq!(s.segments[0], Segment { lo: 0.8, hi: 1.2 });
+        assert_eq!(s.segments[1], Segment { lo: 0.0, hi: 0.25 });
+        assert_eq!(s.segments[2], Segment { lo: 0.0, hi: 0.4 });
+        assert_eq!(s.shifted, 1);
+    }
+
+    #[test]
+    fn names_the_sample_of_a_bad_segment() {
+        let e = Segments::new(&[obs(1.0, Some(0.1)), obs(1.0, Some(0.0))], SegmentSource::Sigma).unwrap_err();
+        assert!(e.to_string().contains("sample 2") && e.to_string().contains("zero width"), "{e}");
+        let e = Segments::new(&[obs(f64::NAN, Some(0.1))], SegmentSource::Absolute(0.5)).unwrap_err();
+        assert!(e.to_string().contains("not a number"), "{e}");
+        let e = Segments::new(&[obs(1.0, Some(f64::NAN))], SegmentSource::Sigma).unwrap_err();
+        assert!(e.to_string().contains("uncertainty is not a number"), "{e}");
+        let e = Segments::new(&[obs(1.0, None)], SegmentSource::Sigma).unwrap_err();
+        assert!(e.to_string().contains("abs:WIDTH"), "{e}");
+        let e = Segments::new(&[obs(0.0, None)], SegmentSource::Relative(0.1)).unwrap_err();
+        assert!(e.to_string().contains("zero width"), "{e}");
+    }
+}
