@@ -5,7 +5,7 @@
 //! under-sampled; bad input is refused with a non-zero exit.
 
 mod common;
-use common::{gonio, text};
+use common::{calibrated_scan, gonio, text};
 use serde_json::Value;
 
 fn moments(file: &str, extra: &[&str]) -> Value {
@@ -35,28 +35,9 @@ fn rows(v: &Value) -> Vec<(f64, String, Value)> {
 #[test]
 fn a_tape_is_isotropic_about_the_light_and_its_moments_say_what_they_rest_on() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("tape");
-    let o = out.to_str().unwrap();
     // The paper's incidences; a coarse grid away from the lobes, the
     // head's retro rings (to 4.75°) about the light.
-    let s = gonio(&[
-        "scan",
-        "--sim",
-        "--material",
-        "retro-phong",
-        "--reference-plate",
-        "--out",
-        o,
-        "--theta-o",
-        "0:84:6",
-        "--dphi",
-        "0:180:30",
-        "--json",
-    ]);
-    assert!(s.status.success(), "{}", text(&s));
-    let c = gonio(&["calibrate", o, "--json"]);
-    assert!(c.status.success(), "{}", text(&c));
-    let file = out.join("calibrated.csv");
+    let file = calibrated_scan(dir.path(), "tape", "retro-phong", &["--theta-o", "0:84:6", "--dphi", "0:180:30"]);
     let file = file.to_str().unwrap();
 
     let plots = dir.path().join("plots");

@@ -107,6 +107,9 @@ pub fn read_material(path: &Path) -> Result<Material> {
 }
 
 fn material_of(v: &Value) -> Result<Material> {
+    if v["model"] == crate::rational::file::MODEL {
+        bail!("a rational fit: plots, exports and coefficients take the parametric models' fits only, so far");
+    }
     let model = ModelId::parse(v["model"].as_str().unwrap_or_default())?;
     let mut params = Vec::new();
     for name in model.param_names() {

@@ -16,11 +16,23 @@ use gonio_brdf::Directions;
 use serde::{Deserialize, Serialize};
 
 /// The coordinates a rational function is a function of: the incidence θi
-/// (degrees) and the view's place `(x, y)` in a retro plane (degrees,
-/// `moments::plane`), with the retro direction at the origin.
+/// (degrees) and the view's place `(x, y)` in a retro plane
+/// (`moments::plane`), with the retro direction at the origin and its
+/// radius, the angle θ from the retro direction in degrees, taken to its
+/// square root: `(x, y)·θ^(−1/2)`.
+///
+/// The warp is for the retro lobe. A lobe a few degrees wide fills 1 % of a
+/// 180° span and no polynomial of degree 8 on it follows the lobe; √θ gives
+/// its core a tenth of the span. A lobe that is a smooth function of θ²
+/// stays one of `(x′² + y′²)²` after the warp. Measured on a simulated
+/// glass-bead scan (1 506 samples, retro rings to 4.75°, ±0.5 sr⁻¹): no
+/// degree up to 8 held every segment in `(x, y)`; degree 6 does in
+/// `(x′, y′)`.
 pub fn coordinates(param: Parametrization, d: &Directions) -> [f64; 3] {
     let [x, y] = param.coordinates(d);
-    [d.angles().0.to_degrees(), x, y]
+    let r = x.hypot(y);
+    let k = if r > 0.0 { r.sqrt() / r } else { 0.0 };
+    [d.angles().0.to_degrees(), k * x, k * y]
 }
 
 /// The box the coordinates are mapped from: the data's range per coordinate.

@@ -63,6 +63,12 @@ const VIOLATION_TOLERANCE: f64 = 1e-9;
 
 /// Fits `data` (any units; segments are taken in `f_r`).
 pub fn fit(data: &Dataset, spec: &RationalSpec) -> Result<RationalFit> {
+    fit_observed(data, spec, |_| {})
+}
+
+/// As `fit`, calling `trying` with each degree before its programme is
+/// solved (a progress bar's hook).
+pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(usize)) -> Result<RationalFit> {
     let start = Instant::now();
     let fr = data.in_units(Units::Fr)?;
     let obs = &fr.observations;
@@ -96,6 +102,7 @@ pub fn fit(data: &Dataset, spec: &RationalSpec) -> Result<RationalFit> {
     });
     let mut attempts = Vec::new();
     let mut attempt = |degree: usize| -> Result<(Basis, Outcome)> {
+        trying(degree);
         let t = Instant::now();
         let basis = Basis::new(degree);
         let out = qp::solve(&basis, &rows)?;
@@ -148,7 +155,7 @@ pub fn fit(data: &Dataset, spec: &RationalSpec) -> Result<RationalFit> {
         numerator: p,
         denominator: q,
     };
-    let fitted: Vec<f64> = obs.iter().map(|o| function.eval_with(&best, &o.directions())).collect();
+    let fitted = function.values(&fr);
     let mut worst = (0.0, 0);
     for (i, (v, s)) in fitted.iter().zip(&segs.segments).enumerate() {
         let out = (s.lo - v).max(v - s.hi).max(0.0) / (s.hi - s.lo);
@@ -169,16 +176,9 @@ pub fn fit(data: &Dataset, spec: &RationalSpec) -> Result<RationalFit> {
         );
     }
     // The figures in the data's own units, as every other fit reports them.
-    let measured: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
-    let model: Vec<f64> = data
-        .observations
-        .iter()
-        .zip(&fitted)
-        .map(|(o, f)| f * o.unit_factor(data.units))
-        .collect();
-    let linf = measured.iter().zip(&model).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+    let (metrics, linf) = function.against(data);
     Ok(RationalFit {
-        metrics: Metrics::new(&measured, &model),
+        metrics,
         function,
         segments: spec.segments,
         shifted: segs.shifted,

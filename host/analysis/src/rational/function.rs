@@ -5,6 +5,7 @@
 //! polynomials must follow.
 
 use super::basis::{coordinates, Basis, Domain};
+use crate::fit::{Dataset, Metrics};
 use crate::moments::plane::Parametrization;
 use gonio_brdf::Directions;
 use serde::{Deserialize, Serialize};
@@ -37,5 +38,23 @@ impl Rational {
     pub fn eval_with(&self, basis: &Basis, d: &Directions) -> f64 {
         let u = self.domain.unit(coordinates(self.parametrization, d));
         d.cos_i() * d.cos_o() * basis.eval(&self.numerator, u) / basis.eval(&self.denominator, u)
+    }
+
+    /// The function at every observation of `data`, in `data`'s units.
+    pub fn values(&self, data: &Dataset) -> Vec<f64> {
+        let basis = Basis::new(self.degree);
+        data.observations
+            .iter()
+            .map(|o| self.eval_with(&basis, &o.directions()) * o.unit_factor(data.units))
+            .collect()
+    }
+
+    /// The figures every fit reports against `data`, and the largest
+    /// |measured − fitted| (L∞), in `data`'s units.
+    pub fn against(&self, data: &Dataset) -> (Metrics, f64) {
+        let measured: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
+        let model = self.values(data);
+        let linf = measured.iter().zip(&model).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        (Metrics::new(&measured, &model), linf)
     }
 }

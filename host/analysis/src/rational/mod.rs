@@ -9,14 +9,15 @@
 //!
 //! `basis` the Legendre terms and the coordinates' box, `segments` the
 //! intervals, `qp` one degree's quadratic programme (Clarabel), `fit` the
-//! bisection on the degree, `function` the result as a BRDF.
+//! search on the degree, `function` the result as a BRDF, `file` its JSON.
 
 pub mod basis;
+pub mod file;
 pub mod fit;
 pub mod function;
 pub mod qp;
 pub mod segments;
 
-pub use fit::{fit, Attempt, RationalFit, RationalSpec};
+pub use fit::{fit, fit_observed, Attempt, RationalFit, RationalSpec};
 pub use function::Rational;
 pub use segments::SegmentSource;

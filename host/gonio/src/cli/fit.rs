@@ -83,9 +83,17 @@ impl From<ParamArg> for Param {
 pub struct FitArgs {
     /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
     pub file: PathBuf,
-    /// Model id (models.md): lambert, retro-phong, abc-retro, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param.
+    /// Model id (models.md): lambert, retro-phong, abc-retro, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param,
+    /// or `rational` (a rational function through every sample's segment; its plane is --param: back or view, the light-view plane).
     #[arg(long)]
     pub model: String,
+    /// With --model rational: each sample's segment, `sigma` (value ± 2σ: the calibrated CSV's k = 2 interval, ALTA's #VS),
+    /// `abs:WIDTH` (value ± WIDTH sr⁻¹) or `rel:WIDTH` (value × (1 ± WIDTH)).
+    #[arg(long, value_name = "SOURCE")]
+    pub segments: Option<String>,
+    /// With --model rational: the highest total degree of numerator and denominator tried (8: 330 coefficients).
+    #[arg(long, value_name = "D")]
+    pub max_degree: Option<usize>,
     /// Hold a parameter at a value, NAME=V (repeatable).
     #[arg(long)]
     pub fix: Vec<String>,
@@ -119,8 +127,8 @@ pub struct CompareArgs {
 
 /// The data a fit sees (domain restriction applied), and the held-out part.
 pub struct Domain {
-    train: Dataset,
-    holdout: Option<Dataset>,
+    pub(super) train: Dataset,
+    pub(super) holdout: Option<Dataset>,
 }
 
 pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
@@ -214,6 +222,12 @@ fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain, every_m
 }
 
 pub fn fit_cmd(a: FitArgs) -> Result<()> {
+    if a.model == gonio_analysis::rational::file::MODEL {
+        return super::rational::fit_cmd(a);
+    }
+    if a.segments.is_some() || a.max_degree.is_some() {
+        bail!("--segments and --max-degree are options of --model rational, not of {}", a.model);
+    }
     let model = ModelId::parse(&a.model)?;
     let d = domain(&a.file, &a.options)?;
     let Outcome {

@@ -16,6 +16,7 @@ pub mod material;
 mod model_eval;
 mod moments;
 mod plot;
+mod rational;
 mod repeatability;
 pub mod scan;
 mod sim;

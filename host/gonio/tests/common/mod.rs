@@ -82,3 +82,19 @@ pub fn check_report(dir: &std::path::Path, models: &[&str], theta_i: &[&str]) ->
     assert_eq!(machine, None, "a number printed as the machine holds it");
     html
 }
+
+/// A simulated scan of `material` with its reference plate into
+/// `dir/name`, calibrated: the path of its `calibrated.csv`. `grid` adds
+/// the scan's grid options.
+#[allow(dead_code)] // not every test binary that shares this module scans
+pub fn calibrated_scan(dir: &std::path::Path, name: &str, material: &str, grid: &[&str]) -> std::path::PathBuf {
+    let out = dir.join(name);
+    let o = out.to_str().unwrap();
+    let mut args = vec!["scan", "--sim", "--material", material, "--reference-plate", "--out", o, "--json"];
+    args.extend_from_slice(grid);
+    let s = gonio(&args);
+    assert!(s.status.success(), "{}", text(&s));
+    let c = gonio(&["calibrate", o, "--json"]);
+    assert!(c.status.success(), "{}", text(&c));
+    out.join("calibrated.csv")
+}

@@ -1,0 +1,97 @@
+//! A rational fit as one JSON object: the function whole (plane, degree,
+//! box, coefficients), so that it can be read back and evaluated, with
+//! the figures every fit reports and what the segments were.
+
+use super::fit::RationalFit;
+use super::function::Rational;
+use crate::fit::{Metrics, Units};
+use anyhow::{bail, Context, Result};
+use serde_json::{json, Value};
+
+/// The model name a rational fit carries in its file.
+pub const MODEL: &str = "rational";
+
+/// The JSON object of a fit, with the metrics of held-out samples if any.
+pub fn to_json(f: &RationalFit, units: Units, holdout: Option<&Metrics>) -> Value {
+    let r = &f.function;
+    let mut v = json!({
+        "model": MODEL,
+        "parametrization": r.parametrization,
+        "degree": r.degree,
+        "coefficients": r.coefficients(),
+        "domain": r.domain,
+        "numerator": r.numerator,
+        "denominator": r.denominator,
+        "segments": f.segments,
+        "shifted_segments": f.shifted,
+        "worst_violation": f.worst_violation,
+        "rmse": f.metrics.rmse, "nrmse": f.metrics.nrmse, "ncc": f.metrics.ncc, "l2": f.metrics.l2,
+        "linf": f.linf,
+        "samples": f.samples, "seconds": f.seconds, "units": units,
+        "attempts": f.attempts,
+    });
+    if let Some(c) = &f.capped {
+        v["capped"] = json!(c);
+    }
+    if let Some(h) = holdout {
+        v["holdout"] = json!(h);
+    }
+    v
+}
+
+/// The function of a fit file's JSON (`model` = `rational`).
+pub fn function_of(v: &Value) -> Result<Rational> {
+    if v["model"] != MODEL {
+        bail!("not a rational fit (model `{}`)", v["model"].as_str().unwrap_or("?"));
+    }
+    let r: Rational =
+        serde_json::from_value(v.clone()).context("a rational fit needs parametrization, degree, domain, numerator and denominator")?;
+    let n = super::basis::Basis::size(r.degree);
+    if r.numerator.len() != n || r.denominator.len() != n {
+        bail!(
+            "degree {} has {n} terms, but the numerator has {} and the denominator {}",
+            r.degree,
+            r.numerator.len(),
+            r.denominator.len()
+        );
+    }
+    if r.numerator.iter().chain(&r.denominator).any(|c| !c.is_finite()) || r.domain.lo.iter().zip(&r.domain.hi).any(|(l, h)| h <= l) {
+        bail!("a coefficient is not a number, or the domain is empty");
+    }
+    Ok(r)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::moments::Parametrization;
+    use crate::rational::basis::Domain;
+
+    #[test]
+    fn a_function_survives_its_file_and_bad_files_are_refused() {
+        let r = Rational {
+            parametrization: Parametrization::LightView,
+            degree: 1,
+            domain: Domain {
+                lo: [10.0, -5.0, -1.0],
+                hi: [60.0, 5.0, 1.0],
+            },
+            numerator: vec![1.0, 0.1, 0.2, 0.3],
+            denominator: vec![2.0, 0.0, 0.0, 0.1],
+        };
+        let mut v = serde_json::to_value(&r).unwrap();
+        v["model"] = json!(MODEL);
+        assert_eq!(function_of(&v).unwrap(), r);
+        let d = gonio_brdf::Directions::from_degrees(30.0, 20.0, 10.0);
+        assert_eq!(function_of(&v).unwrap().eval(&d), r.eval(&d));
+        let mut short = v.clone();
+        short["numerator"] = json!([1.0]);
+        assert!(function_of(&short).unwrap_err().to_string().contains("4 terms"));
+        let mut other = v.clone();
+        other["model"] = json!("lambert");
+        assert!(function_of(&other).is_err());
+        let mut empty = v;
+        empty["domain"]["hi"][0] = json!(10.0);
+        assert!(function_of(&empty).is_err());
+    }
+}

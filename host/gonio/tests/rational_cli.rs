@@ -1,0 +1,119 @@
+//! `gonio fit --model rational` on a calibrated scan of the simulated head's
+//! glass-bead layer (none of the models), its fit file read back and held
+//! to every segment, and the mistakes a user makes with it.
+
+mod common;
+use common::{calibrated_scan, gonio, text};
+use gonio_analysis::formats;
+use gonio_analysis::rational::file::function_of;
+use serde_json::Value;
+
+fn fails_saying(args: &[&str], words: &[&str]) {
+    let o = gonio(args);
+    assert!(!o.status.success(), "{args:?} must fail: {}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap_or_else(|_| panic!("{args:?}: not JSON: {}", text(&o)));
+    let e = v["error"].as_str().unwrap();
+    for w in words {
+        assert!(e.contains(w), "{args:?}: `{e}` does not say `{w}`");
+    }
+}
+
+#[test]
+fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = calibrated_scan(dir.path(), "beads", "glass-beads", &["--theta-o", "0:84:6", "--dphi", "0:180:30"]);
+    let file = csv.to_str().unwrap();
+    let out = dir.path().join("rational.json");
+    let o = gonio(&[
+        "fit",
+        file,
+        "--model",
+        "rational",
+        "--segments",
+        "abs:0.5",
+        "--param",
+        "back",
+        "--max-degree",
+        "6",
+        "--out",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["model"], "rational");
+    assert_eq!(v["parametrization"], "back");
+    assert_eq!(v["segments"], serde_json::json!({"kind": "absolute", "width": 0.5}));
+    assert_eq!(v["worst_violation"], 0.0);
+    let degree = v["degree"].as_u64().unwrap() as usize;
+    assert_eq!(
+        v["coefficients"].as_u64().unwrap() as usize,
+        (degree + 1) * (degree + 2) * (degree + 3) / 3
+    );
+    assert!(v["linf"].as_f64().unwrap() < 0.5, "{v}");
+    // The lowest degree: the one below it was tried and could not be held.
+    let attempts = v["attempts"].as_array().unwrap();
+    assert!(
+        attempts
+            .iter()
+            .any(|a| a["degree"].as_u64() == Some(degree as u64 - 1) && a["feasible"] == false),
+        "{v}"
+    );
+
+    // The file alone gives the function back, and it holds every segment.
+    let saved: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
+    assert!(saved["support"].is_object(), "the fit file says what it rests on");
+    let r = function_of(&saved).unwrap();
+    let data = formats::load(&csv).unwrap();
+    for o in &data.observations {
+        let f = r.eval(&o.directions());
+        assert!(f > (o.value - 0.5).max(0.0) && f < o.value + 0.5, "{f} against {}", o.value);
+    }
+
+    // The text says what held, and which degrees were tried.
+    let o = gonio(&["fit", file, "--model", "rational", "--segments", "abs:0.5", "--max-degree", "6"]);
+    let t = text(&o);
+    assert!(
+        o.status.success() && t.contains("every segment held") && t.contains("degrees tried"),
+        "{t}"
+    );
+
+    // Mistakes.
+    fails_saying(
+        &["fit", file, "--model", "rational", "--segments", "abs:0", "--json"],
+        &["positive"],
+    );
+    fails_saying(
+        &["fit", file, "--model", "rational", "--segments", "pct:3", "--json"],
+        &["sigma", "abs:WIDTH"],
+    );
+    fails_saying(&["fit", file, "--model", "rational", "--bounds", "kd=0:1", "--json"], &["--bounds"]);
+    fails_saying(
+        &["fit", file, "--model", "lambert", "--segments", "abs:1", "--json"],
+        &["--model rational"],
+    );
+    // Segments no degree up to 2 holds: the error names the degree and a sample.
+    fails_saying(
+        &[
+            "fit",
+            file,
+            "--model",
+            "rational",
+            "--segments",
+            "rel:0.01",
+            "--max-degree",
+            "2",
+            "--json",
+        ],
+        &["degree 2", "sample", "segment"],
+    );
+    // An ALTA file without intervals has no σ for `--segments sigma`.
+    let alta = dir.path().join("plain.dat");
+    let mut plain = data.clone();
+    plain.observations.iter_mut().for_each(|o| o.sigma = None);
+    std::fs::write(&alta, formats::alta::write(&plain)).unwrap();
+    fails_saying(
+        &["fit", alta.to_str().unwrap(), "--model", "rational", "--json"],
+        &["no uncertainty", "abs:WIDTH"],
+    );
+}
