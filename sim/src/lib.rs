@@ -20,7 +20,7 @@ pub use frames::{Cue, FrameHead, Sent};
 pub use imperfections::Imperfections;
 #[cfg(feature = "in-process")]
 pub use inproc::spawn_in_process;
-pub use optics::{seen_brdf, Photodiode};
+pub use optics::{field_average, seen_brdf, Photodiode};
 pub use pty::serve_pty;
 pub use world::World;
 

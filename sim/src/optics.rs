@@ -112,7 +112,8 @@ pub fn seen_brdf(material: &Specimen, detector_sr: f64, d: &Directions) -> f64 {
     field_average(detector_sr, d, |d| material.eval(d))
 }
 
-fn field_average(detector_sr: f64, d: &Directions, f: impl Fn(&Directions) -> f64) -> f64 {
+/// As `seen_brdf`, for any BRDF (a fitted function the head is not made of).
+pub fn field_average(detector_sr: f64, d: &Directions, f: impl Fn(&Directions) -> f64) -> f64 {
     let views = disc(d.v, diameter_deg(detector_sr), DiscRule::DETECTOR);
     let flux: f64 = views
         .iter()

@@ -70,6 +70,29 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
         assert!(f > (o.value - 0.5).max(0.0) && f < o.value + 0.5, "{f} against {}", o.value);
     }
 
+    // `gonio eval` and `gonio dhr` take the fit file.
+    let o = gonio(&[
+        "eval",
+        "--fit",
+        out.to_str().unwrap(),
+        "--theta-i",
+        "30",
+        "--theta-o",
+        "29",
+        "--dphi",
+        "0",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let e: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let here = r.eval(&gonio_brdf::Directions::from_degrees(30.0, 29.0, 0.0));
+    assert_eq!(e["model"], "rational");
+    assert!((e["fr"].as_f64().unwrap() - here).abs() <= 1e-12 * here, "{e} against {here}");
+    let o = gonio(&["dhr", "--fit", out.to_str().unwrap(), "--theta-i", "30", "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let rho = serde_json::from_slice::<Value>(&o.stdout).unwrap()["dhr"].as_f64().unwrap();
+    assert!(rho > 0.0 && rho.is_finite(), "ρ = {rho}");
+
     // The text says what held, and which degrees were tried.
     let o = gonio(&["fit", file, "--model", "rational", "--segments", "abs:0.5", "--max-degree", "6"]);
     let t = text(&o);

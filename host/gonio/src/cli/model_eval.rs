@@ -3,14 +3,16 @@
 
 use super::fit::ParamArg;
 use super::material;
-use anyhow::{bail, Result};
+use anyhow::{bail, Context, Result};
+use gonio_analysis::{fit, rational, rational::Rational};
 use gonio_brdf::{dhr, retro_phong_energy_sum, Directions, Material, ModelId, Specimen};
 use gonio_firmware::config::REFERENCE;
-use gonio_sim::seen_brdf;
+use gonio_sim::field_average;
 use serde_json::json;
+use std::path::PathBuf;
 
 #[derive(Debug, Clone, clap::Args)]
-#[command(group(clap::ArgGroup::new("brdf").required(true).args(["model", "material"])))]
+#[command(group(clap::ArgGroup::new("brdf").required(true).args(["model", "material", "fit"])))]
 pub struct ModelArgs {
     /// Model id (models.md), with --params.
     #[arg(long, requires = "params")]
@@ -23,24 +25,62 @@ pub struct ModelArgs {
     /// simulated scan is checked against.
     #[arg(long, conflicts_with = "model")]
     pub material: Option<String>,
+    /// A fit file (`gonio fit --out`): its model with its parameters, or
+    /// its rational function.
+    #[arg(long, value_name = "FIT.json", conflicts_with_all = ["model", "material"])]
+    pub fit: Option<PathBuf>,
     /// Cosine of the retro lobes (a model's).
     #[arg(long, value_enum, default_value = "view")]
     pub param: ParamArg,
 }
 
+/// What is evaluated: a model or a simulated head's material, or a
+/// rational fit's function (which no head is made of).
+enum Evaluated {
+    Specimen(Specimen),
+    Rational(Rational),
+}
+
+impl Evaluated {
+    fn eval(&self, d: &Directions) -> f64 {
+        match self {
+            Evaluated::Specimen(s) => s.eval(d),
+            Evaluated::Rational(r) => r.eval(d),
+        }
+    }
+
+    fn model(&self) -> Option<&Material> {
+        match self {
+            Evaluated::Specimen(s) => s.model(),
+            Evaluated::Rational(_) => None,
+        }
+    }
+}
+
 impl ModelArgs {
     /// What is evaluated, and its name.
-    fn specimen(&self) -> Result<(Specimen, String)> {
+    fn evaluated(&self) -> Result<(Evaluated, String)> {
+        if let Some(path) = &self.fit {
+            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+            let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
+            if v["model"] == rational::file::MODEL {
+                let r = rational::file::function_of(&v).with_context(|| format!("{}", path.display()))?;
+                return Ok((Evaluated::Rational(r), rational::file::MODEL.into()));
+            }
+            let m = fit::file::read_material(path)?;
+            let name = m.model.name().to_string();
+            return Ok((Evaluated::Specimen(Specimen::Model(m)), name));
+        }
         if let Some(name) = &self.material {
-            return Ok((material::specimen(name, self.params.as_deref())?, name.clone()));
+            return Ok((Evaluated::Specimen(material::specimen(name, self.params.as_deref())?), name.clone()));
         }
         let (Some(model), Some(params)) = (&self.model, &self.params) else {
-            bail!("give --model M --params ... or --material NAME");
+            bail!("give --model M --params ..., --material NAME or --fit FIT.json");
         };
         let mut m = Material::parse(ModelId::parse(model)?, params)?;
         m.param = self.param.into();
         let name = m.model.name().to_string();
-        Ok((Specimen::Model(m), name))
+        Ok((Evaluated::Specimen(Specimen::Model(m)), name))
     }
 }
 
@@ -71,7 +111,7 @@ pub struct EvalArgs {
 }
 
 pub fn eval_cmd(a: EvalArgs) -> Result<()> {
-    let (m, name) = a.model.specimen()?;
+    let (m, name) = a.model.evaluated()?;
     let (ti, to) = (polar("theta-i", a.theta_i)?, polar("theta-o", a.theta_o)?);
     if !a.dphi.is_finite() {
         bail!("--dphi must be finite");
@@ -81,7 +121,7 @@ pub fn eval_cmd(a: EvalArgs) -> Result<()> {
     // What the reference head's detector reads there: the average over its
     // field (a 0.39° disc), which a simulated scan's values are.
     let field = REFERENCE.optics.detector_sr as f64;
-    let seen = seen_brdf(&m, field, &d);
+    let seen = field_average(field, &d, |d| m.eval(d));
     if a.json {
         println!(
             "{}",
@@ -110,7 +150,7 @@ pub struct DhrArgs {
 }
 
 pub fn dhr_cmd(a: DhrArgs) -> Result<()> {
-    let (m, name) = a.model.specimen()?;
+    let (m, name) = a.model.evaluated()?;
     let ti = polar("theta-i", a.theta_i)?;
     let rho = dhr::dhr(|d| m.eval(d), ti.to_radians());
     // Spieringhs §8's check for RetroPhong: kd + ks(θi) + kr(θi) < 1.
