@@ -25,6 +25,11 @@ impl RationalSpec {
     /// Degree 8 is 330 coefficients, beyond the 48–70 Belcour et al. 2014
     /// needed for their tapes at ±0.5 sr⁻¹.
     pub const MAX_DEGREE: usize = 8;
+
+    /// The highest degree a spec may ask for: 910 coefficients, about a
+    /// minute per programme on this machine's cores (each interior-point
+    /// iteration factors `rows·n²`), where degree 20 would take hours.
+    pub const HIGHEST_DEGREE: usize = 12;
 }
 
 /// One degree tried.
@@ -70,6 +75,14 @@ pub fn fit(data: &Dataset, spec: &RationalSpec) -> Result<RationalFit> {
 /// solved (a progress bar's hook).
 pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(usize)) -> Result<RationalFit> {
     let start = Instant::now();
+    if spec.max_degree > RationalSpec::HIGHEST_DEGREE {
+        bail!(
+            "--max-degree {}: at most {} ({} coefficients); beyond it one programme takes hours",
+            spec.max_degree,
+            RationalSpec::HIGHEST_DEGREE,
+            2 * Basis::size(RationalSpec::HIGHEST_DEGREE)
+        );
+    }
     let fr = data.in_units(Units::Fr)?;
     let obs = &fr.observations;
     let segs = Segments::new(obs, spec.segments)?;

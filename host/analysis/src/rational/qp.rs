@@ -62,7 +62,7 @@ const GRID: usize = 9;
 /// subset's solution is the whole programme's.
 pub fn solve(basis: &Basis, rows: &[Row]) -> Result<Outcome> {
     let c = Constraints::new(basis, rows);
-    let m = c.margin.len();
+    let m = c.rows.len();
     let n = c.n;
     let samples = 2 * rows.len();
     let mut taken = vec![false; m];
@@ -93,7 +93,7 @@ pub fn solve(basis: &Basis, rows: &[Row]) -> Result<Outcome> {
         let mut violated: Vec<(f64, usize)> = (0..m)
             .filter(|&i| !taken[i])
             .filter_map(|i| {
-                let short = c.margin[i] * t * (1.0 - 1e-6) - c.dot(i, &x);
+                let short = c.margin(i) * t * (1.0 - 1e-6) - c.dot(i, &x);
                 (short > 0.0).then_some((short, i))
             })
             .collect();
@@ -128,53 +128,73 @@ const FEASIBLE: f64 = 1e-7;
 /// Every row `a·x ≥ margin·t` of the programme, `‖a‖ = 1`: `margin = 1`
 /// for the segments and the denominator on the grid, `0` for the
 /// numerator's sign on the grid.
+///
+/// Each row is a pair `(α, β)` times its point's terms `t̂` (unit norm):
+/// `a = (α t̂, β t̂)/‖(α, β)‖`. Kept so, 50 000 samples of degree 8 take
+/// 66 MB (a term vector per point) where the rows written out would take
+/// four times that.
 struct Constraints {
-    /// Row-major `m × n`.
-    a: Vec<f64>,
-    margin: Vec<f64>,
+    /// Row-major `points × k`: each point's terms, of unit norm.
+    terms: Vec<f64>,
+    /// Per row: its point, `(α, β)` of unit norm, and its margin.
+    rows: Vec<(usize, [f64; 2], f64)>,
+    k: usize,
     n: usize,
 }
 
 impl Constraints {
     fn new(basis: &Basis, rows: &[Row]) -> Constraints {
         let k = basis.len();
-        let n = 2 * k;
         let at = |i: usize| -1.0 + 2.0 * i as f64 / (GRID - 1) as f64;
-        let grid: Vec<[f64; 3]> = (0..GRID.pow(3))
-            .map(|i| [at(i / (GRID * GRID)), at(i / GRID % GRID), at(i % GRID)])
-            .collect();
-        let m = 2 * rows.len() + 2 * grid.len();
-        let mut a = vec![0.0; m * n];
-        let mut margin = vec![0.0; m];
-        let mut t = vec![0.0; k];
-        let mut put = |r: usize, pq: [f64; 2], t: &[f64], held: bool| {
-            let row = &mut a[r * n..(r + 1) * n];
-            for j in 0..k {
-                row[j] = pq[0] * t[j];
-                row[k + j] = pq[1] * t[j];
-            }
-            let norm = row.iter().map(|v| v * v).sum::<f64>().sqrt();
+        let grid = (0..GRID.pow(3)).map(|i| [at(i / (GRID * GRID)), at(i / GRID % GRID), at(i % GRID)]);
+        let points: Vec<[f64; 3]> = rows.iter().map(|r| r.u).chain(grid).collect();
+        let mut terms = vec![0.0; points.len() * k];
+        for (p, t) in points.iter().zip(terms.chunks_exact_mut(k)) {
+            basis.values(*p, t);
+            let norm = t.iter().map(|v| v * v).sum::<f64>().sqrt();
             if norm > 0.0 {
-                row.iter_mut().for_each(|v| *v /= norm);
+                t.iter_mut().for_each(|v| *v /= norm);
             }
-            margin[r] = if held { 1.0 } else { 0.0 };
+        }
+        let unit = |a: f64, b: f64| {
+            let norm = a.hypot(b);
+            [a / norm, b / norm]
         };
+        let mut out = Vec::with_capacity(2 * points.len());
         for (i, r) in rows.iter().enumerate() {
-            basis.values(r.u, &mut t);
-            put(2 * i, [1.0, -r.lo], &t, true);
-            put(2 * i + 1, [-1.0, r.hi], &t, true);
+            out.push((i, unit(1.0, -r.lo), 1.0));
+            out.push((i, unit(-1.0, r.hi), 1.0));
         }
-        let base = 2 * rows.len();
-        for (i, u) in grid.iter().enumerate() {
-            basis.values(*u, &mut t);
-            put(base + 2 * i, [0.0, 1.0], &t, true);
-            put(base + 2 * i + 1, [1.0, 0.0], &t, false);
+        for i in rows.len()..points.len() {
+            out.push((i, [0.0, 1.0], 1.0));
+            out.push((i, [1.0, 0.0], 0.0));
         }
-        Constraints { a, margin, n }
+        Constraints {
+            terms,
+            rows: out,
+            k,
+            n: 2 * k,
+        }
+    }
+
+    /// Row `i`'s coefficient `j`.
+    fn at(&self, i: usize, j: usize) -> f64 {
+        let (point, ab, _) = self.rows[i];
+        let (half, j) = if j < self.k { (0, j) } else { (1, j - self.k) };
+        ab[half] * self.terms[point * self.k + j]
+    }
+
+    fn margin(&self, i: usize) -> f64 {
+        self.rows[i].2
     }
 
     fn dot(&self, i: usize, x: &[f64]) -> f64 {
-        self.a[i * self.n..(i + 1) * self.n].iter().zip(x).map(|(a, x)| a * x).sum()
+        let (point, [a, b], _) = self.rows[i];
+        let t = &self.terms[point * self.k..(point + 1) * self.k];
+        let (p, q) = x.split_at(self.k);
+        let tp: f64 = t.iter().zip(p).map(|(t, x)| t * x).sum();
+        let tq: f64 = t.iter().zip(q).map(|(t, x)| t * x).sum();
+        a * tp + b * tq
     }
 
     /// The largest margin over the rows `subset`: `(x, t, dual weights)`.
@@ -187,7 +207,7 @@ impl Constraints {
         colptr.push(0);
         for j in 0..n {
             for (r, &i) in subset.iter().enumerate() {
-                let v = self.a[i * n + j];
+                let v = self.at(i, j);
                 if v != 0.0 {
                     rowval.push(r);
                     nzval.push(-v);
@@ -199,9 +219,9 @@ impl Constraints {
             colptr.push(rowval.len());
         }
         for (r, &i) in subset.iter().enumerate() {
-            if self.margin[i] != 0.0 {
+            if self.margin(i) != 0.0 {
                 rowval.push(r);
-                nzval.push(self.margin[i]);
+                nzval.push(self.margin(i));
             }
         }
         colptr.push(rowval.len());
