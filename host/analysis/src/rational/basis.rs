@@ -56,7 +56,8 @@ impl Domain {
             }
         }
         for k in 0..3 {
-            if hi[k] <= lo[k] {
+            // Rounding, not range: Δφ = 180° puts y at 1e-15, not 0.
+            if hi[k] - lo[k] <= 1e-9 * lo[k].abs().max(hi[k].abs()).max(1.0) {
                 lo[k] -= 1.0;
                 hi[k] += 1.0;
             }
@@ -69,11 +70,6 @@ impl Domain {
     /// value at the nearest edge of what it was fitted to.
     pub fn unit(&self, c: [f64; 3]) -> [f64; 3] {
         std::array::from_fn(|k| (2.0 * (c[k] - self.lo[k]) / (self.hi[k] - self.lo[k]) - 1.0).clamp(-1.0, 1.0))
-    }
-
-    /// Whether `c` lies in the box (within rounding).
-    pub fn holds(&self, c: [f64; 3]) -> bool {
-        (0..3).all(|k| c[k] >= self.lo[k] - 1e-9 && c[k] <= self.hi[k] + 1e-9)
     }
 }
 
@@ -183,6 +179,8 @@ mod tests {
         assert_eq!(d.unit([10.0, -5.0, 0.0]), [-1.0, -1.0, 0.0]);
         assert_eq!(d.unit([50.0, 5.0, 0.0]), [1.0, 1.0, 0.0]);
         assert_eq!(d.unit([70.0, 0.0, 3.0]), [1.0, 0.0, 1.0]);
-        assert!(!d.holds([70.0, 0.0, 0.0]));
+        // A principal-plane scan's y is rounding about 0: no dimension.
+        let plane = Domain::around(&[[10.0, -5.0, 1e-15], [50.0, 5.0, -2e-15]]);
+        assert!(plane.hi[2] - plane.lo[2] > 1.9, "{plane:?}");
     }
 }

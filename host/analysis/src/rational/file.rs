@@ -46,6 +46,13 @@ pub fn function_of(v: &Value) -> Result<Rational> {
     }
     let r: Rational =
         serde_json::from_value(v.clone()).context("a rational fit needs parametrization, degree, domain, numerator and denominator")?;
+    if r.degree > super::RationalSpec::HIGHEST_DEGREE {
+        bail!(
+            "degree {}: a rational fit is at most of degree {}",
+            r.degree,
+            super::RationalSpec::HIGHEST_DEGREE
+        );
+    }
     let n = super::basis::Basis::size(r.degree);
     if r.numerator.len() != n || r.denominator.len() != n {
         bail!(

@@ -38,6 +38,13 @@ pub struct Attempt {
     pub degree: usize,
     pub coefficients: usize,
     pub feasible: bool,
+    /// The programme's margin (values over the largest segment end, rows
+    /// and coefficients of unit norm); `None` where it was not positive.
+    pub margin: Option<f64>,
+    /// Clarabel reached only its reduced accuracy: a function found is
+    /// still checked on every segment, but "not held" is then a verdict
+    /// at that accuracy, and a lower degree might hold.
+    pub reduced: bool,
     pub seconds: f64,
 }
 
@@ -62,8 +69,8 @@ pub struct RationalFit {
     pub attempts: Vec<Attempt>,
 }
 
-/// Violations beyond this (relative to a segment's width) make the solver's
-/// answer an error: the margins put a solution strictly inside.
+/// Misses beyond this (relative to a segment's width) reject a degree's
+/// function: the margins put a solution strictly inside.
 const VIOLATION_TOLERANCE: f64 = 1e-9;
 
 /// Fits `data` (any units; segments are taken in `f_r`).
@@ -113,19 +120,65 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
             2 * Basis::size(spec.max_degree)
         )
     });
+    // Values in units of the largest segment end, so that the margin is
+    // comparable between data sets (it scales as a half-width over the
+    // largest value otherwise); the numerator takes the scale back.
+    let scale = rows.iter().map(|r| r.hi).fold(0.0, f64::max);
+    for r in &mut rows {
+        r.lo /= scale;
+        r.hi /= scale;
+    }
+    // The largest miss of a segment, over its width (∞ for a value that is
+    // not a number), and where.
+    let worst_of = |f: &Rational| -> (f64, usize) {
+        let mut worst = (0.0, 0);
+        for (i, (v, s)) in f.values(&fr).iter().zip(&segs.segments).enumerate() {
+            let out = if v.is_nan() {
+                f64::INFINITY
+            } else {
+                (s.lo - v).max(v - s.hi).max(0.0) / (s.hi - s.lo)
+            };
+            if out > worst.0 {
+                worst = (out, i);
+            }
+        }
+        worst
+    };
     let mut attempts = Vec::new();
-    let mut attempt = |degree: usize| -> Result<(Basis, Outcome)> {
+    // A degree's function if it holds every segment (checked on the
+    // function itself, not taken from the solver), else the sample most in
+    // conflict.
+    let mut attempt = |degree: usize| -> Result<std::result::Result<(Rational, f64), usize>> {
         trying(degree);
         let t = Instant::now();
         let basis = Basis::new(degree);
-        let out = qp::solve(&basis, &rows)?;
+        let (held, margin, reduced) = match qp::solve(&basis, &rows)? {
+            Outcome::Solved { p, q, margin, reduced } => {
+                let f = Rational {
+                    parametrization: spec.parametrization,
+                    degree,
+                    domain,
+                    numerator: p.iter().map(|c| c * scale).collect(),
+                    denominator: q,
+                };
+                let (miss, at) = worst_of(&f);
+                (
+                    if miss <= VIOLATION_TOLERANCE { Ok((f, miss)) } else { Err(at) },
+                    Some(margin),
+                    reduced,
+                )
+            }
+            Outcome::Infeasible { worst, reduced } => (Err(worst), None, reduced),
+        };
         attempts.push(Attempt {
             degree,
             coefficients: 2 * basis.len(),
-            feasible: matches!(out, Outcome::Solved { .. }),
+            feasible: held.is_ok(),
+            margin,
+            reduced,
             seconds: t.elapsed().as_secs_f64(),
         });
-        Ok((basis, out))
+        Ok(held)
     };
     // Galloping (degrees 1, 2, 4, … up to `top`) brackets the lowest
     // feasible degree within a factor of two, so the costliest programme
@@ -133,10 +186,10 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
     // bracket then finds it. Degrees below `lo` are infeasible.
     let mut lo = 0;
     let mut d = 1.min(top);
-    let (mut best, mut p, mut q) = loop {
+    let mut best = loop {
         match attempt(d)? {
-            (basis, Outcome::Solved { p, q }) => break (basis, p, q),
-            (_, Outcome::Infeasible { worst }) if d == top => bail!(
+            Ok(held) => break held,
+            Err(worst) if d == top => bail!(
                 "no rational function of degree {top} ({} coefficients) passes through every segment; the sample most in conflict with the others is {}, segment [{}, {}]: widen the segments{}",
                 2 * Basis::size(top),
                 sample_text(worst, &obs[worst]),
@@ -144,7 +197,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
                 segs.segments[worst].hi,
                 if capped.is_some() { " or measure more samples" } else { " or raise --max-degree" }
             ),
-            (_, Outcome::Infeasible { .. }) => {
+            Err(_) => {
                 lo = d + 1;
                 d = (2 * d).min(top);
             }
@@ -154,40 +207,14 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
     while lo < hi {
         let mid = lo + (hi - lo) / 2;
         match attempt(mid)? {
-            (basis, Outcome::Solved { p: pm, q: qm }) => {
-                (best, p, q) = (basis, pm, qm);
+            Ok(held) => {
+                best = held;
                 hi = mid;
             }
-            (_, Outcome::Infeasible { .. }) => lo = mid + 1,
+            Err(_) => lo = mid + 1,
         }
     }
-    let function = Rational {
-        parametrization: spec.parametrization,
-        degree: best.degree,
-        domain,
-        numerator: p,
-        denominator: q,
-    };
-    let fitted = function.values(&fr);
-    let mut worst = (0.0, 0);
-    for (i, (v, s)) in fitted.iter().zip(&segs.segments).enumerate() {
-        let out = (s.lo - v).max(v - s.hi).max(0.0) / (s.hi - s.lo);
-        if out.is_nan() || out > worst.0 {
-            worst = (out, i);
-        }
-    }
-    if worst.0.is_nan() || worst.0 > VIOLATION_TOLERANCE {
-        let i = worst.1;
-        bail!(
-            "the solver's function at degree {} misses the segment of {} by {:.3e} of its width (f_r = {}, segment [{}, {}])",
-            function.degree,
-            sample_text(i, &obs[i]),
-            worst.0,
-            fitted[i],
-            segs.segments[i].lo,
-            segs.segments[i].hi
-        );
-    }
+    let (function, worst_violation) = best;
     // The figures in the data's own units, as every other fit reports them.
     let (metrics, linf) = function.against(data);
     Ok(RationalFit {
@@ -198,7 +225,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         samples: m,
         seconds: start.elapsed().as_secs_f64(),
         linf,
-        worst_violation: worst.0,
+        worst_violation,
         capped,
         attempts,
     })

@@ -28,8 +28,9 @@ impl Rational {
         self.numerator.len() + self.denominator.len()
     }
 
-    /// `f_r` at `d` (sr⁻¹). Outside the fitted box the coordinates are held
-    /// at its edge (`Domain::unit`).
+    /// `f_r` at `d` (sr⁻¹); NaN where the denominator is not positive.
+    /// Outside the fitted box the coordinates are held at its edge
+    /// (`Domain::unit`).
     pub fn eval(&self, d: &Directions) -> f64 {
         self.eval_with(&Basis::new(self.degree), d)
     }
@@ -37,7 +38,13 @@ impl Rational {
     /// As `eval`, with the basis built once by the caller.
     pub fn eval_with(&self, basis: &Basis, d: &Directions) -> f64 {
         let u = self.domain.unit(coordinates(self.parametrization, d));
-        d.cos_i() * d.cos_o() * basis.eval(&self.numerator, u) / basis.eval(&self.denominator, u)
+        let q = basis.eval(&self.denominator, u);
+        if q <= 0.0 {
+            // A pole or worse: the denominator is held positive at the
+            // samples and a grid, not proven so between.
+            return f64::NAN;
+        }
+        d.cos_i() * d.cos_o() * basis.eval(&self.numerator, u) / q
     }
 
     /// The function at every observation of `data`, in `data`'s units.
@@ -54,7 +61,12 @@ impl Rational {
     pub fn against(&self, data: &Dataset) -> (Metrics, f64) {
         let measured: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
         let model = self.values(data);
-        let linf = measured.iter().zip(&model).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+        // A NaN anywhere is the answer, not skipped as f64::max would.
+        let linf = measured
+            .iter()
+            .zip(&model)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, |m, e| if e > m || e.is_nan() { e } else { m });
         (Metrics::new(&measured, &model), linf)
     }
 }

@@ -5,9 +5,11 @@
 //! `P(u) − lo·Q(u) ≥ 0` and `hi·Q(u) − P(u) ≥ 0`,
 //!
 //! each row scaled to unit norm. With `lo ≥ 0 < hi` the two rows imply
-//! `Q ≥ 0` at every sample. On a grid over the whole box, `Q ≥ 0` and
-//! `P ≥ 0` as well: the function has no pole and no negative value at the
-//! grid's points, between the samples as much as at them.
+//! `Q > 0` at every sample. On a grid over the whole box (`grid_size`),
+//! `Q > 0` and `P ≥ 0` as well: no pole and no negative value at the
+//! grid's points, where there are no samples as much as where there are.
+//! Between grid points nothing is proven: `Rational::eval` says where
+//! `Q ≤ 0`.
 //!
 //! ALTA minimises `‖x‖²` with every margin row `≥ 1`. Posed so, a set of
 //! segments that is barely feasible has a solution of huge norm and an
@@ -16,8 +18,9 @@
 //! at degree 8). The same solution, up to its scale, is the one of largest
 //! margin: maximise `t` with every margin row `≥ t` and `‖x‖ ≤ 1` (the
 //! least-norm solution is `x/t`). That programme is always feasible and
-//! bounded; the segments can be held iff `t > 0`, and when they cannot, its
-//! dual weights are a certificate of which samples conflict. Solved by
+//! bounded; the segments can be held iff `t > 0` (the fit then checks the
+//! candidate on every segment), and when they cannot, its dual weights
+//! are a certificate of which samples conflict. Solved by
 //! Clarabel (interior point, a second-order cone for the norm).
 
 use super::basis::Basis;
@@ -37,17 +40,28 @@ pub struct Row {
 /// What one degree gives.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outcome {
-    /// Numerator and denominator coefficients.
-    Solved { p: Vec<f64>, q: Vec<f64> },
+    /// Numerator and denominator coefficients, and the margin `t` they
+    /// were found with (rows and coefficients of unit norm): a candidate,
+    /// which the fit checks on every segment.
+    Solved {
+        p: Vec<f64>,
+        q: Vec<f64>,
+        margin: f64,
+        reduced: bool,
+    },
     /// No function of this degree holds every segment; `worst` is the
     /// sample with the largest dual weight at the zero margin, the one most
     /// in conflict with the others.
-    Infeasible { worst: usize },
+    Infeasible { worst: usize, reduced: bool },
 }
 
 /// The grid over the box where the denominator is held positive and the
-/// numerator non-negative: `GRID` points per coordinate, ends included.
-const GRID: usize = 9;
+/// numerator non-negative: `2d + 1` points per coordinate (at least 9),
+/// ends included, so that a polynomial of degree `d` cannot turn between
+/// two of its points more than once.
+fn grid_size(degree: usize) -> usize {
+    (2 * degree + 1).max(9)
+}
 
 /// Solves the programme at `basis`'s degree for `rows`.
 ///
@@ -67,18 +81,23 @@ pub fn solve(basis: &Basis, rows: &[Row]) -> Result<Outcome> {
     let samples = 2 * rows.len();
     let mut taken = vec![false; m];
     let mut working: Vec<usize> = {
-        // About n samples at a stride, and the grid's corners and centres.
+        // About n samples and n grid points, each at a stride.
         let stride = (rows.len() / n).max(1);
         let mut w: Vec<usize> = (0..rows.len()).step_by(stride).flat_map(|i| [2 * i, 2 * i + 1]).collect();
-        w.extend((samples..m).step_by(7));
+        let points = (m - samples) / 2;
+        w.extend(
+            (0..points)
+                .step_by((points / n).max(1))
+                .flat_map(|i| [samples + 2 * i, samples + 2 * i + 1]),
+        );
         w
     };
     for &i in &working {
         taken[i] = true;
     }
     for _ in 0..ROUNDS {
-        let (x, t, z) = c.solve(&working, basis.degree)?;
-        if t <= FEASIBLE {
+        let Margin { x, t, z, reduced } = c.solve(&working, basis.degree)?;
+        if t <= 0.0 {
             // The dual weights of the margin rows sum to 1 and balance
             // each other: the largest is the sample most in conflict.
             let mut weight = vec![0.0; rows.len()];
@@ -88,13 +107,13 @@ pub fn solve(basis: &Basis, rows: &[Row]) -> Result<Outcome> {
                 }
             }
             let worst = (0..rows.len()).max_by(|&i, &j| weight[i].total_cmp(&weight[j])).unwrap_or(0);
-            return Ok(Outcome::Infeasible { worst });
+            return Ok(Outcome::Infeasible { worst, reduced });
         }
         let mut violated: Vec<(f64, usize)> = (0..m)
             .filter(|&i| !taken[i])
             .filter_map(|i| {
                 let short = c.margin(i) * t * (1.0 - 1e-6) - c.dot(i, &x);
-                (short > 0.0).then_some((short, i))
+                (short > SLACK).then_some((short, i))
             })
             .collect();
         if violated.is_empty() {
@@ -103,10 +122,13 @@ pub fn solve(basis: &Basis, rows: &[Row]) -> Result<Outcome> {
             return Ok(Outcome::Solved {
                 p: x[..k].iter().map(|v| v / t).collect(),
                 q: x[k..].iter().map(|v| v / t).collect(),
+                margin: t,
+                reduced,
             });
         }
         violated.sort_by(|a, b| b.0.total_cmp(&a.0));
-        for &(_, i) in violated.iter().take(n) {
+        let add = n.max(violated.len() / 8);
+        for &(_, i) in violated.iter().take(add) {
             taken[i] = true;
             working.push(i);
         }
@@ -117,13 +139,25 @@ pub fn solve(basis: &Basis, rows: &[Row]) -> Result<Outcome> {
     )
 }
 
+/// One subset's answer: coefficients and margin (unit norms), the dual
+/// weights of its rows, and whether Clarabel reached only its reduced
+/// accuracy (`AlmostSolved`: gap 5e-5, feasibility 1e-4). A candidate is
+/// checked on every segment whatever the accuracy; an infeasible verdict
+/// at reduced accuracy is said as such (`Attempt::reduced`).
+struct Margin {
+    x: Vec<f64>,
+    t: f64,
+    z: Vec<f64>,
+    reduced: bool,
+}
+
 /// Rounds of constraint generation before giving up.
 const ROUNDS: usize = 60;
 
-/// The margin (rows and coefficients of unit norm) above which the
-/// segments count as held: ten times Clarabel's tolerance. The fit checks
-/// every segment on the function itself afterwards.
-const FEASIBLE: f64 = 1e-7;
+/// How far below its share of the margin a row left out may fall and count
+/// as held: rows of margin 0 (the numerator's sign) have no slack of their
+/// own, and noise of 1e-12 must not keep adding them.
+const SLACK: f64 = 1e-9;
 
 /// Every row `a·x ≥ margin·t` of the programme, `‖a‖ = 1`: `margin = 1`
 /// for the segments and the denominator on the grid, `0` for the
@@ -145,8 +179,9 @@ struct Constraints {
 impl Constraints {
     fn new(basis: &Basis, rows: &[Row]) -> Constraints {
         let k = basis.len();
-        let at = |i: usize| -1.0 + 2.0 * i as f64 / (GRID - 1) as f64;
-        let grid = (0..GRID.pow(3)).map(|i| [at(i / (GRID * GRID)), at(i / GRID % GRID), at(i % GRID)]);
+        let g = grid_size(basis.degree);
+        let at = |i: usize| -1.0 + 2.0 * i as f64 / (g - 1) as f64;
+        let grid = (0..g.pow(3)).map(|i| [at(i / (g * g)), at(i / g % g), at(i % g)]);
         let points: Vec<[f64; 3]> = rows.iter().map(|r| r.u).chain(grid).collect();
         let mut terms = vec![0.0; points.len() * k];
         for (p, t) in points.iter().zip(terms.chunks_exact_mut(k)) {
@@ -200,7 +235,7 @@ impl Constraints {
     /// The largest margin over the rows `subset`: `(x, t, dual weights)`.
     /// Variables `(x, t)`; Clarabel's form `A z + s = b`: a row
     /// `a·x − margin·t = s ≥ 0`, then `(1, x)` in the second-order cone.
-    fn solve(&self, subset: &[usize], degree: usize) -> Result<(Vec<f64>, f64, Vec<f64>)> {
+    fn solve(&self, subset: &[usize], degree: usize) -> Result<Margin> {
         let n = self.n;
         let m = subset.len();
         let (mut colptr, mut rowval, mut nzval) = (Vec::with_capacity(n + 2), Vec::new(), Vec::new());
@@ -243,7 +278,12 @@ impl Constraints {
         solver.solve();
         let s = &solver.solution;
         match s.status {
-            SolverStatus::Solved | SolverStatus::AlmostSolved => Ok((s.x[..n].to_vec(), s.x[n], s.z[..m].to_vec())),
+            SolverStatus::Solved | SolverStatus::AlmostSolved => Ok(Margin {
+                x: s.x[..n].to_vec(),
+                t: s.x[n],
+                z: s.z[..m].to_vec(),
+                reduced: s.status == SolverStatus::AlmostSolved,
+            }),
             other => bail!(
                 "the programme at degree {degree} did not converge (Clarabel: {other:?} after {} iterations)",
                 s.iterations

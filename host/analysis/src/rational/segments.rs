@@ -64,10 +64,12 @@ pub struct Segment {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Segments {
     pub segments: Vec<Segment>,
-    /// Segments whose upper end was below zero, moved up to start at zero
-    /// with their width kept: a BRDF is not negative, and a measurement of
-    /// a dark spot whose noise went below zero says it is within about that
-    /// width of zero.
+    /// Segments of a negative value, `[0, max(v + h, h)]`. Every segment is
+    /// clamped at zero, as Belcour et al. did (`[max(v − h, 0), v + h]`); a
+    /// value that noise took below zero would then leave a sliver `[0, v +
+    /// h]` that narrows to nothing as `v → −h`, so its upper end is held
+    /// at `h` at least: a dark sample says the BRDF is within about `h` of
+    /// zero.
     pub shifted: usize,
 }
 
@@ -108,18 +110,25 @@ impl Segments {
                 SegmentSource::Absolute(w) => w,
                 SegmentSource::Relative(w) => w * o.value.abs(),
             };
-            if half.is_nan() || half <= 0.0 {
+            if half < 0.0 {
+                bail!("{}: its uncertainty is negative", sample_text(i, o));
+            }
+            if half.is_nan() || half == 0.0 {
                 bail!(
                     "{}: its segment has zero width (σ = 0, or a relative width of a zero value); a rational function cannot pass exactly through a point",
                     sample_text(i, o)
                 );
             }
+            if !(o.value + half).is_finite() {
+                bail!("{}: its segment is not finite", sample_text(i, o));
+            }
             let (lo, hi) = (o.value - half, o.value + half);
-            let s = if hi <= 0.0 {
+            if o.value < 0.0 {
                 shifted += 1;
-                Segment { lo: 0.0, hi: 2.0 * half }
-            } else {
-                Segment { lo: lo.max(0.0), hi }
+            }
+            let s = Segment {
+                lo: lo.max(0.0),
+                hi: hi.max(half),
             };
             segments.push(s);
         }
@@ -153,7 +162,7 @@ mod tests {
     }
 
     #[test]
-    fn clamps_below_zero_and_shifts_what_lies_under_it() {
+    fn clamps_at_zero_without_slivers() {
         let s = Segments::new(
             &[obs(1.0, Some(0.1)), obs(0.05, Some(0.1)), obs(-0.3, Some(0.1))],
             SegmentSource::Sigma,
@@ -161,8 +170,11 @@ mod tests {
         .unwrap();
         assert_eq!(s.segments[0], Segment { lo: 0.8, hi: 1.2 });
         assert_eq!(s.segments[1], Segment { lo: 0.0, hi: 0.25 });
-        assert_eq!(s.segments[2], Segment { lo: 0.0, hi: 0.4 });
+        assert_eq!(s.segments[2], Segment { lo: 0.0, hi: 0.2 });
         assert_eq!(s.shifted, 1);
+        // Continuous in the value: no sliver as it nears −2σ.
+        let near = Segments::new(&[obs(-0.2 + 1e-12, Some(0.1))], SegmentSource::Sigma).unwrap();
+        assert!((near.segments[0].hi - 0.2).abs() < 1e-9);
     }
 
     #[test]
@@ -175,6 +187,10 @@ mod tests {
         assert!(e.to_string().contains("uncertainty is not a number"), "{e}");
         let e = Segments::new(&[obs(1.0, None)], SegmentSource::Sigma).unwrap_err();
         assert!(e.to_string().contains("abs:WIDTH"), "{e}");
+        let e = Segments::new(&[obs(1.0, Some(-0.1))], SegmentSource::Sigma).unwrap_err();
+        assert!(e.to_string().contains("negative"), "{e}");
+        let e = Segments::new(&[obs(1.0, Some(f64::MAX))], SegmentSource::Sigma).unwrap_err();
+        assert!(e.to_string().contains("not finite"), "{e}");
         let e = Segments::new(&[obs(0.0, None)], SegmentSource::Relative(0.1)).unwrap_err();
         assert!(e.to_string().contains("zero width"), "{e}");
     }

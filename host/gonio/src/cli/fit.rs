@@ -88,7 +88,7 @@ pub struct FitArgs {
     #[arg(long)]
     pub model: String,
     /// With --model rational: each sample's segment, `sigma` (value ± 2σ: the calibrated CSV's k = 2 interval, ALTA's #VS),
-    /// `abs:WIDTH` (value ± WIDTH sr⁻¹) or `rel:WIDTH` (value × (1 ± WIDTH)).
+    /// `abs:WIDTH` (value ± WIDTH, in f_r, sr⁻¹, whatever the file's units) or `rel:WIDTH` (value × (1 ± WIDTH)).
     #[arg(long, value_name = "SOURCE")]
     pub segments: Option<String>,
     /// With --model rational: the highest total degree of numerator and denominator tried (8: 330 coefficients).

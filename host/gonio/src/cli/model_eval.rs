@@ -118,6 +118,9 @@ pub fn eval_cmd(a: EvalArgs) -> Result<()> {
     }
     let d = Directions::from_degrees(ti, to, a.dphi);
     let f = m.eval(&d);
+    if f.is_nan() {
+        bail!("{name} is not defined at this geometry: a rational fit's denominator is not positive there (held so only at its samples and a grid)");
+    }
     // What the reference head's detector reads there: the average over its
     // field (a 0.39° disc), which a simulated scan's values are.
     let field = REFERENCE.optics.detector_sr as f64;
@@ -153,6 +156,9 @@ pub fn dhr_cmd(a: DhrArgs) -> Result<()> {
     let (m, name) = a.model.evaluated()?;
     let ti = polar("theta-i", a.theta_i)?;
     let rho = dhr::dhr(|d| m.eval(d), ti.to_radians());
+    if rho.is_nan() {
+        bail!("{name} is not defined everywhere over the hemisphere at θi = {ti}°: a rational fit's denominator is not positive somewhere");
+    }
     // Spieringhs §8's check for RetroPhong: kd + ks(θi) + kr(θi) < 1.
     let sum = m
         .model()

@@ -82,7 +82,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     }
     if f.shifted > 0 {
         eprintln!(
-            "note: {} segment(s) lay wholly below zero and were moved up to start at zero, their width kept: a BRDF is not negative",
+            "note: {} value(s) were negative; their segments were clamped to [0, at least the half-width]: a BRDF is not negative",
             f.shifted
         );
     }

@@ -97,6 +97,24 @@ fn geometry_json(p: &Problem) -> Value {
     })
 }
 
+/// The peer's job: the problem as the scipy script reads it (`model`,
+/// geometry, values, weights, scale, box), with `starts` and `extra`
+/// (`check`, `repeats`) added.
+fn job(model: ModelId, problem: &Problem, starts: Value, extra: Value) -> Value {
+    let bounds = &problem.bounds_all;
+    let mut j = json!({
+        "model": model.name(), "geometry": geometry_json(problem), "y": problem.y, "weight": problem.weight,
+        "scale": problem.scale, "lo": bounds.iter().map(|b| b.lo).collect::<Vec<_>>(),
+        "hi": bounds.iter().map(|b| b.hi).collect::<Vec<_>>(),
+    });
+    for more in [starts, extra] {
+        if let (Value::Object(a), Value::Object(b)) = (&mut j, more) {
+            a.extend(b);
+        }
+    }
+    j
+}
+
 fn scipy(job: &Value) -> Value {
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/python/fit_scipy.py");
     let mut child = Command::new("python3")
@@ -168,18 +186,8 @@ fn main() {
         let problem = fit::problem(&data, &spec).expect("synthetic data fit");
         let bounds = problem.bounds_all.clone();
         let start: Vec<f64> = bounds.iter().map(|b| transform::from_unit(b, 0.5)).collect();
-        let job = |extra: Value| {
-            let mut j = json!({
-                "model": model.name(), "geometry": geometry_json(&problem), "y": problem.y, "weight": problem.weight,
-                "scale": problem.scale, "start": start, "lo": bounds.iter().map(|b| b.lo).collect::<Vec<_>>(),
-                "hi": bounds.iter().map(|b| b.hi).collect::<Vec<_>>(),
-            });
-            if let (Value::Object(a), Value::Object(b)) = (&mut j, extra) {
-                a.extend(b);
-            }
-            j
-        };
-        let numpy = scipy(&job(json!({ "check": truth.params })));
+        let peer_job = |extra: Value| job(model, &problem, json!({ "start": start }), extra);
+        let numpy = scipy(&peer_job(json!({ "check": truth.params })));
         let agreement = numpy["values"]
             .as_array()
             .expect("values")
@@ -198,7 +206,7 @@ fn main() {
         }
         times.sort_by(f64::total_cmp);
         let local_seconds = times[REPEATS / 2];
-        let sp = scipy(&job(json!({ "repeats": REPEATS })));
+        let sp = scipy(&peer_job(json!({ "repeats": REPEATS })));
         let sp_params = peer_params(&sp);
         let sp_seconds = sp["seconds"].as_f64().unwrap_or(f64::NAN);
         let sp_rmse = rmse(&problem, &sp_params);

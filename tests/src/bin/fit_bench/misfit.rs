@@ -6,7 +6,7 @@ use rand::{Rng, SeedableRng};
 use serde_json::{json, Value};
 
 use crate::cases::cases;
-use crate::{geometry_json, peer_params, rmse, scipy};
+use crate::{job, peer_params, rmse, scipy};
 
 /// Random starts of the peer's multi-start fit.
 const PEER_STARTS: usize = 24;
@@ -33,11 +33,7 @@ pub fn misfit(limit: usize, filter: &str) -> (Value, f64, f64) {
             continue;
         }
         let ours = fit::fit(data, &spec).expect("misfit fit");
-        let peer = scipy(&json!({
-            "model": model.name(), "geometry": geometry_json(&problem), "y": problem.y, "weight": problem.weight,
-            "scale": problem.scale, "starts": starts, "lo": bounds.iter().map(|b| b.lo).collect::<Vec<_>>(),
-            "hi": bounds.iter().map(|b| b.hi).collect::<Vec<_>>(),
-        }));
+        let peer = scipy(&job(model, &problem, json!({ "starts": starts }), json!({})));
         let peer_params = peer_params(&peer);
         let ours_x: Vec<f64> = problem.free.iter().map(|&i| ours.material.params[i]).collect();
         let (r_ours, r_peer) = (rmse(&problem, &ours_x), rmse(&problem, &peer_params));
