@@ -9,8 +9,6 @@ pub mod chip_costs;
 pub mod chop_signal;
 pub mod doubles;
 pub mod fixed_agreement;
-pub mod frames;
-pub mod fuzz;
 pub mod safety_bench;
 pub mod scanning;
 pub mod step_log;

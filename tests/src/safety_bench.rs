@@ -2,10 +2,10 @@
 //! runs a few of them and checks the same bars; the binary's doc says what
 //! each figure is.
 
-use crate::frames::{scan_events, scan_frames, send};
 use crate::stops::{decel_s_max, duration_s, offset, ready, small_scan, status, trial, Activity, Stop, Trigger};
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
+use gonio_frames::{scan_events, scan_frames, send};
 use gonio_shared::icd::{AbortEndpoint, ContinueEndpoint, PauseEndpoint};
 use gonio_shared::{Axis, Geometry, HeadState, ScanEvent, ScanSpec};
 use gonio_sim::{Cue, FrameHead, SimConfig};

@@ -5,9 +5,9 @@
 //! intervals changed on the way down, and whether the firmware's position
 //! still matches the motors'. Shared by `safety-bench` and the tests.
 
-use crate::frames::{replies, scan_events, scan_frames, send};
 use gonio_firmware::config::{AxisConfig, REFERENCE};
 use gonio_firmware::motion;
+use gonio_frames::{replies, scan_events, scan_frames, send};
 use gonio_shared::icd::{
     AbortEndpoint, ContinueEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint,
     SafetyEndpoint, StatusEndpoint,

@@ -6,11 +6,11 @@
 //! leaves). The host's half (recovery, no sample lost or duplicated,
 //! resumption) is host/gonio/tests/fault_recovery.rs.
 
+use gonio_frames::{replies, scan_events, scan_frames, send};
 use gonio_shared::icd::{HomeEndpoint, HomeRequest, MoveEndpoint, SafetyEndpoint, ScanEndpoint};
 use gonio_shared::{AngleRange, Axis, Fault, Geometry, SafetySettings, SampleFlags, ScanEvent, ScanSpec};
 use gonio_sim::faults::Faults;
 use gonio_sim::{FrameHead, Sent, SimConfig};
-use gonio_tests::frames::{replies, scan_events, scan_frames, send};
 
 /// Points of [`spec`] in the plate's shadow (θo = 24° and 36° at Δφ = 0°,
 /// 6° from the laser): skipped, and planned first, before any move.

@@ -12,13 +12,13 @@ fn every_seed_passes_its_target_and_the_corpus_is_current() {
     for entry in std::fs::read_dir(&root).expect("tests/fuzz/seeds") {
         let dir = entry.unwrap().path();
         let name = dir.file_name().unwrap().to_str().unwrap().to_string();
-        let target = gonio_tests::fuzz::target(&name).unwrap_or_else(|| panic!("seeds for an unknown target {name}"));
+        let target = gonio_frames::fuzz::target(&name).unwrap_or_else(|| panic!("seeds for an unknown target {name}"));
         for seed in std::fs::read_dir(&dir).unwrap() {
             target(&std::fs::read(seed.unwrap().path()).unwrap());
             ran += 1;
         }
     }
-    let want = gonio_tests::fuzz::seeds();
+    let want = gonio_frames::fuzz::seeds();
     // The generated seeds, and the inputs the fuzzers once crashed on (`regression-*`).
     assert!(ran >= want.len(), "run `cargo run -p tests --bin fuzz-seeds` to refresh the corpus");
     for (target, name, bytes) in want {

@@ -4,13 +4,13 @@
 //! one session; after every refused command the stages are where they were,
 //! the laser was not switched on and no driver was enabled.
 
+use gonio_frames::{refusal, send};
 use gonio_shared::icd::{
     AbortEndpoint, DetectionEndpoint, HomeEndpoint, HomeRequest, LearnEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint,
     SafetyEndpoint, SanityEndpoint, ScanEndpoint, StatusEndpoint,
 };
 use gonio_shared::{Fault, Geometry, LearnRequest, SafetySettings};
 use gonio_sim::{FrameHead, Sent, SimConfig};
-use gonio_tests::frames::{refusal, send};
 use gonio_tests::strategies::{any_f32, detection_settings, geometry, sanity_config, scan_spec};
 use proptest::prelude::*;
 

@@ -1,4 +1,4 @@
 #![no_main]
-//! See `gonio_tests::fuzz::csv_reader`.
+//! See `gonio_frames::fuzz::csv_reader`.
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| gonio_tests::fuzz::csv_reader(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| gonio_frames::fuzz::csv_reader(data));

@@ -1,4 +1,4 @@
 #![no_main]
-//! See `gonio_tests::fuzz::dispatch`.
+//! See `gonio_frames::fuzz::dispatch`.
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| gonio_tests::fuzz::dispatch(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| gonio_frames::fuzz::dispatch(data));

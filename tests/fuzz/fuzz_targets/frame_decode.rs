@@ -1,4 +1,4 @@
 #![no_main]
-//! See `gonio_tests::fuzz::frame_decode`.
+//! See `gonio_frames::fuzz::frame_decode`.
 
-libfuzzer_sys::fuzz_target!(|data: &[u8]| gonio_tests::fuzz::frame_decode(data));
+libfuzzer_sys::fuzz_target!(|data: &[u8]| gonio_frames::fuzz::frame_decode(data));

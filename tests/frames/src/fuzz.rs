@@ -3,7 +3,7 @@
 //! `cargo test` runs every committed seed through them on stable Rust
 //! (tests/tests/fuzz_seeds.rs), and `fuzz-seeds` writes those seeds.
 
-use crate::frames::{request, sealed};
+use crate::{request, sealed};
 use gonio_analysis::formats::{alta, brdf_csv};
 use gonio_firmware::dispatch;
 use gonio_shared::icd::{

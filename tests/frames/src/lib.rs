@@ -1,6 +1,9 @@
 //! Frames as the host sends them to the head and reads them back, for tests
 //! that drive the firmware frame by frame (`gonio_sim::FrameHead`):
-//! requests encoded and sealed, the head's scan events and replies decoded.
+//! requests encoded and sealed, the head's scan events and replies decoded;
+//! and the fuzz targets' bodies (`fuzz`), which send such frames.
+
+pub mod fuzz;
 
 use gonio_acquire::scan_order::visit_order;
 use gonio_firmware::config::REFERENCE;
