@@ -19,6 +19,7 @@ pub enum ModelId {
     Lambert,
     RetroPhong,
     AbcRetro,
+    AbcRetroPerLobe,
     BeckmannRetro,
     BlinnRetro,
     Lafortune,
@@ -182,6 +183,17 @@ const ABC_RETRO: &[Bound] = &[
     b(0.0, 1e4, A),
     b(0.0, 100.0, A),
 ];
+const ABC_RETRO_PER_LOBE: &[Bound] = &[
+    KD,
+    held(0.0, 1.0, L),
+    a(0.0, 100.0, A),
+    b(0.0, 1e4, A),
+    b(0.0, 100.0, A),
+    held(0.0, 1.0, L),
+    a(0.0, 100.0, A),
+    b(0.0, 1e4, A),
+    b(0.0, 100.0, A),
+];
 const BECKMANN_RETRO: &[Bound] = &[KD, b(1e-3, 1e4, G), held(0.0, 1.0, L)];
 const BLINN_RETRO: &[Bound] = &[KD, b(1.0, 1e6, G), b(1.0, 1e6, G)];
 const LAFORTUNE: &[Bound] = &[
@@ -197,10 +209,11 @@ const OREN_NAYAR: &[Bound] = &[KD, held(0.0, std::f64::consts::FRAC_PI_2, L)];
 const FIVE_PARAM: &[Bound] = &[a(0.0, 100.0, A), b(0.01, 100.0, G), b(0.01, 20.0, G), free(-100.0, 10.0, L), KD];
 
 impl ModelId {
-    pub const ALL: [ModelId; 8] = [
+    pub const ALL: [ModelId; 9] = [
         ModelId::Lambert,
         ModelId::RetroPhong,
         ModelId::AbcRetro,
+        ModelId::AbcRetroPerLobe,
         ModelId::BeckmannRetro,
         ModelId::BlinnRetro,
         ModelId::Lafortune,
@@ -243,6 +256,7 @@ impl ModelId {
             ModelId::Lambert => &[KD],
             ModelId::RetroPhong => RETRO_PHONG,
             ModelId::AbcRetro => ABC_RETRO,
+            ModelId::AbcRetroPerLobe => ABC_RETRO_PER_LOBE,
             ModelId::BeckmannRetro => BECKMANN_RETRO,
             ModelId::BlinnRetro => BLINN_RETRO,
             ModelId::Lafortune => LAFORTUNE,
@@ -255,7 +269,7 @@ impl ModelId {
     pub fn has_retro_cosine(self) -> bool {
         matches!(
             self,
-            ModelId::RetroPhong | ModelId::AbcRetro | ModelId::BeckmannRetro | ModelId::BlinnRetro
+            ModelId::RetroPhong | ModelId::AbcRetro | ModelId::AbcRetroPerLobe | ModelId::BeckmannRetro | ModelId::BlinnRetro
         )
     }
 
@@ -291,6 +305,7 @@ impl ModelId {
             ModelId::Lambert => lambert::eval(p),
             ModelId::RetroPhong => retro_phong::eval(g, p, param),
             ModelId::AbcRetro => abc_retro::eval(g, p, param),
+            ModelId::AbcRetroPerLobe => abc_retro::eval_per_lobe(g, p, param),
             ModelId::BeckmannRetro => beckmann_retro::eval(g, p, param),
             ModelId::BlinnRetro => blinn_retro::eval(g, p, param),
             ModelId::Lafortune => lafortune::eval(g, p),

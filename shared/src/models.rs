@@ -32,6 +32,12 @@ pub const ABC_RETRO: ModelSpec = ModelSpec {
     id: "abc-retro",
     params: &["kd", "r0", "ab", "bb", "cb", "ar", "br", "cr"],
 };
+/// `abc-retro` with a Fresnel `r0` of each lobe's own (Belcour §4.C; ALTA's
+/// retro tutorial fits this form).
+pub const ABC_RETRO_PER_LOBE: ModelSpec = ModelSpec {
+    id: "abc-retro-per-lobe",
+    params: &["kd", "r0_b", "ab", "bb", "cb", "r0_r", "ar", "br", "cr"],
+};
 pub const BECKMANN_RETRO: ModelSpec = ModelSpec {
     id: "beckmann-retro",
     params: &["kd", "alpha", "r0"],
@@ -54,10 +60,11 @@ pub const FIVE_PARAM: ModelSpec = ModelSpec {
 };
 
 /// Every model, in the order of `docs/models.md` §2.
-pub const MODELS: [&ModelSpec; 8] = [
+pub const MODELS: [&ModelSpec; 9] = [
     &LAMBERT,
     &RETRO_PHONG,
     &ABC_RETRO,
+    &ABC_RETRO_PER_LOBE,
     &BECKMANN_RETRO,
     &BLINN_RETRO,
     &LAFORTUNE,

@@ -71,6 +71,11 @@ def model(name, g, p):
         spec = ar / (1.0 + br * (1.0 - g["nh"])) ** cr * schlick(g["vh"], r0)
         retro = ab / (1.0 + bb * (1.0 - g["c"])) ** cb * schlick(g["vpb"], r0)
         return kd / PI + spec + retro
+    if name == "abc-retro-per-lobe":
+        kd, r0_b, ab, bb, cb, r0_r, ar, br, cr = p
+        spec = ar / (1.0 + br * (1.0 - g["nh"])) ** cr * schlick(g["vh"], r0_r)
+        retro = ab / (1.0 + bb * (1.0 - g["c"])) ** cb * schlick(g["vpb"], r0_b)
+        return kd / PI + spec + retro
     if name == "beckmann-retro":
         kd, alpha, r0 = p
         c = g["c"]

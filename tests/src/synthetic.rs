@@ -15,6 +15,7 @@ pub fn reference(model: ModelId) -> Material {
         ModelId::Lambert => vec![0.5],
         ModelId::RetroPhong => vec![0.620, 24.0, 0.158, 0.0415, 0.00133, 5.47],
         ModelId::AbcRetro => vec![0.534, 0.0472, 1.82, 13.5, 1.51, 1.02, 0.0775, 6.97],
+        ModelId::AbcRetroPerLobe => vec![0.534, 0.0472, 1.82, 13.5, 1.51, 0.5, 1.02, 0.0775, 6.97],
         ModelId::BeckmannRetro => vec![0.796, 8.20, 0.995],
         ModelId::BlinnRetro => vec![0.919, 7.91e3, 2.77e3],
         ModelId::Lafortune => vec![0.5, -1.0, 1.0, 20.0, 1.0, 1.0, 150.0],

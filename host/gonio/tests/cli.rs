@@ -234,7 +234,7 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
     // a physical glass-bead layer, none of the models: the summary names it,
     // and no model describes it exactly.
     assert_eq!(summary["calibration"]["usable"].as_u64(), Some(measured));
-    assert_eq!(summary["models"].as_array().unwrap().len(), 8);
+    assert_eq!(summary["models"].as_array().unwrap().len(), gonio_brdf::ModelId::ALL.len());
     assert!(summary["material"].as_str().unwrap().contains("glass-bead"), "{summary}");
     let ncc: Vec<f64> = summary["models"]
         .as_array()

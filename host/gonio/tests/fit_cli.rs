@@ -580,10 +580,11 @@ fn search_boxes_follow_the_data_and_say_when_they_bind() {
     let o = gonio(&["compare", f, "--bounds", "kd=0:1000,n=1:100", "--json"]);
     assert!(o.status.success(), "{}", text(&o));
     let rows: Vec<Value> = serde_json::from_slice(&o.stdout).unwrap();
-    assert_eq!(rows.len(), 8);
+    let models = ModelId::ALL.len();
+    assert_eq!(rows.len(), models);
     let mut ranks: Vec<u64> = rows.iter().map(|r| r["rank"]["aic"].as_u64().unwrap()).collect();
     ranks.sort();
-    assert_eq!(ranks, (1..=8).collect::<Vec<u64>>());
+    assert_eq!(ranks, (1..=models as u64).collect::<Vec<u64>>());
     assert!(rows.iter().all(|r| r["at_bound"].is_array() && r["bic"].is_f64()));
 }
 

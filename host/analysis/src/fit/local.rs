@@ -4,12 +4,12 @@
 //! ([`Space::Box`]).
 //!
 //! Written here rather than taken from the `levenberg-marquardt` crate: our
-//! problems are tall and thin (thousands of samples, at most 8 parameters),
+//! problems are tall and thin (thousands of samples, at most 9 parameters),
 //! and a pivoted QR of the whole Jacobian, as that crate's MINPACK port
 //! does, costs as much as the rest of a fit (`fit-bench` times both).
 //! Solving the n×n normal equations with
 //! Marquardt's diagonal scaling costs `m·n²` flops and a Cholesky of at most
-//! 8×8, which is plenty accurate for a handful of well-scaled parameters;
+//! 9×9, which is plenty accurate for a handful of well-scaled parameters;
 //! the damping update is Nielsen's (Madsen, Nielsen & Tingleff 2004, §3.2).
 
 use super::problem::{Normal, Problem};

@@ -23,8 +23,8 @@ const CHUNK: usize = 256;
 /// larger, and nest their tasks inside the candidates' (rayon's work stealing
 /// runs both).
 const PARALLEL_MIN: usize = 2048;
-/// Most free parameters of any model (`abc-retro`).
-const MAX_FREE: usize = 8;
+/// Most free parameters of any model (`abc-retro-per-lobe`).
+const MAX_FREE: usize = 9;
 
 /// `task` over the samples `0..m`, in tasks of [`CHUNK`] samples on all
 /// threads when there are enough samples to pay for them, else at once
@@ -201,8 +201,8 @@ impl Problem {
 
     /// Every sample's weighted residual and Jacobian row, as `gather` keeps
     /// them. The dual numbers carry exactly as many derivatives as there are
-    /// free parameters (up to the 8 of `abc-retro`), so a one-parameter fit
-    /// does not pay for eight; models with a hand-written gradient use it.
+    /// free parameters (up to the 9 of `abc-retro-per-lobe`), so a one-parameter
+    /// fit does not pay for nine; models with a hand-written gradient use it.
     fn rows<G: Gather>(&self, x: &[f64], gather: &G) -> Vec<G::Part> {
         if let Some(gradient) = self.model.hand_gradient() {
             let full = self.full(x);
@@ -220,7 +220,8 @@ impl Problem {
             5 => self.dual_rows::<5, G>(x, gather),
             6 => self.dual_rows::<6, G>(x, gather),
             7 => self.dual_rows::<7, G>(x, gather),
-            _ => self.dual_rows::<8, G>(x, gather),
+            8 => self.dual_rows::<8, G>(x, gather),
+            _ => self.dual_rows::<MAX_FREE, G>(x, gather),
         }
     }
 

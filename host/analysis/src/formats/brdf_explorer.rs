@@ -126,6 +126,13 @@ fn body(model: ModelId) -> (&'static str, &'static str) {
     float f = kd / PI + specular + retro;
 ",
         ),
+        ModelId::AbcRetroPerLobe => (
+            "",
+            r"    float specular = ar / pow(1.0 + br * (1.0 - hv.z), cr) * schlick(dot(v, hv), r0_r);
+    float retro = ab / pow(1.0 + bb * (1.0 - retroCos), cb) * schlick(dot(vRefl, bk), r0_b);
+    float f = kd / PI + specular + retro;
+",
+        ),
         ModelId::BeckmannRetro => (
             SMITH_G1,
             r"    float f = kd / PI;

@@ -83,7 +83,7 @@ impl From<ParamArg> for Param {
 pub struct FitArgs {
     /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
     pub file: PathBuf,
-    /// Model id (models.md): lambert, retro-phong, abc-retro, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param,
+    /// Model id (models.md): lambert, retro-phong, abc-retro, abc-retro-per-lobe, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param,
     /// or `rational` (a rational function through every sample's segment; its plane is --param: back or view, the light-view plane).
     #[arg(long)]
     pub model: String,
