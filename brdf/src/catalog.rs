@@ -92,14 +92,6 @@ const fn free(lo: f64, hi: f64, spread: Spread) -> Bound {
     }
 }
 
-/// A box open below only (a parameter ≤ 0 by the model's geometry).
-const fn below(lo: f64, hi: f64, spread: Spread) -> Bound {
-    Bound {
-        open: (true, false),
-        ..b(lo, hi, spread)
-    }
-}
-
 impl Bound {
     /// How far a box grows at an open edge, per widening.
     pub const GROWTH: f64 = 10.0;
@@ -196,10 +188,16 @@ const ABC_RETRO_PER_LOBE: &[Bound] = &[
 ];
 const BECKMANN_RETRO: &[Bound] = &[KD, b(1e-3, 1e4, G), held(0.0, 1.0, L)];
 const BLINN_RETRO: &[Bound] = &[KD, b(1.0, 1e6, G), b(1.0, 1e6, G)];
+// Lafortune's lobe r is the retro lobe (cxy_r, cz_r ≥ 0: its peak at
+// l = v); lobe s is the other one, of any kind: a mirror lobe (cxy_s < 0), a
+// second, wider retro lobe (a tape's halo about its core), or a lobe at
+// grazing angles (cz_s < 0). ALTA's fit, unbounded, finds each of these on
+// the misfit materials (fit-bench alta); a box held at cxy_s ≤ 0, cz_s ≥ 0
+// kept the fit 1.07–1.29× above ALTA's RMSE there.
 const LAFORTUNE: &[Bound] = &[
     KD,
-    below(-2.0, 0.0, L),
-    b(0.0, 2.0, L),
+    free(-2.0, 2.0, L),
+    free(-2.0, 2.0, L),
     EXPONENT,
     b(0.0, 2.0, L),
     b(0.0, 2.0, L),
