@@ -67,28 +67,50 @@ impl Case {
     }
 }
 
-/// Every case, 2 % noise, at 7 000 samples, and at 80 000 the outside
-/// materials fitted by the models the papers argue over (the peer takes
-/// minutes per case).
-pub fn cases() -> Vec<Case> {
-    let mut cases = Vec::new();
+/// One material's noisy samples.
+pub struct Samples {
+    pub samples: usize,
+    pub material: &'static str,
+    /// The model it is, if any.
+    pub model: Option<ModelId>,
+    pub data: Rc<Dataset>,
+}
+
+/// Every material's samples, 2 % noise, at 7 000 samples, and at 80 000
+/// those outside every model (the peers take minutes per case there).
+pub fn materials() -> Vec<Samples> {
+    let mut out = Vec::new();
     for (samples, geos) in [(7000, synthetic::belcour_geometries()), (80_000, synthetic::dense_geometries())] {
         for g in generators() {
             if samples > 7000 && g.model.is_some() {
                 continue;
             }
-            let data = Rc::new(synthetic::samples_of(&g.brdf, &geos, samples, NOISE, 11));
-            for model in RETRO_MODELS {
-                if Some(model) == g.model || (samples > 7000 && matches!(model, ModelId::BeckmannRetro | ModelId::BlinnRetro)) {
-                    continue;
-                }
-                cases.push(Case {
-                    samples,
-                    material: g.name,
-                    model,
-                    data: data.clone(),
-                });
+            out.push(Samples {
+                samples,
+                material: g.name,
+                model: g.model,
+                data: Rc::new(synthetic::samples_of(&g.brdf, &geos, samples, NOISE, 11)),
+            });
+        }
+    }
+    out
+}
+
+/// Every material fitted by every retro model but its own; at 80 000
+/// samples only the models the papers argue over.
+pub fn cases() -> Vec<Case> {
+    let mut cases = Vec::new();
+    for m in materials() {
+        for model in RETRO_MODELS {
+            if Some(model) == m.model || (m.samples > 7000 && matches!(model, ModelId::BeckmannRetro | ModelId::BlinnRetro)) {
+                continue;
             }
+            cases.push(Case {
+                samples: m.samples,
+                material: m.material,
+                model,
+                data: m.data.clone(),
+            });
         }
     }
     cases

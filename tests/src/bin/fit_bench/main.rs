@@ -37,6 +37,9 @@
 //!   hold the full-box optimum), what widened and what did not hold it;
 //! - `gof`: per model the share of 200 σ-weighted fits to its own data
 //!   whose reduced χ² lies in its 99 % interval (`gof.rs`; bar ≥ 0.98).
+//! - `alta`: the models ALTA also has, fitted by ALTA's Ceres fitter on the
+//!   same samples from its default start and 24 random ones (`alta.rs`;
+//!   bars: RMSE ratio ≤ 1 + 1e-9, time ratio < 1); needs `ALTA_DIR`.
 //!
 //! Ours evaluates the samples and the global search's candidates on every
 //! core (`threads`), as the peer's BLAS does.
@@ -44,6 +47,7 @@
 //! Installs scipy (pinned) with pip if it is missing or another version;
 //! prints one JSON object, with the peer's versions and BLAS.
 
+mod alta;
 mod cases;
 mod gof;
 mod misfit;
@@ -153,24 +157,23 @@ fn main() {
     // `fit-bench misfit|widen [N [FILTER]]`: that table alone (its first N
     // cases, those whose `SAMPLES/MATERIAL/MODEL` holds FILTER);
     // `fit-bench models [MODEL]`: the per-model figures alone;
-    // `fit-bench gof`: the χ² trials alone. `widen` and `gof` need no peer.
+    // `fit-bench gof`: the χ² trials alone; `fit-bench alta [N [FILTER]]`:
+    // ALTA's fits beside ours alone. `widen`, `gof` and `alta` need no scipy.
     let mode = std::env::args().nth(1).unwrap_or_default();
     let cases: usize = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(usize::MAX);
     let filter = std::env::args().nth(3).unwrap_or_default();
     match mode.as_str() {
-        "widen" => {
-            widen_section(&mut report, cases, &filter);
-            report.insert("threads".into(), fit::threads().into());
-            println!("{}", Value::Object(report));
-            return;
-        }
-        "gof" => {
-            gof_section(&mut report);
-            report.insert("threads".into(), fit::threads().into());
-            println!("{}", Value::Object(report));
-            return;
+        "widen" => widen_section(&mut report, cases, &filter),
+        "gof" => gof_section(&mut report),
+        "alta" => {
+            report.insert("alta".into(), alta::alta(cases, &filter));
         }
         _ => {}
+    }
+    if matches!(mode.as_str(), "widen" | "gof" | "alta") {
+        report.insert("threads".into(), fit::threads().into());
+        println!("{}", Value::Object(report));
+        return;
     }
     ensure_scipy();
     let (misfit_only, models_only) = (mode == "misfit", mode == "models");
@@ -256,6 +259,7 @@ fn main() {
     if !misfit_only {
         widen_section(&mut report, cases, &filter);
         gof_section(&mut report);
+        report.insert("alta".into(), alta::alta(cases, &filter));
     }
     report.insert("peer".into(), scipy(&json!({"versions": true})));
     report.insert("threads".into(), fit::threads().into());
