@@ -165,27 +165,14 @@ const RETRO_PHONG: &[Bound] = &[
     a(0.0, 10.0, A),
     free(-20.0, 20.0, L),
 ];
-const ABC_RETRO: &[Bound] = &[
-    KD,
-    held(0.0, 1.0, L),
-    a(0.0, 100.0, A),
-    b(0.0, 1e4, A),
-    b(0.0, 100.0, A),
-    a(0.0, 100.0, A),
-    b(0.0, 1e4, A),
-    b(0.0, 100.0, A),
-];
-const ABC_RETRO_PER_LOBE: &[Bound] = &[
-    KD,
-    held(0.0, 1.0, L),
-    a(0.0, 100.0, A),
-    b(0.0, 1e4, A),
-    b(0.0, 100.0, A),
-    held(0.0, 1.0, L),
-    a(0.0, 100.0, A),
-    b(0.0, 1e4, A),
-    b(0.0, 100.0, A),
-];
+/// A Fresnel `r0`, held in [0, 1].
+const R0: Bound = held(0.0, 1.0, L);
+/// An ABC lobe's `a` (amplitude), `b` and `c`.
+const ABC_A: Bound = a(0.0, 100.0, A);
+const ABC_B: Bound = b(0.0, 1e4, A);
+const ABC_C: Bound = b(0.0, 100.0, A);
+const ABC_RETRO: &[Bound] = &[KD, R0, ABC_A, ABC_B, ABC_C, ABC_A, ABC_B, ABC_C];
+const ABC_RETRO_PER_LOBE: &[Bound] = &[KD, R0, ABC_A, ABC_B, ABC_C, R0, ABC_A, ABC_B, ABC_C];
 const BECKMANN_RETRO: &[Bound] = &[KD, b(1e-3, 1e4, G), held(0.0, 1.0, L)];
 const BLINN_RETRO: &[Bound] = &[KD, b(1.0, 1e6, G), b(1.0, 1e6, G)];
 // Lafortune's lobe r is the retro lobe (cxy_r, cz_r ≥ 0: its peak at
