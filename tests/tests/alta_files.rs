@@ -196,16 +196,36 @@ fn confidence_columns_become_uncertainties() {
     let text = "#DIM 3 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN_COSINE_FACTOR\n";
     let one = alta::parse(&format!("{text}#VS 1\n0.5 0.1 0.2 3.0 0.4\n")).unwrap();
     assert_eq!(one.observations[0].sigma, Some(0.2), "#VS 1: the half-width of a k = 2 interval");
-    let two = alta::parse(&format!("{text}#VS 2\n0.5 0.1 0.2 3.0 2.6 3.4\n")).unwrap();
+    // ALTA's reader (`read_confidence_interval`): the interval [y − a, y + b].
+    let two = alta::parse(&format!("{text}#VS 2\n0.5 0.1 0.2 3.0 0.3 0.5\n")).unwrap();
     assert!(
         (two.observations[0].sigma.unwrap() - 0.2).abs() < 1e-15,
-        "#VS 2: lower and upper ends"
+        "#VS 2: how far below and above the value"
     );
     assert_eq!(two.units, Units::FrCos);
+    // gonio's files from before it followed ALTA there: the ends, and a note that says so.
+    let ends = alta::parse(&format!("{text}#VS 2\n# {}\n0.5 0.1 0.2 3.0 2.6 3.4\n", alta::ENDS_NOTE)).unwrap();
+    assert!((ends.observations[0].sigma.unwrap() - 0.2).abs() < 1e-15, "older #VS 2: the ends");
+    let rewritten = alta::write(&ends);
+    assert!(!rewritten.contains(alta::ENDS_NOTE), "{rewritten}");
+    let again = alta::parse(&rewritten).unwrap();
+    assert!((again.observations[0].sigma.unwrap() - 0.2).abs() < 1e-15, "{rewritten}");
     for (bad, says) in [
         (
-            format!("{text}#VS 2\n0.5 0.1 0.2 3.0 3.4 2.6\n"),
-            "line 5: the confidence interval is negative",
+            format!("{text}#VS 2\n# {}\n0.5 0.1 0.2 3.0 3.4 2.6\n", alta::ENDS_NOTE),
+            "line 6: the confidence interval is negative",
+        ),
+        (
+            format!("{text}#VS 2\n0.5 0.1 0.2 3.0 -0.4 0.4\n"),
+            "line 5: a confidence offset is negative",
+        ),
+        (
+            format!("{text}#VS 1\n0.5 0.1 0.2 3.0 -0.4\n"),
+            "line 5: the confidence half-width is negative",
+        ),
+        (
+            format!("{text}#VS 2\n0.5 0.1 0.2 3.0 1e308 1e308\n"),
+            "line 5: the confidence interval is wider than a number holds",
         ),
         (
             format!("{text}#VS 2\n0.5 0.1 0.2 3.0 2.6\n"),

@@ -201,6 +201,21 @@ pub fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
             .to_vec(),
     ));
     out.push((
+        "alta_reader",
+        "intervals".into(),
+        b"#DIM 3 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#PARAM_OUT INV_STERADIAN\n#VS 2\n0.5 0.4 0.1 1.25 0.1 0.2\n0.5 0.5 3.0 2.0e-1 0 0.05\n"
+            .to_vec(),
+    ));
+    out.push((
+        "alta_reader",
+        "interval-ends".into(),
+        format!(
+            "#DIM 3 1\n#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI\n#VS 2\n# {}\n0.5 0.4 0.1 1.25 1.2 1.3\n",
+            alta::ENDS_NOTE
+        )
+        .into_bytes(),
+    ));
+    out.push((
         "csv_reader",
         "brdf-sr".into(),
         b"theta_i_deg,theta_o_deg,dphi_deg,brdf_sr,brdf_sigma_sr,usable\n30,20,90,0.12,0.001,true\n30,30,0,40.5,0.2,false\n".to_vec(),

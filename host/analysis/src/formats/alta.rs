@@ -24,9 +24,13 @@
 //! `INV_STERADIAN_COSINE_FACTOR` (`f_r·cosθo`); others (`ENERGY`,
 //! `RGB_COLOR`, `XYZ_COLOR`, `UNKNOWN_OUTPUT`) are read as `f_r` with a
 //! warning, the first channel of several. Confidence: `#VS 1` one more
-//! number, the half-width of the first value's interval; `#VS 2` two, its
-//! lower and upper ends (absolute); both taken as k = 2 intervals. The
-//! writer uses `#VS 2` when every value has an uncertainty.
+//! number, the half-width of the first value's interval; `#VS 2` two, how
+//! far its interval reaches below and above the value (ALTA reads them as
+//! `[y − a, y + b]`, `read_confidence_interval`, since its 2017 fix of
+//! that reader); both taken as k = 2 intervals. Files gonio wrote before it
+//! followed ALTA there held the interval's ends themselves: they carry
+//! [`ENDS_NOTE`], and are read as they were written. The writer uses `#VS 2`
+//! when every value has an uncertainty.
 
 use crate::fit::data::check_angles;
 use crate::fit::{Dataset, Observation, Units};
@@ -35,6 +39,12 @@ use anyhow::{anyhow, bail, Result};
 use gonio_brdf::frame::dot;
 use gonio_brdf::Directions;
 use std::fmt::Write;
+
+/// The note gonio's writer put in files whose `#VS 2` columns are the
+/// interval's lower and upper ends, not ALTA's distances to them.
+pub const ENDS_NOTE: &str = "confidence: the value's k = 2 interval [lower upper]";
+/// The note of `#VS 2` columns as ALTA reads them.
+const OFFSETS_NOTE: &str = "confidence: how far the value's k = 2 interval reaches [below above]";
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum ParamIn {
@@ -156,8 +166,9 @@ pub fn parse(text: &str) -> Result<Dataset> {
     let mut metadata = Vec::new();
     let mut warnings = Vec::new();
     let mut observations = Vec::new();
-    // Settled at the first data line: inputs, outputs, units.
-    let mut layout: Option<(ParamIn, usize, Option<Units>)> = None;
+    // Settled at the first data line: inputs, outputs, units, and whether
+    // `#VS 2` holds the interval's ends (`ENDS_NOTE`).
+    let mut layout: Option<(ParamIn, usize, Option<Units>, bool)> = None;
     for (i, raw) in text.split('\n').enumerate() {
         let n = i + 1;
         let line = raw.trim();
@@ -216,7 +227,7 @@ pub fn parse(text: &str) -> Result<Dataset> {
             }
             continue;
         }
-        let (p, outputs, _) = match layout {
+        let (p, outputs, _, ends) = match layout {
             Some(l) => l,
             None => {
                 let p = h.param_in.ok_or_else(|| {
@@ -239,8 +250,9 @@ pub fn parse(text: &str) -> Result<Dataset> {
                 }
                 // No #PARAM_OUT: ALTA's UNKNOWN_OUTPUT (`units_stated` false).
                 let u = h.param_out.flatten();
-                layout = Some((p, outputs, u));
-                (p, outputs, u)
+                let ends = metadata.iter().any(|m| m == ENDS_NOTE);
+                layout = Some((p, outputs, u, ends));
+                (p, outputs, u, ends)
             }
         };
         let d = p.dim();
@@ -268,12 +280,24 @@ pub fn parse(text: &str) -> Result<Dataset> {
         let value = x[d];
         let conf = &x[d + outputs..];
         let sigma = match h.vs {
+            1 if conf[0] < 0.0 => return Err(err("the confidence half-width is negative".into())),
             1 => Some(conf[0] / K_COVERAGE),
-            2 => Some((conf[1] - conf[0]) / (2.0 * K_COVERAGE)),
+            2 if ends && conf[1] < conf[0] => {
+                return Err(err(
+                    "the confidence interval is negative (#VS 2 of gonio's older files: lower end, then upper end)".into(),
+                ))
+            }
+            2 if ends => Some((conf[1] - conf[0]) / (2.0 * K_COVERAGE)),
+            2 if conf[0] < 0.0 || conf[1] < 0.0 => {
+                return Err(err(
+                    "a confidence offset is negative (#VS 2: how far the interval reaches below, then above the value)".into(),
+                ))
+            }
+            2 => Some((conf[0] + conf[1]) / (2.0 * K_COVERAGE)),
             _ => None,
         };
-        if sigma.is_some_and(|s| s < 0.0) {
-            return Err(err("the confidence interval is negative (#VS 2: lower end, then upper end)".into()));
+        if sigma.is_some_and(|s| !s.is_finite()) {
+            return Err(err("the confidence interval is wider than a number holds".into()));
         }
         observations.push(Observation {
             theta_i,
@@ -284,7 +308,7 @@ pub fn parse(text: &str) -> Result<Dataset> {
             shared: Default::default(),
         });
     }
-    let Some((_, _, units)) = layout else {
+    let Some((_, _, units, _)) = layout else {
         bail!("no data lines: the file holds no sample (a header at most)");
     };
     Ok(Dataset {
@@ -299,7 +323,8 @@ pub fn parse(text: &str) -> Result<Dataset> {
 /// Writes a data set as ALTA text in `ISOTROPIC_TL_TV_PROJ_DPHI`, in its own
 /// units; metadata become `#` comment lines. Numbers are written in Rust's
 /// shortest round-trip form, so reading back gives the same `f64`s. When
-/// every value has an uncertainty, `#VS 2` with its k = 2 interval.
+/// every value has an uncertainty, `#VS 2` with its k = 2 interval, as far
+/// below and above the value as ALTA reads it.
 pub fn write(data: &Dataset) -> String {
     let intervals = !data.observations.is_empty() && data.observations.iter().all(|o| o.sigma.is_some());
     let mut s = String::new();
@@ -307,13 +332,12 @@ pub fn write(data: &Dataset) -> String {
     let _ = writeln!(s, "#PARAM_IN ISOTROPIC_TL_TV_PROJ_DPHI");
     let _ = writeln!(s, "#PARAM_OUT {}", unit_name(data.units));
     let _ = writeln!(s, "#VS {}", if intervals { 2 } else { 0 });
-    let note = format!("confidence: the value's k = {K_COVERAGE} interval [lower upper]");
     if intervals {
-        let _ = writeln!(s, "# {note}");
+        let _ = writeln!(s, "# {OFFSETS_NOTE}");
     }
-    // The note a file this wrote was read back with is the writer's own,
-    // written above when it still holds: not kept twice.
-    for m in data.metadata.iter().filter(|m| **m != note) {
+    // A note of the columns read back is the writer's to write, above, for
+    // the columns it writes: not kept twice, and an older file's never.
+    for m in data.metadata.iter().filter(|m| *m != OFFSETS_NOTE && *m != ENDS_NOTE) {
         let _ = writeln!(s, "# {m}");
     }
     for o in &data.observations {
@@ -327,7 +351,7 @@ pub fn write(data: &Dataset) -> String {
         );
         match o.sigma {
             Some(u) if intervals => {
-                let _ = writeln!(s, " {:e} {:e}", o.value - K_COVERAGE * u, o.value + K_COVERAGE * u);
+                let _ = writeln!(s, " {:e} {:e}", K_COVERAGE * u, K_COVERAGE * u);
             }
             _ => s.push('\n'),
         }
