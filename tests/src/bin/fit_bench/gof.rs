@@ -1,8 +1,12 @@
 //! The `gof` section: a right model fitted with right σ draws its reduced
 //! χ² from the χ² distribution of N − k degrees of freedom, so it lies in
-//! that distribution's 99 % interval in 99 % of trials (bar: ≥ 98 % of
-//! 200). Every model, each trial its own noise draw of 500 samples at 2 %,
-//! fitted from no start (the global search), as a user fits.
+//! that distribution's 99 % interval in 99 % of trials. Every model, 200
+//! trials each, each trial its own noise draw of 500 samples at 2 %, fitted
+//! from no start (the global search), as a user fits. Bar: ≥ 98 % of all
+//! the trials, pooled. Per model it would fail a right engine too often:
+//! 196 of 200 at p = 0.99 is reached with probability 0.948, all nine
+//! models together 0.62; pooled (1 800 trials, σ 0.23 %) 98 % is 4.3 σ
+//! below the expected 99 %. Each model's share is printed beside.
 
 use gonio_analysis::fit::goodness::Goodness;
 use gonio_analysis::fit::{self, FitSpec, Weighting};
@@ -16,10 +20,10 @@ const TRIALS: u64 = 200;
 const SAMPLES: usize = 500;
 
 /// Per model the share of trials inside the interval; returns the table
-/// and the smallest share.
+/// and the share of all the trials.
 pub fn gof() -> (Value, f64) {
     let mut table = Map::new();
-    let mut worst = 1.0f64;
+    let mut pooled = 0u64;
     for model in ModelId::ALL {
         let truth = synthetic::reference(model);
         let spec = FitSpec {
@@ -38,7 +42,7 @@ pub fn gof() -> (Value, f64) {
             seconds += f.seconds;
         }
         let share = inside as f64 / TRIALS as f64;
-        worst = worst.min(share);
+        pooled += inside;
         eprintln!(
             "gof    {:<16} inside {inside}/{TRIALS}  p<0.01 {p_low}  {seconds:.1} s",
             model.name()
@@ -51,5 +55,5 @@ pub fn gof() -> (Value, f64) {
             }),
         );
     }
-    (Value::Object(table), worst)
+    (Value::Object(table), pooled as f64 / (TRIALS as usize * ModelId::ALL.len()) as f64)
 }

@@ -48,12 +48,13 @@ fn cut(b: &Bound) -> Bound {
     Bound { lo, hi, ..*b }
 }
 
-/// The first `limit` cases whose label holds `filter`; returns the table
-/// and the largest RMSE ratio − 1 of the cases whose boxes hold the
-/// full-box optimum.
-pub fn widen(limit: usize, filter: &str) -> (Value, f64) {
+/// The first `limit` cases whose label holds `filter`; returns the table,
+/// the largest RMSE ratio − 1 of the cases whose boxes hold the full-box
+/// optimum, and how many did.
+pub fn widen(limit: usize, filter: &str) -> (Value, f64, usize) {
     let mut rows = Vec::new();
     let mut worst = 0.0f64;
+    let mut holding = 0;
     for case in cases().into_iter().filter(|c| c.label().contains(filter)).take(limit) {
         let data = &*case.data;
         let spec = FitSpec::new(case.model);
@@ -100,6 +101,7 @@ pub fn widen(limit: usize, filter: &str) -> (Value, f64) {
             .collect();
         if outside.is_empty() {
             worst = worst.max(ratio - 1.0);
+            holding += 1;
         }
         eprintln!(
             "widen  {:<40} rmse ratio {ratio:.12}  widened {:?}  full optimum outside {outside:?}  ({:.2} s vs {:.2} s)",
@@ -118,5 +120,5 @@ pub fn widen(limit: usize, filter: &str) -> (Value, f64) {
             "seconds": cut_fit.seconds, "full_box_seconds": full.seconds,
         }));
     }
-    (Value::Array(rows), worst)
+    (Value::Array(rows), worst, holding)
 }
