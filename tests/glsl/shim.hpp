@@ -8,8 +8,10 @@
 
 typedef GLSL_FLOAT S;
 using std::abs;
+using std::cos;
 using std::exp;
 using std::pow;
+using std::sin;
 using std::sqrt;
 
 struct vec2 {
@@ -32,6 +34,9 @@ inline S length(vec2 a) { return sqrt(dot(a, a)); }
 inline S max(S a, S b) { return a > b ? a : b; }
 inline S min(S a, S b) { return a < b ? a : b; }
 inline S clamp(S x, S lo, S hi) { return min(max(x, lo), hi); }
+inline S atan(S y, S x) { return std::atan2(y, x); }
+inline S degrees(S radians) { return radians * S(57.295779513082320876798154814105); }
+inline vec3 cross(vec3 a, vec3 b) { return vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x); }
 
 // GLSL's `float` is the scalar from here on (the shader and its parameters).
 #define float S

@@ -12,7 +12,9 @@
 //! stderr, while the parameter blocks and naga's check still run.
 
 use gonio_analysis::formats::brdf_explorer;
-use gonio_brdf::{Directions, Material, ModelId, Param};
+use gonio_analysis::moments::Parametrization;
+use gonio_analysis::rational::{self, RationalSpec, SegmentSource};
+use gonio_brdf::{Directions, GlassBeads, Material, ModelId, Param};
 use gonio_tests::synthetic;
 use rand::{Rng, SeedableRng};
 use std::fmt::Write as _;
@@ -88,11 +90,16 @@ fn check_glsl(dir: &Path, name: &str, text: &str) {
 /// fragment shader (naga's dialect: the parameters in a uniform block, the
 /// output at a location) and validates the module.
 fn check_naga(name: &str, text: &str) {
-    let mut src = String::from("#version 450 core\nlayout(set = 0, binding = 0) uniform Parameters {\n");
-    for (p, ..) in parameters(text) {
-        let _ = writeln!(src, "    float {p};");
+    let mut src = String::from("#version 450 core\n");
+    let params = parameters(text);
+    // An empty uniform block is no GLSL: a rational shader has no parameter.
+    if !params.is_empty() {
+        src.push_str("layout(set = 0, binding = 0) uniform Parameters {\n");
+        for (p, ..) in params {
+            let _ = writeln!(src, "    float {p};");
+        }
+        src.push_str("};\n");
     }
-    src.push_str("};\n");
     src.push_str(shader(text));
     src.push_str(
         "layout(location = 0) out vec4 color;\nvoid main()\n{\n    color = vec4(BRDF(vec3(0.0, 0.6, 0.8), vec3(0.0, 0.0, 1.0), \
@@ -215,7 +222,6 @@ fn geometries() -> Vec<(f64, f64, f64)> {
 fn brdf_explorer_shaders_compile_and_equal_the_models() {
     let dir = tempfile::tempdir().unwrap();
     let geos = geometries();
-    let (glslang, cpp) = (available("glslangValidator"), available("g++"));
     for model in ModelId::ALL {
         let params: &[Param] = if model.has_retro_cosine() {
             &[Param::View, Param::Back]
@@ -237,38 +243,76 @@ fn brdf_explorer_shaders_compile_and_equal_the_models() {
                 assert_eq!(v, want, "{name}: default of {p}");
                 assert!(lo <= v && v <= hi && lo < hi, "{name}: {p} range [{lo}, {hi}] ∌ {v}");
             }
-            check_naga(&name, &text);
-            if glslang {
-                check_glsl(dir.path(), &name, &text);
-            }
-            if !cpp {
-                continue;
-            }
             let want: Vec<f64> = geos
                 .iter()
                 .map(|&(ti, to, dp)| m.eval(&Directions::from_angles(ti, to, dp)))
                 .collect();
-            let scale = want.iter().cloned().fold(0.0, f64::max);
-            assert!(scale > 0.0);
-            for (scalar, tol) in [("double", 1e-9), ("float", 1e-3)] {
-                let got = evaluate_as_cpp(dir.path(), &name, &text, scalar, &geos);
-                assert_eq!(got.len(), geos.len(), "{name} ({scalar}): one value per geometry");
-                let (worst, at) = got
-                    .iter()
-                    .zip(&want)
-                    .map(|(g, w)| (g - w).abs() / scale)
-                    .zip(&geos)
-                    .fold((0.0, (0.0, 0.0, 0.0)), |acc, (e, g)| if e > acc.0 { (e, *g) } else { acc });
-                eprintln!("{name} ({scalar}): max |shader − model| / peak = {worst:.2e}");
-                assert!(
-                    worst <= tol,
-                    "{name} ({scalar}): |shader − model| = {worst:e} of the peak at θi {:.2}°, θo {:.2}°, Δφ {:.2}°",
-                    at.0.to_degrees(),
-                    at.1.to_degrees(),
-                    at.2.to_degrees()
-                );
-            }
+            check_shader(dir.path(), &name, &text, &geos, &want, 1e-3);
         }
+    }
+}
+
+/// A rational function fitted to a material none of the models is (the
+/// glass-bead layer, ±0.5 sr⁻¹), in both planes: the shader is the function,
+/// to 1e-9 of its peak in double precision and 1e-3 in single, wherever its
+/// denominator is positive.
+#[test]
+fn rational_shaders_compile_and_equal_the_function() {
+    let dir = tempfile::tempdir().unwrap();
+    let geos = geometries();
+    let beads = GlassBeads::default();
+    let data = synthetic::samples_of(|d: &Directions| beads.eval(d), &synthetic::belcour_geometries(), 1_500, 0.02, 7);
+    for parametrization in Parametrization::BOTH {
+        let spec = RationalSpec {
+            parametrization,
+            segments: SegmentSource::Absolute(0.5),
+            max_degree: 5,
+        };
+        let r = rational::fit(&data, &spec).expect("a rational fit").function;
+        let name = format!("rational-{}", parametrization.name());
+        let text = brdf_explorer::write_rational(&r, &["test".into()]);
+        assert!(parameters(&text).is_empty(), "{name}: the coefficients are in the shader");
+        let want: Vec<f64> = geos
+            .iter()
+            .map(|&(ti, to, dp)| r.eval(&Directions::from_angles(ti, to, dp)))
+            .collect();
+        assert!(want.iter().filter(|v| v.is_finite()).count() > geos.len() * 9 / 10, "{name}: poles");
+        check_shader(dir.path(), &name, &text, &geos, &want, 1e-3);
+    }
+}
+
+/// naga and glslangValidator accept the shader, and evaluated as C++ it
+/// gives `want` at `geos` (NaN where there is no value to compare): to 1e-9
+/// of the largest value in double precision, to `float_tol` in single.
+fn check_shader(dir: &Path, name: &str, text: &str, geos: &[(f64, f64, f64)], want: &[f64], float_tol: f64) {
+    let (glslang, cpp) = (available("glslangValidator"), available("g++"));
+    check_naga(name, text);
+    if glslang {
+        check_glsl(dir, name, text);
+    }
+    if !cpp {
+        return;
+    }
+    let scale = want.iter().cloned().filter(|v| v.is_finite()).fold(0.0, f64::max);
+    assert!(scale > 0.0);
+    for (scalar, tol) in [("double", 1e-9), ("float", float_tol)] {
+        let got = evaluate_as_cpp(dir, name, text, scalar, geos);
+        assert_eq!(got.len(), geos.len(), "{name} ({scalar}): one value per geometry");
+        let (worst, at) = got
+            .iter()
+            .zip(want)
+            .filter(|(_, w)| w.is_finite())
+            .map(|(g, w)| (g - w).abs() / scale)
+            .zip(geos)
+            .fold((0.0, (0.0, 0.0, 0.0)), |acc, (e, g)| if e > acc.0 { (e, *g) } else { acc });
+        eprintln!("{name} ({scalar}): max |shader − model| / peak = {worst:.2e}");
+        assert!(
+            worst <= tol,
+            "{name} ({scalar}): |shader − model| = {worst:e} of the peak at θi {:.2}°, θo {:.2}°, Δφ {:.2}°",
+            at.0.to_degrees(),
+            at.1.to_degrees(),
+            at.2.to_degrees()
+        );
     }
 }
 

@@ -101,6 +101,18 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     let rho = serde_json::from_slice::<Value>(&o.stdout).unwrap()["dhr"].as_f64().unwrap();
     assert!(rho > 0.0 && rho.is_finite(), "ρ = {rho}");
 
+    // `gonio export` writes it as a BRDF Explorer shader, its coefficients
+    // inside (the shader is checked against the function in brdf_export.rs).
+    let brdf = dir.path().join("rational.brdf");
+    let o = gonio(&["export", out.to_str().unwrap(), brdf.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert_eq!(serde_json::from_slice::<Value>(&o.stdout).unwrap()["model"], "rational");
+    let shader = std::fs::read_to_string(&brdf).unwrap();
+    assert!(
+        shader.contains("::begin parameters\n::end parameters") && shader.contains("numerator +="),
+        "{shader}"
+    );
+
     // The text says what held, and which degrees were tried.
     let o = gonio(&["fit", file, "--model", "rational", "--segments", "abs:0.5", "--theta-i", "30"]);
     let t = text(&o);

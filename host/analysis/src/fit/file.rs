@@ -106,9 +106,27 @@ pub fn read_material(path: &Path) -> Result<Material> {
     read(path).map(|f| f.material)
 }
 
+/// What a fit file holds: a model with its parameters, or a rational
+/// function (`gonio fit --model rational`).
+pub enum Fitted {
+    Model(Material),
+    Rational(crate::rational::Rational),
+}
+
+/// Reads either kind of fit file.
+pub fn read_fitted(path: &Path) -> Result<Fitted> {
+    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let v: Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
+    if v["model"] == crate::rational::file::MODEL {
+        let r = crate::rational::file::function_of(&v).with_context(|| format!("{}", path.display()))?;
+        return Ok(Fitted::Rational(r));
+    }
+    read_material(path).map(Fitted::Model)
+}
+
 fn material_of(v: &Value) -> Result<Material> {
     if v["model"] == crate::rational::file::MODEL {
-        bail!("a rational fit: plots, exports and coefficients take the parametric models' fits only, so far");
+        bail!("a rational fit: plots and coefficients take the parametric models' fits only, so far");
     }
     let model = ModelId::parse(v["model"].as_str().unwrap_or_default())?;
     let mut params = Vec::new();

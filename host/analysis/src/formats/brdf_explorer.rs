@@ -10,6 +10,9 @@
 //! and compare it with the Rust model at many geometries. BRDF Explorer
 //! multiplies by `n·l` itself: the function returns `f_r` (sr⁻¹), grey.
 
+use crate::moments::Parametrization;
+use crate::rational::basis::Basis;
+use crate::rational::Rational;
 use gonio_brdf::{Material, ModelId, Param};
 use std::fmt::Write;
 
@@ -191,30 +194,100 @@ fn retro_cos(model: ModelId, param: Param) -> &'static str {
 /// The `.brdf` text of a fitted material; `comments` go into the header
 /// (source file, fit metrics), one `#` line each.
 pub fn write(m: &Material, comments: &[String]) -> String {
-    let mut s = String::from("analytic\n\n");
-    let _ = writeln!(s, "# {} fitted by gonio {}", m.model.name(), env!("CARGO_PKG_VERSION"));
+    let mut header = vec![format!("{} fitted by gonio {}", m.model.name(), env!("CARGO_PKG_VERSION"))];
     if m.model.has_retro_cosine() {
-        let _ = writeln!(
-            s,
-            "# retro cosine: {}",
+        header.push(format!(
+            "retro cosine: {}",
             if m.param == Param::View { "view (l·v)" } else { "back (n·b)" }
-        );
+        ));
     }
-    for c in comments {
+    let mut parameters = String::new();
+    for ((name, b), v) in m.model.param_names().iter().zip(m.model.bounds()).zip(&m.params) {
+        let _ = writeln!(parameters, "float {name} {} {} {v}", b.lo.min(*v), b.hi.max(*v));
+    }
+    let (helpers, model_body) = body(m.model);
+    let body = format!("{}{model_body}", retro_cos(m.model, m.param));
+    document(&header, comments, &parameters, helpers, &body)
+}
+
+/// The `.brdf` text of a fitted rational function (`rational::Rational`),
+/// its coefficients written into the shader: it has no parameter a user
+/// would move. Its coordinates, box and Legendre terms follow
+/// `rational::basis` line by line; where the denominator is not positive
+/// (a pole, which the fit holds away from the samples and a grid only) it
+/// returns 0, where the Rust function returns NaN.
+pub fn write_rational(r: &Rational, comments: &[String]) -> String {
+    let header = [
+        format!(
+            "rational function of degree {} ({} coefficients) fitted by gonio {}",
+            r.degree,
+            r.coefficients(),
+            env!("CARGO_PKG_VERSION")
+        ),
+        format!("plane: {}", r.parametrization.name()),
+    ];
+    let mut b = String::from("    float thetaI = degrees(atan(length(planar(l)), l.z));\n");
+    b.push_str(match r.parametrization {
+        Parametrization::Back => "    float theta = degrees(atan(length(planar(bk)), bk.z));\n    float phi = atan(bk.y, bk.x);\n",
+        Parametrization::LightView => {
+            "    float theta = degrees(atan(length(cross(l, v)), dot(l, v)));\n    \
+             float phi = atan(v.y, dot(v, vec3(-l.z, 0.0, l.x)));\n"
+        }
+    });
+    b.push_str(
+        "    float px = theta * cos(phi);\n    float py = theta * sin(phi);\n    float radius = sqrt(px * px + py * py);\n    \
+         float warp = radius > 0.0 ? sqrt(radius) / radius : 0.0;\n",
+    );
+    for (k, c) in ["thetaI", "warp * px", "warp * py"].iter().enumerate() {
+        let (lo, hi) = (r.domain.lo[k], r.domain.hi[k]);
+        let _ = writeln!(
+            b,
+            "    float u{k} = clamp(2.0 * ({c} - ({lo:e})) / ({:e}) - 1.0, -1.0, 1.0);",
+            hi - lo
+        );
+        // (n + 1) P_{n+1} = (2n + 1) x P_n − n P_{n−1}
+        let _ = writeln!(b, "    float p{k}_0 = 1.0;");
+        if r.degree >= 1 {
+            let _ = writeln!(b, "    float p{k}_1 = u{k};");
+        }
+        for n in 1..r.degree {
+            let _ = writeln!(
+                b,
+                "    float p{k}_{} = ({}.0 * u{k} * p{k}_{n} - {n}.0 * p{k}_{}) / {}.0;",
+                n + 1,
+                2 * n + 1,
+                n - 1,
+                n + 1
+            );
+        }
+    }
+    let basis = Basis::new(r.degree);
+    for (name, coefficients) in [("numerator", &r.numerator), ("denominator", &r.denominator)] {
+        let _ = writeln!(b, "    float {name} = 0.0;");
+        for ([i, j, k], c) in basis.terms().iter().zip(coefficients.iter()) {
+            let _ = writeln!(b, "    {name} += {c:e} * p0_{i} * p1_{j} * p2_{k};");
+        }
+    }
+    b.push_str("    if (denominator <= 0.0) {\n        return vec3(0.0);\n    }\n");
+    b.push_str("    float f = cosI * cosO * numerator / denominator;\n");
+    document(&header, comments, "", "", &b)
+}
+
+/// A whole `.brdf` file: header lines, the parameter block, the shader with
+/// the prelude, `helpers`, and `BRDF` setting `f` in `body` after [`FRAME`].
+fn document(header: &[String], comments: &[String], parameters: &str, helpers: &str, body: &str) -> String {
+    let mut s = String::from("analytic\n\n");
+    for c in header.iter().chain(comments) {
         let _ = writeln!(s, "# {}", c.replace('\n', " "));
     }
     s.push_str("# Returns f_r in 1/sr (BRDF Explorer applies n·l itself).\n\n::begin parameters\n");
-    for ((name, b), v) in m.model.param_names().iter().zip(m.model.bounds()).zip(&m.params) {
-        let _ = writeln!(s, "float {name} {} {} {v}", b.lo.min(*v), b.hi.max(*v));
-    }
+    s.push_str(parameters);
     s.push_str("::end parameters\n\n::begin shader\n\n");
-    let (helpers, model_body) = body(m.model);
     s.push_str(PRELUDE);
     s.push_str(helpers);
     s.push_str("\nvec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)\n{\n");
     s.push_str(FRAME);
-    s.push_str(retro_cos(m.model, m.param));
-    s.push_str(model_body);
+    s.push_str(body);
     s.push_str("    return vec3(f);\n}\n\n::end shader\n");
     s
 }

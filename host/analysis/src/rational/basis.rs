@@ -108,6 +108,11 @@ impl Basis {
         self.terms.is_empty()
     }
 
+    /// Each term's Legendre degree in each coordinate, in the coefficients' order.
+    pub fn terms(&self) -> &[[usize; 3]] {
+        &self.terms
+    }
+
     /// Every term at `u` (a point of [−1, 1]³), into `out` (`len()` values).
     pub fn values(&self, u: [f64; 3], out: &mut [f64]) {
         let mut table = vec![[0.0; 3]; self.degree + 1];

@@ -1,9 +1,12 @@
 //! `gonio export`: a fit (`gonio fit --out FIT.json`) as a Disney BRDF
-//! Explorer `.brdf` file, to look at the model in that tool.
+//! Explorer `.brdf` file, to look at the model in that tool: a model with
+//! its parameters, or a rational function with its coefficients in the
+//! shader.
 
 use anyhow::{Context, Result};
-use gonio_analysis::fit::file::read_material;
+use gonio_analysis::fit::file::{read_fitted, Fitted};
 use gonio_analysis::formats::brdf_explorer;
+use gonio_analysis::rational;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, clap::Args)]
@@ -24,11 +27,21 @@ pub fn write_brdf(m: &gonio_brdf::Material, source: &str, out: &Path) -> Result<
 }
 
 pub fn export_cmd(a: ExportArgs) -> Result<()> {
-    let m = read_material(&a.fit)?;
-    write_brdf(&m, &a.fit.display().to_string(), &a.output)?;
+    let source = a.fit.display().to_string();
+    let model = match read_fitted(&a.fit)? {
+        Fitted::Model(m) => {
+            write_brdf(&m, &source, &a.output)?;
+            m.model.name()
+        }
+        Fitted::Rational(r) => {
+            let text = brdf_explorer::write_rational(&r, &[format!("from {source}")]);
+            std::fs::write(&a.output, text).with_context(|| format!("cannot write {}", a.output.display()))?;
+            rational::file::MODEL
+        }
+    };
     match a.json {
-        true => println!("{}", serde_json::json!({ "written": a.output, "model": m.model.name() })),
-        false => eprintln!("{} written to {}", m.model.name(), a.output.display()),
+        true => println!("{}", serde_json::json!({ "written": a.output, "model": model })),
+        false => eprintln!("{model} written to {}", a.output.display()),
     }
     Ok(())
 }

@@ -3,7 +3,8 @@
 
 use super::fit::ParamArg;
 use super::material;
-use anyhow::{bail, Context, Result};
+use anyhow::{bail, Result};
+use gonio_analysis::fit::file::Fitted;
 use gonio_analysis::{fit, rational, rational::Rational};
 use gonio_brdf::{dhr, retro_phong_energy_sum, Directions, Material, ModelId, Specimen};
 use gonio_firmware::config::REFERENCE;
@@ -61,15 +62,13 @@ impl ModelArgs {
     /// What is evaluated, and its name.
     fn evaluated(&self) -> Result<(Evaluated, String)> {
         if let Some(path) = &self.fit {
-            let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-            let v: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
-            if v["model"] == rational::file::MODEL {
-                let r = rational::file::function_of(&v).with_context(|| format!("{}", path.display()))?;
-                return Ok((Evaluated::Rational(r), rational::file::MODEL.into()));
-            }
-            let m = fit::file::read_material(path)?;
-            let name = m.model.name().to_string();
-            return Ok((Evaluated::Specimen(Specimen::Model(m)), name));
+            return Ok(match fit::file::read_fitted(path)? {
+                Fitted::Rational(r) => (Evaluated::Rational(r), rational::file::MODEL.into()),
+                Fitted::Model(m) => {
+                    let name = m.model.name().to_string();
+                    (Evaluated::Specimen(Specimen::Model(m)), name)
+                }
+            });
         }
         if let Some(name) = &self.material {
             return Ok((Evaluated::Specimen(material::specimen(name, self.params.as_deref())?), name.clone()));
