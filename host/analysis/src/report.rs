@@ -6,6 +6,7 @@
 
 use crate::calibration::IncidenceBudget;
 use crate::coefficients::{self, Estimate, Fitted, Kind, Provenance, Source, Support};
+use crate::fit::file::FittedBrdf;
 use crate::fit::{self, Dataset, Fit, Metrics, Units};
 use crate::formats::brdf_explorer;
 use crate::plot;
@@ -267,8 +268,12 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     if !r.budget.is_empty() {
         html.push_str(&budget_section(r.budget));
     }
-    let drawn: Vec<_> = order.iter().take(DRAWN).map(|&i| r.fits[i].material.clone()).collect();
-    let names: Vec<&str> = drawn.iter().map(|m| m.model.name()).collect();
+    let drawn: Vec<FittedBrdf> = order
+        .iter()
+        .take(DRAWN)
+        .map(|&i| FittedBrdf::Model(r.fits[i].material.clone()))
+        .collect();
+    let names: Vec<&str> = drawn.iter().map(FittedBrdf::name).collect();
     let files = plot::render(r.data, &drawn, &dir.join("plots"), &plot::Options::default())?;
     let _ = writeln!(
         html,

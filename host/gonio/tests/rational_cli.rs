@@ -113,13 +113,47 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
         "{shader}"
     );
 
-    // The text says what held, and which degrees were tried.
-    let o = gonio(&["fit", file, "--model", "rational", "--segments", "abs:0.5", "--theta-i", "30"]);
+    // `gonio plot` draws it over the data.
+    let pictures = dir.path().join("plots");
+    let o = gonio(&[
+        "plot",
+        file,
+        "--out",
+        pictures.to_str().unwrap(),
+        "--fit",
+        out.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let written = serde_json::from_slice::<Value>(&o.stdout).unwrap()["written"]
+        .as_array()
+        .unwrap()
+        .len();
+    assert!(written > 0 && pictures.join("residuals-30.svg").is_file(), "{written} pictures");
+
+    // The text says what held, and which degrees were tried; --brdf and
+    // --plot take the fit as they take a model's.
+    let (brdf, plots) = (dir.path().join("fit.brdf"), dir.path().join("fit-plots"));
+    let o = gonio(&[
+        "fit",
+        file,
+        "--model",
+        "rational",
+        "--segments",
+        "abs:0.5",
+        "--theta-i",
+        "30",
+        "--brdf",
+        brdf.to_str().unwrap(),
+        "--plot",
+        plots.to_str().unwrap(),
+    ]);
     let t = text(&o);
     assert!(
         o.status.success() && t.contains("every segment held") && t.contains("degrees tried"),
         "{t}"
     );
+    assert!(brdf.is_file() && plots.join("residuals-30.svg").is_file());
 
     // Mistakes.
     fails_saying(

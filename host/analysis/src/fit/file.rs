@@ -108,25 +108,44 @@ pub fn read_material(path: &Path) -> Result<Material> {
 
 /// What a fit file holds: a model with its parameters, or a rational
 /// function (`gonio fit --model rational`).
-pub enum Fitted {
+#[derive(Debug, Clone, PartialEq)]
+pub enum FittedBrdf {
     Model(Material),
     Rational(crate::rational::Rational),
 }
 
+impl FittedBrdf {
+    /// `f_r` (sr⁻¹) at `d`; a rational function's is NaN at a pole.
+    pub fn eval(&self, d: &gonio_brdf::Directions) -> f64 {
+        match self {
+            FittedBrdf::Model(m) => m.eval(d),
+            FittedBrdf::Rational(r) => r.eval(d),
+        }
+    }
+
+    /// The model's id, `rational` for a rational function.
+    pub fn name(&self) -> &'static str {
+        match self {
+            FittedBrdf::Model(m) => m.model.name(),
+            FittedBrdf::Rational(_) => crate::rational::file::MODEL,
+        }
+    }
+}
+
 /// Reads either kind of fit file.
-pub fn read_fitted(path: &Path) -> Result<Fitted> {
+pub fn read_fitted(path: &Path) -> Result<FittedBrdf> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let v: Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
     if v["model"] == crate::rational::file::MODEL {
         let r = crate::rational::file::function_of(&v).with_context(|| format!("{}", path.display()))?;
-        return Ok(Fitted::Rational(r));
+        return Ok(FittedBrdf::Rational(r));
     }
-    read_material(path).map(Fitted::Model)
+    read_material(path).map(FittedBrdf::Model)
 }
 
 fn material_of(v: &Value) -> Result<Material> {
     if v["model"] == crate::rational::file::MODEL {
-        bail!("a rational fit: plots and coefficients take the parametric models' fits only, so far");
+        bail!("a rational fit: here only a parametric model's fit is taken (eval, dhr, export and plot take a rational one)");
     }
     let model = ModelId::parse(v["model"].as_str().unwrap_or_default())?;
     let mut params = Vec::new();

@@ -4,10 +4,11 @@
 //! colour. The incidence plane (Δφ = 0°) is the first.
 
 use super::{err, fr, legend, samples_with_bars, tick, STYLE};
+use crate::fit::file::FittedBrdf;
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
-use gonio_brdf::{Directions, Material};
+use gonio_brdf::Directions;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -71,7 +72,7 @@ fn cuts(data: &Dataset) -> Vec<Cut> {
         .collect()
 }
 
-pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fit: Option<&Material>) -> Result<()> {
+pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fit: Option<&FittedBrdf>) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     let cuts = cuts(data);
     let model = |p: f64, t: f64| -> f64 {
@@ -120,7 +121,7 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         let note = TextStyle::from(("sans-serif", STYLE.label).into_font()).pos(Pos::new(HPos::Right, VPos::Top));
         chart
             .draw_series(std::iter::once(Text::new(
-                format!("lines: {}; bars: ± U (k = {K_COVERAGE})", m.model.name()),
+                format!("lines: {}; bars: ± U (k = {K_COVERAGE})", m.name()),
                 (88.0, hi / 1.1),
                 note,
             )))

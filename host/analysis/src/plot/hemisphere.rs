@@ -7,9 +7,9 @@
 
 use super::colour_scale::{ColourScale, Scale, LEVELS};
 use super::{err, fr, STYLE};
+use crate::fit::file::FittedBrdf;
 use crate::fit::{Dataset, Observation};
 use anyhow::Result;
-use gonio_brdf::Material;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
@@ -45,8 +45,8 @@ pub fn measured(data: &Dataset, ti: f64, scale: Scale, range: Option<(f64, f64)>
 
 /// The residuals of `fit`: in units of σ where every sample carries one,
 /// relative otherwise.
-pub fn residuals(data: &Dataset, ti: f64, fit: &Material) -> Map {
-    let name = fit.model.name();
+pub fn residuals(data: &Dataset, ti: f64, fit: &FittedBrdf) -> Map {
+    let name = fit.name();
     let model: Vec<f64> = data.observations.iter().map(|o| fit.eval(&o.directions())).collect();
     let sigmas: Option<Vec<f64>> = data
         .observations

@@ -18,9 +18,9 @@ mod retro;
 
 pub use colour_scale::Scale;
 
+use crate::fit::file::FittedBrdf;
 use crate::fit::{data::theta_in, Dataset, Observation};
 use anyhow::{anyhow, Context, Result};
-use gonio_brdf::Material;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use std::path::{Path, PathBuf};
@@ -207,7 +207,7 @@ enum Prepared {
     Map(hemisphere::Map),
 }
 
-fn prepare(kind: Picture, data: &Dataset, ti: f64, fits: &[Material], o: &Options) -> Option<Prepared> {
+fn prepare(kind: Picture, data: &Dataset, ti: f64, fits: &[FittedBrdf], o: &Options) -> Option<Prepared> {
     match kind {
         Picture::Plane => Some(Prepared::Plane),
         Picture::Cuts => Some(Prepared::Cuts),
@@ -217,7 +217,7 @@ fn prepare(kind: Picture, data: &Dataset, ti: f64, fits: &[Material], o: &Option
     }
 }
 
-fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &Prepared, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
+fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &Prepared, data: &Dataset, ti: f64, fits: &[FittedBrdf]) -> Result<()> {
     match p {
         Prepared::Plane => plane::draw(root, data, ti, fits),
         Prepared::Cuts => cuts::draw(root, data, ti, fits.first()),
@@ -229,7 +229,7 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &Prepared, data: &
 /// Draws every picture for every incidence angle (residuals only with a
 /// fit, the retro peak only where samples lie near it); returns the files
 /// written, `{picture}-{θi}.svg` and `.png`.
-pub fn render(data: &Dataset, fits: &[Material], dir: &Path, options: &Options) -> Result<Vec<PathBuf>> {
+pub fn render(data: &Dataset, fits: &[FittedBrdf], dir: &Path, options: &Options) -> Result<Vec<PathBuf>> {
     register_font()?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
     let mut files = Vec::new();
@@ -262,6 +262,7 @@ mod tests {
     use super::*;
     use crate::fit::Units;
     use crate::uncertainty::SHARED;
+    use gonio_brdf::Material;
 
     /// A tape at θi = 30° on the default grid plus rings about the light,
     /// each sample with a 2 % σ.
@@ -320,7 +321,7 @@ mod tests {
         let data = tape();
         let mut off = Material::tape();
         off.params[1] = 300.0; // a wider lobe than the data's
-        let files = render(&data, &[off], dir.path(), &Options::default()).unwrap();
+        let files = render(&data, &[FittedBrdf::Model(off)], dir.path(), &Options::default()).unwrap();
         assert_eq!(files.len(), 2 * Picture::ALL.len(), "{files:?}");
         let map = svg(dir.path(), "hemisphere-30");
         for text in [

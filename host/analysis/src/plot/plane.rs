@@ -5,16 +5,17 @@
 //! the fits are drawn over the data.
 
 use super::{err, fr, in_plane, legend, PALETTE, STYLE};
+use crate::fit::file::FittedBrdf;
 use crate::fit::Dataset;
 use crate::rounding::superscript;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
-use gonio_brdf::{Directions, Material};
+use gonio_brdf::Directions;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 
-pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
+pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[FittedBrdf]) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     // (signed θo, f_r, expanded uncertainty of f_r)
     let points: Vec<(f64, f64, Option<f64>)> = data
@@ -26,13 +27,15 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         })
         .filter(|p| p.1 > 0.0)
         .collect();
-    let curve = |m: &Material| -> Vec<(f64, f64)> {
+    let curve = |m: &FittedBrdf| -> Vec<(f64, f64)> {
         (-890..=890)
             .map(|k| {
                 let t = k as f64 / 10.0;
                 let f = m.eval(&Directions::from_degrees(ti, t.abs(), if t >= 0.0 { 0.0 } else { 180.0 }));
                 (t, f)
             })
+            // A rational function's pole is no point of its curve.
+            .filter(|p| p.1.is_finite())
             .collect()
     };
     let curves: Vec<Vec<(f64, f64)>> = fits.iter().map(curve).collect();
@@ -111,7 +114,7 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         chart
             .draw_series(LineSeries::new(c.iter().map(|&(t, f)| to_xy(t, radius(f))), color.stroke_width(2)))
             .map_err(err)?
-            .label(m.model.name())
+            .label(m.name())
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
     }
     // The error bars: radial, from f − U to f + U (U = k·u, k = 2).

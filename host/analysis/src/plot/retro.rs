@@ -5,11 +5,12 @@
 //! lives here, where a hemisphere map is a few pixels wide.
 
 use super::{err, fr, legend, samples_with_bars, tick, PALETTE, STYLE};
+use crate::fit::file::FittedBrdf;
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
 use gonio_brdf::frame::angle_between;
-use gonio_brdf::{Directions, Material};
+use gonio_brdf::Directions;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -33,12 +34,12 @@ pub fn near_peak(data: &Dataset) -> Vec<(f64, f64, Option<f64>)> {
         .collect()
 }
 
-pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[Material]) -> Result<()> {
+pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[FittedBrdf]) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
     let points = near_peak(data);
     // A fit along the incidence plane, the view tilted from the light
     // towards the normal by α (through it, to Δφ = 180°, when α > θi).
-    let along = |m: &Material, a: f64| {
+    let along = |m: &FittedBrdf, a: f64| {
         let t = ti - a;
         m.eval(&Directions::from_degrees(ti, t.abs(), if t >= 0.0 { 0.0 } else { 180.0 }))
     };
@@ -48,6 +49,8 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
             (0..=600)
                 .map(|k| k as f64 * ALPHA_MAX_DEG / 600.0)
                 .map(|a| (a, along(m, a)))
+                // A rational function's pole is no point of its curve.
+                .filter(|p| p.1.is_finite())
                 .collect()
         })
         .collect();
@@ -85,7 +88,7 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         chart
             .draw_series(LineSeries::new(c.iter().copied().filter(|p| p.1 > lo), colour.stroke_width(2)))
             .map_err(err)?
-            .label(format!("{} (in the incidence plane)", m.model.name()))
+            .label(format!("{} (in the incidence plane)", m.name()))
             .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
     }
     let label = format!("measured, every Δφ about the light (± U, k = {K_COVERAGE})");

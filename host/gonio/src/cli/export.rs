@@ -4,9 +4,8 @@
 //! shader.
 
 use anyhow::{Context, Result};
-use gonio_analysis::fit::file::{read_fitted, Fitted};
+use gonio_analysis::fit::file::{read_fitted, FittedBrdf};
 use gonio_analysis::formats::brdf_explorer;
-use gonio_analysis::rational;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, clap::Args)]
@@ -20,28 +19,22 @@ pub struct ExportArgs {
     pub json: bool,
 }
 
-/// Writes a fitted material as `.brdf`, naming where it came from in the header.
-pub fn write_brdf(m: &gonio_brdf::Material, source: &str, out: &Path) -> Result<()> {
-    let text = brdf_explorer::write(m, &[format!("from {source}")]);
+/// Writes a fit as `.brdf`, naming where it came from in the header.
+pub fn write_brdf(fitted: &FittedBrdf, source: &str, out: &Path) -> Result<()> {
+    let comments = [format!("from {source}")];
+    let text = match fitted {
+        FittedBrdf::Model(m) => brdf_explorer::write(m, &comments),
+        FittedBrdf::Rational(r) => brdf_explorer::write_rational(r, &comments),
+    };
     std::fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))
 }
 
 pub fn export_cmd(a: ExportArgs) -> Result<()> {
-    let source = a.fit.display().to_string();
-    let model = match read_fitted(&a.fit)? {
-        Fitted::Model(m) => {
-            write_brdf(&m, &source, &a.output)?;
-            m.model.name()
-        }
-        Fitted::Rational(r) => {
-            let text = brdf_explorer::write_rational(&r, &[format!("from {source}")]);
-            std::fs::write(&a.output, text).with_context(|| format!("cannot write {}", a.output.display()))?;
-            rational::file::MODEL
-        }
-    };
+    let fitted = read_fitted(&a.fit)?;
+    write_brdf(&fitted, &a.fit.display().to_string(), &a.output)?;
     match a.json {
-        true => println!("{}", serde_json::json!({ "written": a.output, "model": model })),
-        false => eprintln!("{model} written to {}", a.output.display()),
+        true => println!("{}", serde_json::json!({ "written": a.output, "model": fitted.name() })),
+        false => eprintln!("{} written to {}", fitted.name(), a.output.display()),
     }
     Ok(())
 }

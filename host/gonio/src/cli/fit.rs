@@ -3,6 +3,7 @@
 
 use anyhow::{bail, Context, Result};
 use gonio_analysis::coefficients::{Coefficient, Fitted, Source, Support};
+use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::goodness::Goodness;
 use gonio_analysis::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
 use gonio_analysis::rounding::{figure, significant};
@@ -241,12 +242,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     if let Some(out) = &a.out {
         fit::file::write_with_support(out, &v, &Support::of(&d.train)?)?;
     }
-    if let Some(out) = &a.brdf {
-        super::export::write_brdf(&f.material, &a.file.display().to_string(), out)?;
-    }
-    if let Some(dir) = &a.plot {
-        gonio_analysis::plot::render(&d.train, std::slice::from_ref(&f.material), dir, &Default::default())?;
-    }
+    drawn(&FittedBrdf::Model(f.material.clone()), &a, &d.train)?;
     if a.options.json {
         println!("{v}");
         return Ok(());
@@ -291,6 +287,17 @@ const STRONG_CORRELATION: f64 = 0.95;
 
 /// χ² in words: its degrees of freedom, the reduced value against its 99 %
 /// interval for a right model with right σ, and the p-value.
+/// What `--brdf` and `--plot` ask of a fit: its shader, its pictures over `data`.
+pub fn drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<()> {
+    if let Some(out) = &a.brdf {
+        super::export::write_brdf(fitted, &a.file.display().to_string(), out)?;
+    }
+    if let Some(dir) = &a.plot {
+        gonio_analysis::plot::render(data, std::slice::from_ref(fitted), dir, &Default::default())?;
+    }
+    Ok(())
+}
+
 fn goodness_text(g: &Goodness) -> String {
     let (lo, hi) = Goodness::interval(g.dof, 0.99);
     let verdict = if g.reduced_chi2 > hi {

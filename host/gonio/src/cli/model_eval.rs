@@ -4,7 +4,7 @@
 use super::fit::ParamArg;
 use super::material;
 use anyhow::{bail, Result};
-use gonio_analysis::fit::file::Fitted;
+use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::{fit, rational, rational::Rational};
 use gonio_brdf::{dhr, retro_phong_energy_sum, Directions, Material, ModelId, Specimen};
 use gonio_firmware::config::REFERENCE;
@@ -63,8 +63,8 @@ impl ModelArgs {
     fn evaluated(&self) -> Result<(Evaluated, String)> {
         if let Some(path) = &self.fit {
             return Ok(match fit::file::read_fitted(path)? {
-                Fitted::Rational(r) => (Evaluated::Rational(r), rational::file::MODEL.into()),
-                Fitted::Model(m) => {
+                FittedBrdf::Rational(r) => (Evaluated::Rational(r), rational::file::MODEL.into()),
+                FittedBrdf::Model(m) => {
                     let name = m.model.name().to_string();
                     (Evaluated::Specimen(Specimen::Model(m)), name)
                 }

@@ -2,8 +2,8 @@
 
 use anyhow::Result;
 use gonio_analysis::fit;
+use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::plot;
-use gonio_brdf::Material;
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
@@ -13,7 +13,7 @@ pub struct PlotArgs {
     /// Output directory of the pictures (PNG and SVG).
     #[arg(long)]
     pub out: PathBuf,
-    /// A fit written by `gonio fit --out FIT.json` to draw over the data (repeatable).
+    /// A fit written by `gonio fit --out FIT.json` to draw over the data (repeatable): a model's, or a rational function's.
     #[arg(long)]
     pub fit: Vec<PathBuf>,
     /// How the hemisphere maps colour f_r.
@@ -30,7 +30,7 @@ pub struct PlotArgs {
 
 pub fn plot_cmd(a: PlotArgs) -> Result<()> {
     let data = super::load_data(&a.file, None)?;
-    let fits: Vec<Material> = a.fit.iter().map(|p| fit::file::read_material(p)).collect::<Result<_>>()?;
+    let fits: Vec<FittedBrdf> = a.fit.iter().map(|p| fit::file::read_fitted(p)).collect::<Result<_>>()?;
     let options = plot::Options {
         scale: a.scale,
         range: a.range,

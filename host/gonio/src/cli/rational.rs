@@ -6,6 +6,7 @@ use super::fit::{domain, FitArgs, ParamArg};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
 use gonio_analysis::coefficients::Support;
+use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::{self, Weighting};
 use gonio_analysis::moments::Parametrization;
 use gonio_analysis::rational::{self, RationalSpec, SegmentSource};
@@ -15,9 +16,6 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let o = &a.options;
     if !a.fix.is_empty() || !o.bounds.is_empty() || o.weights != Weighting::Uniform {
         bail!("--fix, --bounds and --weights are options of the parametric models: a rational function has no parameters to hold or box, and no least-squares sum to weigh (its --segments say how close it must pass)");
-    }
-    if a.brdf.is_some() || a.plot.is_some() {
-        bail!("--brdf and --plot do not take a rational fit yet: write it with --out and evaluate it from there");
     }
     let segments: SegmentSource = a.segments.as_deref().unwrap_or("sigma").parse()?;
     let spec = RationalSpec {
@@ -44,6 +42,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     if let Some(out) = &a.out {
         fit::file::write_with_support(out, &v, &Support::of(&d.train)?)?;
     }
+    super::fit::drawn(&FittedBrdf::Rational(f.function.clone()), &a, &d.train)?;
     if o.json {
         println!("{v}");
         return Ok(());
