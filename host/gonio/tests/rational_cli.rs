@@ -25,21 +25,9 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     let csv = calibrated_scan(dir.path(), "beads", "glass-beads", &["--theta-o", "0:84:6", "--dphi", "0:180:30"]);
     let file = csv.to_str().unwrap();
     let out = dir.path().join("rational.json");
-    let o = gonio(&[
-        "fit",
-        file,
-        "--model",
-        "rational",
-        "--segments",
-        "abs:0.5",
-        "--param",
-        "back",
-        "--theta-i",
-        "30",
-        "--out",
-        out.to_str().unwrap(),
-        "--json",
-    ]);
+    // The paper's absolute segments, at one incidence.
+    let at_30 = ["fit", file, "--model", "rational", "--segments", "abs:0.5", "--theta-i", "30"];
+    let o = gonio(&[&at_30[..], &["--param", "back", "--out", out.to_str().unwrap(), "--json"]].concat());
     assert!(o.status.success(), "{}", text(&o));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["model"], "rational");
@@ -134,20 +122,7 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     // The text says what held, and which degrees were tried; --brdf and
     // --plot take the fit as they take a model's.
     let (brdf, plots) = (dir.path().join("fit.brdf"), dir.path().join("fit-plots"));
-    let o = gonio(&[
-        "fit",
-        file,
-        "--model",
-        "rational",
-        "--segments",
-        "abs:0.5",
-        "--theta-i",
-        "30",
-        "--brdf",
-        brdf.to_str().unwrap(),
-        "--plot",
-        plots.to_str().unwrap(),
-    ]);
+    let o = gonio(&[&at_30[..], &["--brdf", brdf.to_str().unwrap(), "--plot", plots.to_str().unwrap()]].concat());
     let t = text(&o);
     assert!(
         o.status.success() && t.contains("every segment held") && t.contains("degrees tried"),
