@@ -186,7 +186,11 @@ fn evaluate_as_cpp(dir: &Path, name: &str, text: &str, scalar: &str, geos: &[(f6
     for &(ti, to, dp) in geos {
         let d = Directions::from_angles(ti, to, dp);
         let f = frame(&mut rng);
-        for w in [world(d.l, f), world(d.v, f), f[0], f[1], f[2]] {
+        // The light at any azimuth in the surface's frame, not only at 0 as
+        // `Directions` puts it: a BRDF of an isotropic surface does not see it.
+        let psi: f64 = rng.random_range(-std::f64::consts::PI..std::f64::consts::PI);
+        let turn = |w: [f64; 3]| [w[0] * psi.cos() - w[1] * psi.sin(), w[0] * psi.sin() + w[1] * psi.cos(), w[2]];
+        for w in [world(turn(d.l), f), world(turn(d.v), f), f[0], f[1], f[2]] {
             let _ = write!(input, "{:e} {:e} {:e} ", w[0], w[1], w[2]);
         }
         input.push('\n');
@@ -247,10 +251,16 @@ fn brdf_explorer_shaders_compile_and_equal_the_models() {
                 .iter()
                 .map(|&(ti, to, dp)| m.eval(&Directions::from_angles(ti, to, dp)))
                 .collect();
-            check_shader(dir.path(), &name, &text, &geos, &want, 1e-3);
+            check_shader(dir.path(), &name, &text, &geos, &want, [1e-9, 1e-3]);
         }
     }
 }
+
+/// How close a rational shader is to its function (of the peak), in double
+/// and single precision. Double is looser than a model's 1e-9: the
+/// coordinates' square-root warp (`rational::basis`) takes a rounding ε of
+/// the directions at the retro direction to √ε (5e-9 measured there).
+const RATIONAL_TOLERANCES: [f64; 2] = [1e-7, 1e-3];
 
 /// A rational function fitted to a material none of the models is (the
 /// glass-bead layer, ±0.5 sr⁻¹), in both planes: the shader is the function,
@@ -277,14 +287,14 @@ fn rational_shaders_compile_and_equal_the_function() {
             .map(|&(ti, to, dp)| r.eval(&Directions::from_angles(ti, to, dp)))
             .collect();
         assert!(want.iter().filter(|v| v.is_finite()).count() > geos.len() * 9 / 10, "{name}: poles");
-        check_shader(dir.path(), &name, &text, &geos, &want, 1e-3);
+        check_shader(dir.path(), &name, &text, &geos, &want, RATIONAL_TOLERANCES);
     }
 }
 
 /// naga and glslangValidator accept the shader, and evaluated as C++ it
 /// gives `want` at `geos` (NaN where there is no value to compare): to 1e-9
 /// of the largest value in double precision, to `float_tol` in single.
-fn check_shader(dir: &Path, name: &str, text: &str, geos: &[(f64, f64, f64)], want: &[f64], float_tol: f64) {
+fn check_shader(dir: &Path, name: &str, text: &str, geos: &[(f64, f64, f64)], want: &[f64], [double_tol, float_tol]: [f64; 2]) {
     let (glslang, cpp) = (available("glslangValidator"), available("g++"));
     check_naga(name, text);
     if glslang {
@@ -295,16 +305,22 @@ fn check_shader(dir: &Path, name: &str, text: &str, geos: &[(f64, f64, f64)], wa
     }
     let scale = want.iter().cloned().filter(|v| v.is_finite()).fold(0.0, f64::max);
     assert!(scale > 0.0);
-    for (scalar, tol) in [("double", 1e-9), ("float", float_tol)] {
+    for (scalar, tol) in [("double", double_tol), ("float", float_tol)] {
         let got = evaluate_as_cpp(dir, name, text, scalar, geos);
         assert_eq!(got.len(), geos.len(), "{name} ({scalar}): one value per geometry");
         let (worst, at) = got
             .iter()
             .zip(want)
-            .filter(|(_, w)| w.is_finite())
-            .map(|(g, w)| (g - w).abs() / scale)
             .zip(geos)
-            .fold((0.0, (0.0, 0.0, 0.0)), |acc, (e, g)| if e > acc.0 { (e, *g) } else { acc });
+            .filter(|((_, w), _)| w.is_finite())
+            .map(|((g, w), at)| {
+                assert!(
+                    g.is_finite(),
+                    "{name} ({scalar}): the shader gives {g} where the model gives {w}, at {at:?}"
+                );
+                ((g - w).abs() / scale, *at)
+            })
+            .fold((0.0, (0.0, 0.0, 0.0)), |acc, (e, at)| if e > acc.0 { (e, at) } else { acc });
         eprintln!("{name} ({scalar}): max |shader − model| / peak = {worst:.2e}");
         assert!(
             worst <= tol,

@@ -1,7 +1,9 @@
 //! A fitted model as a Disney BRDF Explorer `.brdf` file: an `analytic`
 //! header, one `float NAME MIN MAX DEFAULT` line per parameter (the model's
 //! search bounds, the fitted value as default) and a GLSL function
-//! `vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)`.
+//! `vec3 BRDF(vec3 L, vec3 V, vec3 N, vec3 X, vec3 Y)`; a fitted rational
+//! function (`write_rational`) with its coefficients in the GLSL and no
+//! parameter line.
 //!
 //! The GLSL is the host's f64 model (`gonio_brdf`) written once more, in the
 //! tool's language: it first takes `L` and `V` into the local frame `(X, Y, N)`
@@ -226,16 +228,29 @@ pub fn write_rational(r: &Rational, comments: &[String]) -> String {
         ),
         format!("plane: {}", r.parametrization.name()),
     ];
-    let mut b = String::from("    float thetaI = degrees(atan(length(planar(l)), l.z));\n");
+    // The function was fitted with the light at azimuth 0 (`Directions`):
+    // the light and the view turned about the normal to put it there. An
+    // in-plane direction is taken by its unit vector, not by atan(0, 0),
+    // which GLSL leaves undefined at the retro peak.
+    let mut b = String::from(
+        "    vec2 lPlanar = planar(l);\n    float sinI = length(lPlanar);\n    \
+         vec2 az = sinI > 0.0 ? lPlanar / sinI : vec2(1.0, 0.0);\n    vec3 lr = vec3(sinI, 0.0, l.z);\n    \
+         vec3 vr = vec3(az.x * v.x + az.y * v.y, az.x * v.y - az.y * v.x, v.z);\n    \
+         float thetaI = degrees(atan(sinI, lr.z));\n",
+    );
     b.push_str(match r.parametrization {
-        Parametrization::Back => "    float theta = degrees(atan(length(planar(bk)), bk.z));\n    float phi = atan(bk.y, bk.x);\n",
+        Parametrization::Back => {
+            "    vec3 bkr = unitSum(vec3(-vr.x, -vr.y, vr.z), lr);\n    \
+             float theta = degrees(atan(length(planar(bkr)), bkr.z));\n    vec2 w = planar(bkr);\n"
+        }
         Parametrization::LightView => {
-            "    float theta = degrees(atan(length(cross(l, v)), dot(l, v)));\n    \
-             float phi = atan(v.y, dot(v, vec3(-l.z, 0.0, l.x)));\n"
+            "    float theta = degrees(atan(length(cross(lr, vr)), dot(lr, vr)));\n    \
+             vec2 w = vec2(dot(vr, vec3(-lr.z, 0.0, lr.x)), vr.y);\n"
         }
     });
     b.push_str(
-        "    float px = theta * cos(phi);\n    float py = theta * sin(phi);\n    float radius = sqrt(px * px + py * py);\n    \
+        "    float wLength = length(w);\n    vec2 toward = wLength > 0.0 ? w / wLength : vec2(1.0, 0.0);\n    \
+         float px = theta * toward.x;\n    float py = theta * toward.y;\n    float radius = sqrt(px * px + py * py);\n    \
          float warp = radius > 0.0 ? sqrt(radius) / radius : 0.0;\n",
     );
     for (k, c) in ["thetaI", "warp * px", "warp * py"].iter().enumerate() {
