@@ -1,6 +1,7 @@
 //! `lafortune`: isotropic generalized cosine lobes (Lafortune et al. 1997, as
-//! Belcour uses it for retroreflection): one mirror lobe (`cxy_s < 0`) and one
-//! retro lobe (`cxy_r > 0`),
+//! Belcour uses it for retroreflection): a retro lobe (`cxy_r, cz_r ≥ 0`) and
+//! another of any kind (`s`: a mirror lobe `cxy_s < 0`, a second retro lobe,
+//! a grazing one),
 //! `kd/π + Σ_j max(0, cxy_j(lx vx + ly vy) + cz_j lz vz)^n_j`. The retro lobe is
 //! already a function of `l·v`-like products, so it has no back/view form.
 

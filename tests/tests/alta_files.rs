@@ -228,6 +228,10 @@ fn confidence_columns_become_uncertainties() {
             "line 5: the confidence interval is wider than a number holds",
         ),
         (
+            format!("{text}#VS 1\n0.5 0.1 0.2 3.0 1e308\n"),
+            "line 5: the confidence interval is wider than a number holds",
+        ),
+        (
             format!("{text}#VS 2\n0.5 0.1 0.2 3.0 2.6\n"),
             "line 5: expected 6 numbers (3 inputs, 1 output, 2 confidence), found 5",
         ),

@@ -140,7 +140,9 @@ pub fn read_fitted(path: &Path) -> Result<FittedBrdf> {
         let r = crate::rational::file::function_of(&v).with_context(|| format!("{}", path.display()))?;
         return Ok(FittedBrdf::Rational(r));
     }
-    read_material(path).map(FittedBrdf::Model)
+    material_of(&v)
+        .map(FittedBrdf::Model)
+        .with_context(|| format!("{}", path.display()))
 }
 
 fn material_of(v: &Value) -> Result<Material> {

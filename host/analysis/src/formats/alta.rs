@@ -27,7 +27,8 @@
 //! number, the half-width of the first value's interval; `#VS 2` two, how
 //! far its interval reaches below and above the value (ALTA reads them as
 //! `[y − a, y + b]`, `read_confidence_interval`, since its 2017 fix of
-//! that reader); both taken as k = 2 intervals. Files gonio wrote before it
+//! that reader); both taken as k = 2 intervals, an asymmetric one as its
+//! half-width (σ = (a + b)/4). Files gonio wrote before it
 //! followed ALTA there held the interval's ends themselves: they carry
 //! [`ENDS_NOTE`], and are read as they were written. The writer uses `#VS 2`
 //! when every value has an uncertainty.
@@ -296,7 +297,8 @@ pub fn parse(text: &str) -> Result<Dataset> {
             2 => Some((conf[0] + conf[1]) / (2.0 * K_COVERAGE)),
             _ => None,
         };
-        if sigma.is_some_and(|s| !s.is_finite()) {
+        // The writer puts k·σ below and above; their sum must be a number too.
+        if sigma.is_some_and(|s| !(2.0 * K_COVERAGE * s).is_finite()) {
             return Err(err("the confidence interval is wider than a number holds".into()));
         }
         observations.push(Observation {

@@ -75,7 +75,14 @@ pub fn residuals(data: &Dataset, ti: f64, fit: &FittedBrdf) -> Map {
 
 fn build(title: String, scale: ColourScale, data: &Dataset, values: &[f64], ti: f64) -> Map {
     let samples: Vec<(f64, f64)> = data.observations.iter().map(projected).collect();
-    let positions: Vec<f64> = values.iter().map(|&v| scale.level(v) as f64 + 0.5).collect();
+    // A sample without a value (a rational function's pole in a residual)
+    // colours no cell.
+    let (valued, positions): (Vec<(f64, f64)>, Vec<f64>) = samples
+        .iter()
+        .zip(values)
+        .filter(|(_, v)| v.is_finite())
+        .map(|(&p, &v)| (p, scale.level(v) as f64 + 0.5))
+        .unzip();
     let gap = gap(&samples);
     let n = (180.0 / CELL).round() as i32;
     let mut runs = Vec::new();
@@ -86,7 +93,7 @@ fn build(title: String, scale: ColourScale, data: &Dataset, values: &[f64], ti: 
             let x = -90.0 + col as f64 * CELL;
             let (cx, cy) = (x + CELL / 2.0, y + CELL / 2.0);
             let level = (col < n && cx.hypot(cy) <= 90.0)
-                .then(|| interpolate(&samples, &positions, (cx, cy), gap))
+                .then(|| interpolate(&valued, &positions, (cx, cy), gap))
                 .flatten()
                 .map(|p| (p as usize).min(LEVELS - 1));
             match (run, level) {

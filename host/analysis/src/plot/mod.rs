@@ -207,6 +207,12 @@ enum Prepared {
     Map(hemisphere::Map),
 }
 
+/// A curve cut where it has no value (a rational function's pole): its runs
+/// of finite points, each drawn on its own so that no line bridges the gap.
+fn finite_runs(curve: &[(f64, f64)]) -> Vec<&[(f64, f64)]> {
+    curve.split(|p| !p.1.is_finite()).filter(|run| !run.is_empty()).collect()
+}
+
 fn prepare(kind: Picture, data: &Dataset, ti: f64, fits: &[FittedBrdf], o: &Options) -> Option<Prepared> {
     match kind {
         Picture::Plane => Some(Prepared::Plane),
@@ -263,6 +269,14 @@ mod tests {
     use crate::fit::Units;
     use crate::uncertainty::SHARED;
     use gonio_brdf::Material;
+
+    #[test]
+    fn a_curve_is_cut_where_it_has_no_value() {
+        let curve = [(0.0, 1.0), (1.0, f64::NAN), (2.0, 3.0), (3.0, 4.0), (4.0, f64::INFINITY)];
+        let runs = finite_runs(&curve);
+        assert_eq!(runs, vec![&curve[..1], &curve[2..4]]);
+        assert!(finite_runs(&[(0.0, f64::NAN)]).is_empty());
+    }
 
     /// A tape at θi = 30° on the default grid plus rings about the light,
     /// each sample with a 2 % σ.

@@ -4,7 +4,7 @@
 //! mirror directions are marked, each sample carries its k = 2 error bar and
 //! the fits are drawn over the data.
 
-use super::{err, fr, in_plane, legend, PALETTE, STYLE};
+use super::{err, finite_runs, fr, in_plane, legend, PALETTE, STYLE};
 use crate::fit::file::FittedBrdf;
 use crate::fit::Dataset;
 use crate::rounding::superscript;
@@ -34,8 +34,6 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
                 let f = m.eval(&Directions::from_degrees(ti, t.abs(), if t >= 0.0 { 0.0 } else { 180.0 }));
                 (t, f)
             })
-            // A rational function's pole is no point of its curve.
-            .filter(|p| p.1.is_finite())
             .collect()
     };
     let curves: Vec<Vec<(f64, f64)>> = fits.iter().map(curve).collect();
@@ -111,11 +109,19 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
     }
     for (k, (m, c)) in fits.iter().zip(&curves).enumerate() {
         let color = PALETTE[k % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(c.iter().map(|&(t, f)| to_xy(t, radius(f))), color.stroke_width(2)))
-            .map_err(err)?
-            .label(m.name())
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+        for (j, run) in finite_runs(c).into_iter().enumerate() {
+            let series = chart
+                .draw_series(LineSeries::new(
+                    run.iter().map(|&(t, f)| to_xy(t, radius(f))),
+                    color.stroke_width(2),
+                ))
+                .map_err(err)?;
+            if j == 0 {
+                series
+                    .label(m.name())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2)));
+            }
+        }
     }
     // The error bars: radial, from f − U to f + U (U = k·u, k = 2).
     chart

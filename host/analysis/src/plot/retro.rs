@@ -4,7 +4,7 @@
 //! incidence plane towards the normal. A retroreflector's figure of merit
 //! lives here, where a hemisphere map is a few pixels wide.
 
-use super::{err, fr, legend, samples_with_bars, tick, PALETTE, STYLE};
+use super::{err, finite_runs, fr, legend, samples_with_bars, tick, PALETTE, STYLE};
 use crate::fit::file::FittedBrdf;
 use crate::fit::Dataset;
 use crate::uncertainty::K_COVERAGE;
@@ -49,8 +49,6 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
             (0..=600)
                 .map(|k| k as f64 * ALPHA_MAX_DEG / 600.0)
                 .map(|a| (a, along(m, a)))
-                // A rational function's pole is no point of its curve.
-                .filter(|p| p.1.is_finite())
                 .collect()
         })
         .collect();
@@ -85,11 +83,16 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         .map_err(err)?;
     for (k, (m, c)) in fits.iter().zip(&curves).enumerate() {
         let colour = PALETTE[k % PALETTE.len()];
-        chart
-            .draw_series(LineSeries::new(c.iter().copied().filter(|p| p.1 > lo), colour.stroke_width(2)))
-            .map_err(err)?
-            .label(format!("{} (in the incidence plane)", m.name()))
-            .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+        for (j, run) in finite_runs(c).into_iter().enumerate() {
+            let series = chart
+                .draw_series(LineSeries::new(run.iter().copied().filter(|p| p.1 > lo), colour.stroke_width(2)))
+                .map_err(err)?;
+            if j == 0 {
+                series
+                    .label(format!("{} (in the incidence plane)", m.name()))
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], colour.stroke_width(2)));
+            }
+        }
     }
     let label = format!("measured, every Δφ about the light (± U, k = {K_COVERAGE})");
     samples_with_bars(&mut chart, &points, lo, BLACK, label)?;

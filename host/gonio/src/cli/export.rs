@@ -12,7 +12,7 @@ use std::path::{Path, PathBuf};
 pub struct ExportArgs {
     /// A fit written by `gonio fit --out FIT.json`.
     pub fit: PathBuf,
-    /// Output `.brdf` file (GLSL `BRDF(L, V, N, X, Y)` with parameter lines).
+    /// Output `.brdf` file (GLSL `BRDF(L, V, N, X, Y)`; a model's parameters as parameter lines).
     pub output: PathBuf,
     /// Print one JSON object: what was written (errors too: `{"error", "kind"}`).
     #[arg(long)]

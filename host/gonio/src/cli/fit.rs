@@ -242,7 +242,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     if let Some(out) = &a.out {
         fit::file::write_with_support(out, &v, &Support::of(&d.train)?)?;
     }
-    drawn(&FittedBrdf::Model(f.material.clone()), &a, &d.train)?;
+    write_drawn(&FittedBrdf::Model(f.material.clone()), &a, &d.train)?;
     if a.options.json {
         println!("{v}");
         return Ok(());
@@ -285,10 +285,8 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
 /// |ρ| beyond which two parameters are named as correlated.
 const STRONG_CORRELATION: f64 = 0.95;
 
-/// χ² in words: its degrees of freedom, the reduced value against its 99 %
-/// interval for a right model with right σ, and the p-value.
 /// What `--brdf` and `--plot` ask of a fit: its shader, its pictures over `data`.
-pub fn drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<()> {
+pub fn write_drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<()> {
     if let Some(out) = &a.brdf {
         super::export::write_brdf(fitted, &a.file.display().to_string(), out)?;
     }
@@ -298,6 +296,8 @@ pub fn drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<()> {
     Ok(())
 }
 
+/// χ² in words: its degrees of freedom, the reduced value against its 99 %
+/// interval for a right model with right σ, and the p-value.
 fn goodness_text(g: &Goodness) -> String {
     let (lo, hi) = Goodness::interval(g.dof, 0.99);
     let verdict = if g.reduced_chi2 > hi {

@@ -42,7 +42,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     if let Some(out) = &a.out {
         fit::file::write_with_support(out, &v, &Support::of(&d.train)?)?;
     }
-    super::fit::drawn(&FittedBrdf::Rational(f.function.clone()), &a, &d.train)?;
+    super::fit::write_drawn(&FittedBrdf::Rational(f.function.clone()), &a, &d.train)?;
     if o.json {
         println!("{v}");
         return Ok(());
