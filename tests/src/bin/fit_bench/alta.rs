@@ -29,10 +29,10 @@
 //! commit where `ALTA_DIR` is no git checkout. Without `ALTA_DIR` the
 //! section says so and runs nothing.
 
-use gonio_analysis::fit::{self, transform, FitSpec, Problem};
+use gonio_analysis::fit::{self, FitSpec, Problem};
 use gonio_analysis::formats::alta as alta_file;
 use gonio_brdf::{ModelId, Param};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 use serde_json::{json, Value};
 use std::f64::consts::PI;
 use std::fmt::Write as _;
@@ -41,10 +41,7 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 use crate::cases::materials;
-use crate::rmse;
-
-/// Random starts of ALTA's fits, as the scipy peer of `misfit` has.
-const STARTS: usize = 24;
+use crate::{peer_starts, rmse, PEER_STARTS};
 
 /// A model of ours as ALTA's plugins compose it.
 struct Shared {
@@ -261,15 +258,7 @@ pub fn alta(limit: usize, filter: &str) -> Value {
             };
             let problem = fit::problem(&m.data, &spec).expect("alta problem");
             // Drawn for every case, so a case's starts do not depend on the filter.
-            let starts: Vec<Vec<f64>> = (0..STARTS)
-                .map(|_| {
-                    problem
-                        .bounds_all
-                        .iter()
-                        .map(|b| transform::from_unit(b, rng.random_range(0.0..1.0)))
-                        .collect()
-                })
-                .collect();
+            let starts = peer_starts(&mut rng, &problem);
             let label = format!("{}/{}/{}", m.samples, m.material, shared.model.name());
             if !label.contains(filter) {
                 continue;
@@ -342,7 +331,7 @@ pub fn alta(limit: usize, filter: &str) -> Value {
     }
     let bars_met = !rows.is_empty() && worst_rmse <= 1.0 + 1e-9 && worst_time < 1.0;
     json!({
-        "alta_commit": alta.commit(), "ceres": ceres_version(), "starts": STARTS + 1, "cases": rows,
+        "alta_commit": alta.commit(), "ceres": ceres_version(), "starts": PEER_STARTS + 1, "cases": rows,
         "max_rmse_ratio": worst_rmse, "max_time_ratio": worst_time, "max_l2_disagreement": worst_l2,
         "bars_met": bars_met,
     })

@@ -149,6 +149,23 @@ fn peer_params(answer: &Value) -> Vec<f64> {
         .collect()
 }
 
+/// Random starts of a peer's multi-start fit, as many as scipy's in
+/// `misfit` and ALTA's in `alta`: each uniform in the search cube of
+/// `problem`'s box.
+const PEER_STARTS: usize = 24;
+
+fn peer_starts(rng: &mut impl rand::Rng, problem: &Problem) -> Vec<Vec<f64>> {
+    (0..PEER_STARTS)
+        .map(|_| {
+            problem
+                .bounds_all
+                .iter()
+                .map(|b| transform::from_unit(b, rng.random_range(0.0..1.0)))
+                .collect()
+        })
+        .collect()
+}
+
 fn rmse(p: &Problem, x: &[f64]) -> f64 {
     (p.cost(x) / p.y.len() as f64).sqrt()
 }

@@ -1,15 +1,12 @@
 //! The `misfit` section: ours from no start (the global search) against
 //! `least_squares` from 24 random starts in the same box, on every case.
 
-use gonio_analysis::fit::{self, transform, FitSpec};
-use rand::{Rng, SeedableRng};
+use gonio_analysis::fit::{self, FitSpec};
+use rand::SeedableRng;
 use serde_json::{json, Value};
 
 use crate::cases::cases;
-use crate::{job, peer_params, rmse, scipy};
-
-/// Random starts of the peer's multi-start fit.
-const PEER_STARTS: usize = 24;
+use crate::{job, peer_params, peer_starts, rmse, scipy};
 
 /// The first `limit` cases whose label holds `filter`; returns the table
 /// and the worst RMSE and time ratios.
@@ -24,11 +21,8 @@ pub fn misfit(limit: usize, filter: &str) -> (Value, f64, f64) {
         let (data, model) = (&*case.data, case.model);
         let spec = FitSpec::new(model);
         let problem = fit::problem(data, &spec).expect("misfit problem");
-        let bounds = problem.bounds_all.clone();
         // Drawn for every case, so a case's starts do not depend on the filter.
-        let starts: Vec<Vec<f64>> = (0..PEER_STARTS)
-            .map(|_| bounds.iter().map(|b| transform::from_unit(b, rng.random_range(0.0..1.0))).collect())
-            .collect();
+        let starts = peer_starts(&mut rng, &problem);
         if !case.label().contains(filter) {
             continue;
         }
