@@ -6,8 +6,9 @@
 
 use crate::calibration::IncidenceBudget;
 use crate::coefficients::{self, Estimate, Fitted, Kind, Provenance, Source, Support};
-use crate::fit::file::FittedBrdf;
-use crate::fit::{self, Dataset, Fit, Metrics, Units};
+use crate::fit::compared::ComparedFit;
+use crate::fit::file::{self as fit_file, FittedBrdf};
+use crate::fit::{Dataset, Metrics, Units};
 use crate::formats::brdf_explorer;
 use crate::plot;
 use crate::rounding;
@@ -25,7 +26,10 @@ pub struct Report<'a> {
     /// Facts shown above the table: `(what, value)`.
     pub facts: Vec<(String, String)>,
     pub data: &'a Dataset,
-    pub fits: &'a [Fit],
+    pub fits: &'a [ComparedFit],
+    /// Fits the comparison tried and could not make, and why (the rational
+    /// function when no function of the allowed degree holds every segment).
+    pub unfitted: &'a [String],
     /// Metrics on held-out samples, one per fit, if the comparison held any out.
     pub holdout: &'a [Option<Metrics>],
     /// The calibration's budget per incidence angle, when the data were calibrated here.
@@ -33,8 +37,8 @@ pub struct Report<'a> {
 }
 
 /// Every fit with what weighs it against the others.
-fn fitted(fits: &[Fit]) -> Vec<Fitted> {
-    fits.iter().map(Fitted::from).collect()
+fn fitted(fits: &[ComparedFit]) -> Vec<Fitted> {
+    fits.iter().map(ComparedFit::fitted).collect()
 }
 
 /// One table cell: the value ± u, extrapolated ones marked.
@@ -57,23 +61,27 @@ fn coefficient_cell(e: &Estimate) -> String {
 /// from the data where they hold the geometry, from the best fit beyond it
 /// (marked, with the adequate models' spread in its uncertainty), and the
 /// picture of R_A against α per β.
-fn coefficients_section(fits: &[Fit], support: Support, dir: &Path) -> Result<String> {
-    let source = Source::measured(fitted(fits), support)?;
+fn coefficients_section(fits: &[ComparedFit], support: Support, dir: &Path) -> Result<String> {
+    let all = fitted(fits);
+    let carrier = coefficients::best(&all).map_or(
+        "none: only the rational function was fitted, so such values are refused",
+        |(_, m)| m.model.name(),
+    );
+    let models: Vec<&ComparedFit> = fits.iter().filter(|f| matches!(f, ComparedFit::Model(_))).collect();
+    let source = Source::measured(all, support)?;
     let values = coefficients::compute(&source, &coefficients::report_requests())?;
     let mut html = format!(
         "<h2>Coefficients of retroreflection</h2>\n<p>Each value says what it rests on. <b>measured</b>: a sample of this \
          scan at the geometry, carried from the head's apertures (a collimated laser, a 0.39° detector field) to the \
          standard's with the samples' own curvature; <b>interpolated</b>: between samples on every side at most 1° \
          away; <b>extrapolated</b> (shaded): no sample there (an entrance angle not measured, or the plate's shadow): the \
-         best model ({}) carries it, scaled to the data at the nearest measured incidences, and its uncertainty holds \
-         half the spread of every model within {}× its RMSE. ± the standard uncertainty (k = 1{}). Spectral values at \
+         best model by AIC ({carrier}) carries it, scaled to the data at the nearest measured incidences, and its uncertainty \
+         holds half the spread of every model within {}× its RMSE; the rational function, held by its segments only where \
+         there are samples, carries none. ± the standard uncertainty (k = 1{}). Spectral values at \
          the laser's wavelength ({} nm), <b>not photometric</b>. Definitions: docs/retroreflection.md.</p>\n<table>\n\
          <tr><th class=\"l\">R_A (cd·lx⁻¹·m⁻²)</th>",
-        fits.iter()
-            .min_by(|a, b| a.aic.total_cmp(&b.aic))
-            .map_or("", |f| f.material.model.name()),
         coefficients::ADEQUATE_RMSE_RATIO,
-        if fits.iter().all(|f| f.covariance.is_some()) {
+        if models.iter().all(|f| matches!(f, ComparedFit::Model(m) if m.covariance.is_some())) {
             ": the samples' budgets, the fit's covariance with the plate and the stage zeros"
         } else {
             "; a fit without covariance adds no parameter term"
@@ -148,21 +156,34 @@ fn escape(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// `value ± stderr` of each parameter.
-fn params_cell(f: &Fit) -> String {
-    let names = f.material.model.param_names();
-    names
-        .iter()
-        .enumerate()
-        .map(|(k, n)| format!("<span class=\"n\">{n} = {}</span>", f.parameter_text(k)))
-        .collect::<Vec<_>>()
-        .join("<br>")
+/// `value ± stderr` of each parameter; what the rational function is.
+fn params_cell(f: &ComparedFit) -> String {
+    match f {
+        ComparedFit::Model(f) => f
+            .material
+            .model
+            .param_names()
+            .iter()
+            .enumerate()
+            .map(|(k, n)| format!("<span class=\"n\">{n} = {}</span>", f.parameter_text(k)))
+            .collect::<Vec<_>>()
+            .join("<br>"),
+        ComparedFit::Rational { fit, .. } => escape(&format!(
+            "degree {} in the {} plane ({} over {} coefficients), through every segment {}; L∞ {}",
+            fit.function.degree,
+            fit.function.parametrization.name(),
+            fit.function.numerator.len(),
+            fit.function.denominator.len(),
+            fit.segments,
+            rounding::significant(fit.linf, 4)
+        )),
+    }
 }
 
 /// Fits sorted best first (RMSE on the fitted samples).
-fn ranked(fits: &[Fit]) -> Vec<usize> {
+fn ranked(fits: &[ComparedFit]) -> Vec<usize> {
     let mut order: Vec<usize> = (0..fits.len()).collect();
-    order.sort_by(|&a, &b| fits[a].metrics.rmse.total_cmp(&fits[b].metrics.rmse));
+    order.sort_by(|&a, &b| fits[a].metrics().rmse.total_cmp(&fits[b].metrics().rmse));
     order
 }
 
@@ -210,32 +231,29 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         }
     );
     let holdout = r.holdout.iter().any(Option::is_some);
-    html.push_str("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt).</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th>");
+    html.push_str("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt); the rational function (Belcour et al. 2014 §5.B) is the least-norm one of the lowest degree that passes through every sample's segment.</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th>");
     if holdout {
         html.push_str("<th>held-out NRMSE</th><th>held-out NCC</th>");
     }
     html.push_str("<th>s</th><th class=\"l\">parameters</th><th class=\"l\">files</th></tr>\n");
     for (rank, &i) in order.iter().enumerate() {
         let f = &r.fits[i];
-        let name = f.material.model.name();
+        let name = f.name();
         let json = fits_dir.join(format!("{name}.json"));
-        fit::file::write_with_support(
-            &json,
-            &fit::file::to_json(f, r.data.units, r.holdout.get(i).and_then(Option::as_ref)),
-            &support,
-        )?;
+        fit_file::write_with_support(&json, &f.to_json(r.data.units, r.holdout.get(i).and_then(Option::as_ref)), &support)?;
+        let m = f.metrics();
         let brdf = fits_dir.join(format!("{name}.brdf"));
-        let text = brdf_explorer::write(
-            &f.material,
-            &[format!("{}: RMSE {:.4e} sr^-1, NCC {:.5}", r.title, f.metrics.rmse, f.metrics.ncc)],
-        );
+        let comments = [format!("{}: RMSE {:.4e} sr^-1, NCC {:.5}", r.title, m.rmse, m.ncc)];
+        let text = match f.brdf() {
+            FittedBrdf::Model(material) => brdf_explorer::write(&material, &comments),
+            FittedBrdf::Rational(function) => brdf_explorer::write_rational(&function, &comments),
+        };
         std::fs::write(&brdf, text).with_context(|| format!("cannot write {}", brdf.display()))?;
-        let m = &f.metrics;
         let _ = write!(
             html,
             "<tr{}><td class=\"l\">{name}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
             if rank < DRAWN { " class=\"best\"" } else { "" },
-            f.material.params.len(),
+            f.coefficients(),
             rounding::significant(m.rmse, 4),
             rounding::significant(m.nrmse, 4),
             rounding::figure(m.ncc, 5)
@@ -257,22 +275,21 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
             html,
             "<td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\"><a href=\"fits/{name}.json\">JSON</a> · \
              <a href=\"fits/{name}.brdf\">BRDF Explorer</a></td></tr>",
-            f.seconds,
+            f.seconds(),
             params_cell(f)
         );
     }
     html.push_str("</table>\n");
+    for why in r.unfitted {
+        let _ = writeln!(html, "<p>Not fitted: {}</p>", escape(why));
+    }
     if !r.fits.is_empty() {
         html.push_str(&coefficients_section(r.fits, support, dir)?);
     }
     if !r.budget.is_empty() {
         html.push_str(&budget_section(r.budget));
     }
-    let drawn: Vec<FittedBrdf> = order
-        .iter()
-        .take(DRAWN)
-        .map(|&i| FittedBrdf::Model(r.fits[i].material.clone()))
-        .collect();
+    let drawn: Vec<FittedBrdf> = order.iter().take(DRAWN).map(|&i| r.fits[i].brdf()).collect();
     let names: Vec<&str> = drawn.iter().map(FittedBrdf::name).collect();
     let files = plot::render(r.data, &drawn, &dir.join("plots"), &plot::Options::default())?;
     let _ = writeln!(

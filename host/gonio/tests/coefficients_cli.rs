@@ -4,6 +4,7 @@
 
 use gonio_analysis::coefficients::{self, Set, Source};
 use gonio_analysis::fit;
+use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::formats;
 use gonio_brdf::Material;
 use serde_json::Value;
@@ -198,8 +199,11 @@ fn coefficients_of_a_fitted_scan_hold_the_truth() {
 
     // Linear propagation against Monte Carlo (GUM S1), within 10 %.
     let f = fit::file::read(&fit_json).unwrap();
+    let FittedBrdf::Model(material) = f.brdf else {
+        panic!("a model's fit");
+    };
     let src = Source::Model {
-        material: f.material,
+        material,
         covariance: f.covariance,
     };
     let reqs: Vec<_> = Set::AstmE810

@@ -247,30 +247,61 @@ fn fit_and_plot_draw_every_picture() {
 }
 
 /// The comparison as JSON, as a table, and as `report.html` (with every fit
-/// and its shader beside it).
+/// and its shader beside it); the rational function beside the models when
+/// its segments can be had, and why not when they cannot.
 #[test]
 fn compare_lists_every_model() {
     let dir = tempfile::tempdir().unwrap();
     let file = write_alta(dir.path(), &tape(), Units::Fr);
+    // The file has no σ, so the rational function's default segments
+    // cannot be had: a note says so, and the models stand.
     let o = gonio(&["compare", file.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", text(&o));
-    let v: Vec<Value> = serde_json::from_slice(&o.stdout).unwrap();
-    let models: Vec<&str> = v.iter().map(|f| f["model"].as_str().unwrap()).collect();
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let models: Vec<&str> = v["fits"].as_array().unwrap().iter().map(|f| f["model"].as_str().unwrap()).collect();
     assert_eq!(models, ModelId::ALL.map(|m| m.name()));
-    let best = v
+    let why = v["unfitted"][0].as_str().unwrap_or_else(|| panic!("{}", v["unfitted"]));
+    assert!(why.contains("rational") && why.contains("abs:WIDTH"), "{why}");
+    // With relative segments it is fitted, ranked and reported as a model is.
+    let report = dir.path().join("report");
+    // Degree 6 at most: degree 8 costs a minute in a test build.
+    let segments = ["--segments", "rel:0.2", "--max-degree", "6"];
+    let o = gonio(&[&["compare", file.to_str().unwrap(), "--json"][..], &segments].concat());
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let fits = v["fits"].as_array().unwrap();
+    assert_eq!(fits.len(), ModelId::ALL.len() + 1, "{v}");
+    assert_eq!(v["unfitted"], serde_json::json!([]));
+    let rational = fits.iter().find(|f| f["model"] == "rational").unwrap();
+    assert_eq!(rational["worst_violation"], 0.0);
+    assert!(rational["rank"]["aic"].is_u64() && rational["bic"].is_f64(), "{rational}");
+    // Every sample within 20 % of its value.
+    let peak = dataset(&tape(), Units::Fr).observations.iter().map(|o| o.value).fold(0.0, f64::max);
+    assert!(rational["linf"].as_f64().unwrap() <= 0.2 * peak, "{rational}");
+    let best = fits
         .iter()
         .min_by(|a, b| a["rmse"].as_f64().unwrap().total_cmp(&b["rmse"].as_f64().unwrap()))
         .unwrap();
     assert_eq!(best["model"], "retro-phong");
-    let report = dir.path().join("report");
-    let table = gonio(&["compare", file.to_str().unwrap(), "--report", report.to_str().unwrap()]);
+    let table = gonio(
+        &[
+            &["compare", file.to_str().unwrap(), "--report", report.to_str().unwrap()][..],
+            &segments,
+        ]
+        .concat(),
+    );
     assert!(
-        text(&table).contains("NRMSE") && text(&table).contains("five-param"),
+        text(&table).contains("NRMSE") && text(&table).contains("five-param") && text(&table).contains("rational"),
         "{}",
         text(&table)
     );
-    let names = ModelId::ALL.map(|m| m.name());
+    let mut names = ModelId::ALL.map(|m| m.name()).to_vec();
+    names.push("rational");
     let html = common::check_report(&report, &names, &["15", "30", "60"]);
+    assert!(
+        html.contains("lowest degree that passes through every sample"),
+        "the rational row is explained"
+    );
     // Best first.
     let models = &html[html.find("<h2>Models</h2>").unwrap()..];
     let first_row = models.find("<td class=\"l\">").map(|i| &models[i..i + 40]).unwrap();
@@ -579,7 +610,10 @@ fn search_boxes_follow_the_data_and_say_when_they_bind() {
     // compare: every model takes the names it has; AIC/BIC ranks beside RMSE's.
     let o = gonio(&["compare", f, "--bounds", "kd=0:1000,n=1:100", "--json"]);
     assert!(o.status.success(), "{}", text(&o));
-    let rows: Vec<Value> = serde_json::from_slice(&o.stdout).unwrap();
+    let rows = serde_json::from_slice::<Value>(&o.stdout).unwrap()["fits"]
+        .as_array()
+        .unwrap()
+        .clone();
     let models = ModelId::ALL.len();
     assert_eq!(rows.len(), models);
     let mut ranks: Vec<u64> = rows.iter().map(|r| r["rank"]["aic"].as_u64().unwrap()).collect();

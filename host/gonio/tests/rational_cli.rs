@@ -101,6 +101,51 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
         "{shader}"
     );
 
+    // `gonio coefficients` takes it: values the data hold are theirs; beyond
+    // them a rational function carries nothing (refused when alone, the
+    // models' when a model's fit of the same data is given too).
+    let coefficients = |fits: &[&str]| -> Value {
+        let mut args = vec!["coefficients", "--set", "astm-e810", "--rl", "--json"];
+        for f in fits {
+            args.extend(["--fit", f]);
+        }
+        let o = gonio(&args);
+        assert!(o.status.success(), "{}", text(&o));
+        serde_json::from_slice(&o.stdout).unwrap()
+    };
+    let alone = coefficients(&[out.to_str().unwrap()]);
+    let values: Vec<&Value> = alone["ra"].as_array().unwrap().iter().chain([&alone["rl"]]).collect();
+    assert!(values.len() > 1);
+    for c in &values {
+        let held = c["provenance"] != "extrapolated";
+        assert_eq!(c["value"].is_number(), held, "{c}");
+    }
+    let model = dir.path().join("model.json");
+    let o = gonio(
+        &[
+            &at_30[..2],
+            &[
+                "--model",
+                "retro-phong",
+                "--theta-i",
+                "30",
+                "--out",
+                model.to_str().unwrap(),
+                "--json",
+            ],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", text(&o));
+    let both = coefficients(&[out.to_str().unwrap(), model.to_str().unwrap()]);
+    for c in both["ra"].as_array().unwrap().iter().chain([&both["rl"]]) {
+        assert!(c["value"].is_number(), "{c}");
+        if c["provenance"] == "extrapolated" {
+            assert_eq!(c["model"], "retro-phong", "{c}");
+            assert!(c["models"].as_array().unwrap().iter().all(|m| m["model"] != "rational"), "{c}");
+        }
+    }
+
     // `gonio plot` draws it over the data.
     let pictures = dir.path().join("plots");
     let o = gonio(&[

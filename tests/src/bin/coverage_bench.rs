@@ -200,8 +200,10 @@ fn provenance_coverage(rt: &tokio::runtime::Runtime, material: Specimen, scans: 
                 .count();
             retro_zone_min = retro_zone_min.min(near);
         }
-        let outcomes = compare(&domain(&c.csv, &options)?, &options)?;
-        let fits: Vec<Fitted> = outcomes.iter().map(|o| Fitted::from(&o.fit)).collect();
+        // Models only: the rational function carries no value beyond the
+        // data, and within them the data carry every value themselves.
+        let outcomes = compare(&domain(&c.csv, &options)?, &options, None)?.rows;
+        let fits: Vec<Fitted> = outcomes.iter().map(|o| o.fit.fitted()).collect();
         let source = Source::measured(fits, Support::of(&data)?)?;
         let got = coefficients::compute(&source, &reqs)?;
         let mut scan: BTreeMap<&'static str, Tally> = BTreeMap::new();
@@ -275,6 +277,6 @@ fn imperfect_scan(
 fn source_best(outcomes: &[gonio::cli::fit::Outcome]) -> &'static str {
     outcomes
         .iter()
-        .min_by(|a, b| a.fit.aic.total_cmp(&b.fit.aic))
-        .map_or("none", |o| o.fit.material.model.name())
+        .min_by(|a, b| a.fit.criteria().aic.total_cmp(&b.fit.criteria().aic))
+        .map_or("none", |o| o.fit.name())
 }

@@ -6,6 +6,7 @@
 
 use super::provenance::{Basis, Point, Provenance, Support};
 use super::{aperture, Apertures, Cie, Request};
+use crate::fit::file::FittedBrdf;
 use crate::fit::Dataset;
 use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Result};
@@ -43,10 +44,15 @@ pub enum Source {
     Truth(Specimen),
 }
 
-/// A model fitted to the data, and how well.
+/// A model or the rational function fitted to the data, and how well.
+/// The rational function never carries a value beyond the data: it is held
+/// by its segments only where there are samples (its denominator is kept
+/// positive only there), so what it says beyond them is no measurement's,
+/// and a wild value there would widen the models' spread for nothing.
 #[derive(Debug, Clone)]
 pub struct Fitted {
-    pub material: Material,
+    pub brdf: FittedBrdf,
+    /// The parameters' covariance (a model's only).
     pub covariance: Option<DMatrix<f64>>,
     /// Root mean square residual, in the data's units.
     pub rmse: f64,
@@ -56,7 +62,7 @@ pub struct Fitted {
 impl From<&crate::fit::Fit> for Fitted {
     fn from(f: &crate::fit::Fit) -> Self {
         Fitted {
-            material: f.material.clone(),
+            brdf: FittedBrdf::Model(f.material.clone()),
             covariance: f.covariance.clone(),
             rmse: f.metrics.rmse,
             aic: f.aic,
@@ -223,8 +229,8 @@ impl Source {
                 covariance: Some(c),
             } => (material, c),
             Source::Measured { fits, .. } => {
-                let best = best(fits);
-                (&best.material, best.covariance.as_ref()?)
+                let (best, material) = best(fits)?;
+                (material, best.covariance.as_ref()?)
             }
             _ => return None,
         };
@@ -248,15 +254,27 @@ impl Source {
     }
 }
 
-/// The fit with the lowest AIC.
-fn best(fits: &[Fitted]) -> &Fitted {
-    fits.iter().min_by(|a, b| a.aic.total_cmp(&b.aic)).unwrap_or(&fits[0])
+impl Fitted {
+    /// The model fitted, `None` for the rational function.
+    pub fn material(&self) -> Option<&Material> {
+        match &self.brdf {
+            FittedBrdf::Model(m) => Some(m),
+            FittedBrdf::Rational(_) => None,
+        }
+    }
+}
+
+/// The model fit with the lowest AIC, and its material (`None`: only the
+/// rational function was fitted).
+pub fn best(fits: &[Fitted]) -> Option<(&Fitted, &Material)> {
+    fits.iter()
+        .filter_map(|f| Some((f, f.material()?)))
+        .min_by(|a, b| a.0.aic.total_cmp(&b.0.aic))
 }
 
 /// A coefficient from the data where they hold its geometry, else from the
 /// best model with the adequate models' spread.
 fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
-    let top = best(fits);
     let basis = support.classify(&r.geometry.directions());
     if basis.provenance != Provenance::Extrapolated {
         return Estimate {
@@ -264,6 +282,15 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
             ..carried(support, r, interpolate(&support.points, r))
         };
     }
+    let Some((top, top_material)) = best(fits) else {
+        // Only a rational function, which says nothing beyond its data.
+        return Estimate {
+            value: f64::NAN,
+            u: f64::NAN,
+            basis: Some(basis),
+            ..Estimate::default()
+        };
+    };
     // The data where they are nearest: the same geometry at the measured
     // incidences about the requested one, each model scaled to them.
     let anchors: Vec<(f64, Request, Estimate)> = anchors(support, r)
@@ -291,13 +318,16 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
     let models: Vec<ModelValue> = fits
         .iter()
         .filter(|f| f.rmse <= limit)
-        .map(|f| ModelValue {
-            model: f.material.model.name(),
-            value: scaled(&f.material),
-            rmse: f.rmse,
+        .filter_map(|f| {
+            let m = f.material()?;
+            Some(ModelValue {
+                model: m.model.name(),
+                value: scaled(m),
+                rmse: f.rmse,
+            })
         })
         .collect();
-    let value = scaled(&top.material);
+    let value = scaled(top_material);
     // Between two measured incidences the data themselves interpolate too
     // (linearly in the entrance angle): a way across that no model shapes,
     // whose disagreement with the models' belongs in the spread.
@@ -308,7 +338,7 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
         .chain(between)
         .fold((value, value), |(lo, hi), v| (lo.min(v), hi.max(v)));
     let u_model = (hi - lo) / 2.0;
-    let u_params = top.covariance.as_ref().map(|c| linear_u(&top.material, c, r));
+    let u_params = top.covariance.as_ref().map(|c| linear_u(top_material, c, r));
     // The level the anchors set is known to their own relative uncertainty.
     let u_anchor = match total > 0.0 {
         true => value * anchors.iter().map(|(w, _, e)| w / total * e.u / e.value).sum::<f64>(),
@@ -320,7 +350,7 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
         u_params,
         u_model: Some(u_model),
         basis: Some(basis),
-        model: Some(top.material.model.name()),
+        model: Some(top_material.model.name()),
         models,
         ..Estimate::default()
     }

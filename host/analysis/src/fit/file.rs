@@ -43,11 +43,13 @@ pub fn to_json(f: &Fit, units: Units, holdout: Option<&Metrics>) -> Value {
     v
 }
 
-/// A fit read back: the material, and what its uncertainty needs.
+/// A fit read back: the model or rational function, and what its
+/// uncertainty needs.
 #[derive(Debug, Clone)]
 pub struct FitFile {
-    pub material: Material,
-    /// Covariance of the parameters, `models.md` order (`None` if the file has none).
+    pub brdf: FittedBrdf,
+    /// Covariance of a model's parameters, `models.md` order (`None` if the
+    /// file has none, and for a rational function).
     pub covariance: Option<nalgebra::DMatrix<f64>>,
     pub rmse: Option<f64>,
     pub aic: Option<f64>,
@@ -70,11 +72,15 @@ pub fn write_with_support(path: &Path, v: &Value, support: &Support) -> Result<(
 pub fn read(path: &Path) -> Result<FitFile> {
     let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let v: Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
-    let material = material_of(&v).with_context(|| format!("{}", path.display()))?;
-    let n = material.params.len();
-    let covariance = match &v["covariance"] {
-        Value::Null => None,
-        c => {
+    let brdf = if v["model"] == crate::rational::file::MODEL {
+        FittedBrdf::Rational(crate::rational::file::function_of(&v).with_context(|| format!("{}", path.display()))?)
+    } else {
+        FittedBrdf::Model(material_of(&v).with_context(|| format!("{}", path.display()))?)
+    };
+    let covariance = match (&brdf, &v["covariance"]) {
+        (FittedBrdf::Rational(_), _) | (_, Value::Null) => None,
+        (FittedBrdf::Model(m), c) => {
+            let n = m.params.len();
             let rows: Vec<Vec<f64>> = serde_json::from_value(c.clone())
                 .with_context(|| format!("{}: `covariance` is not a matrix of numbers", path.display()))?;
             if rows.len() != n || rows.iter().any(|r| r.len() != n) {
@@ -88,7 +94,7 @@ pub fn read(path: &Path) -> Result<FitFile> {
         s => Some(Support::from_json(s).with_context(|| format!("{}", path.display()))?),
     };
     Ok(FitFile {
-        material,
+        brdf,
         covariance,
         rmse: v["rmse"].as_f64(),
         aic: v["aic"].as_f64(),
@@ -101,9 +107,15 @@ pub fn write(path: &Path, v: &Value) -> Result<()> {
     std::fs::write(path, serde_json::to_string_pretty(v)? + "\n").with_context(|| format!("cannot write {}", path.display()))
 }
 
-/// The material of a fit file.
+/// The material of a fit file: a model's only.
 pub fn read_material(path: &Path) -> Result<Material> {
-    read(path).map(|f| f.material)
+    match read(path)?.brdf {
+        FittedBrdf::Model(m) => Ok(m),
+        FittedBrdf::Rational(_) => bail!(
+            "{}: a rational fit: here only a parametric model's fit is taken (eval, dhr, export, plot and coefficients take a rational one)",
+            path.display()
+        ),
+    }
 }
 
 /// What a fit file holds: a model with its parameters, or a rational
@@ -134,21 +146,10 @@ impl FittedBrdf {
 
 /// Reads either kind of fit file.
 pub fn read_fitted(path: &Path) -> Result<FittedBrdf> {
-    let text = std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
-    let v: Value = serde_json::from_str(&text).with_context(|| format!("{} is not JSON", path.display()))?;
-    if v["model"] == crate::rational::file::MODEL {
-        let r = crate::rational::file::function_of(&v).with_context(|| format!("{}", path.display()))?;
-        return Ok(FittedBrdf::Rational(r));
-    }
-    material_of(&v)
-        .map(FittedBrdf::Model)
-        .with_context(|| format!("{}", path.display()))
+    read(path).map(|f| f.brdf)
 }
 
 fn material_of(v: &Value) -> Result<Material> {
-    if v["model"] == crate::rational::file::MODEL {
-        bail!("a rational fit: here only a parametric model's fit is taken (eval, dhr, export and plot take a rational one)");
-    }
     let model = ModelId::parse(v["model"].as_str().unwrap_or_default())?;
     let mut params = Vec::new();
     for name in model.param_names() {

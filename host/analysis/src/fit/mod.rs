@@ -4,6 +4,8 @@
 //! standard errors, and cross-validation by held-out incidence angles.
 
 mod area;
+pub mod compared;
+pub mod criteria;
 pub mod data;
 pub mod file;
 mod global;
@@ -197,26 +199,7 @@ pub fn problem(data: &Dataset, spec: &FitSpec) -> Result<Problem> {
     }
     let data = data.in_units(spec.units)?;
     let y: Vec<f64> = data.observations.iter().map(|o| o.value).collect();
-    let floor = 1e-3 * y.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    let solid = match spec.weighting {
-        Weighting::Area => area::solid_angles(&data.observations),
-        _ => Vec::new(),
-    };
-    let mut weight = Vec::with_capacity(y.len());
-    for (k, o) in data.observations.iter().enumerate() {
-        weight.push(match spec.weighting {
-            Weighting::Uniform => 1.0,
-            Weighting::Area => solid[k].sqrt(),
-            Weighting::Relative => 1.0 / y[k].abs().max(floor).max(f64::MIN_POSITIVE),
-            Weighting::Sigma => match o.sigma {
-                Some(s) if s > 0.0 && s.is_finite() => 1.0 / s,
-                _ => bail!(
-                    "--weights sigma needs a positive uncertainty on every sample (sample {} has none)",
-                    k + 1
-                ),
-            },
-        });
-    }
+    let weight = criteria::weights(&data, spec.weighting)?;
     Ok(Problem {
         model,
         param: spec.param,
@@ -264,8 +247,7 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         })
         .map(|&i| names[i])
         .collect();
-    let (nf, kf) = (problem.y.len() as f64, problem.free.len() as f64);
-    let log_mean = (cost / nf).max(f64::MIN_POSITIVE).ln();
+    let criteria = criteria::Criteria::of(cost, problem.y.len(), problem.free.len());
     let correlation = covariance
         .as_ref()
         .and_then(|c| goodness::correlation(c, &problem.free))
@@ -279,8 +261,8 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
             .then(|| goodness::Goodness::of(cost, problem.y.len(), problem.free.len()))
             .flatten(),
         correlation,
-        aic: nf * log_mean + 2.0 * kf,
-        bic: nf * log_mean + kf * nf.ln(),
+        aic: criteria.aic,
+        bic: criteria.bic,
         at_bound,
         metrics: evaluate(&material, data),
         stderr,

@@ -4,6 +4,7 @@
 
 use super::fit::RationalFit;
 use super::function::Rational;
+use crate::fit::criteria::Criteria;
 use crate::fit::{Metrics, Units};
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
@@ -11,8 +12,9 @@ use serde_json::{json, Value};
 /// The model name a rational fit carries in its file.
 pub const MODEL: &str = "rational";
 
-/// The JSON object of a fit, with the metrics of held-out samples if any.
-pub fn to_json(f: &RationalFit, units: Units, holdout: Option<&Metrics>) -> Value {
+/// The JSON object of a fit, with its information criteria (under the
+/// weighting it is ranked by) and the metrics of held-out samples if any.
+pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, holdout: Option<&Metrics>) -> Value {
     let r = &f.function;
     let mut v = json!({
         "model": MODEL,
@@ -28,6 +30,7 @@ pub fn to_json(f: &RationalFit, units: Units, holdout: Option<&Metrics>) -> Valu
         "rmse": f.metrics.rmse, "nrmse": f.metrics.nrmse, "ncc": f.metrics.ncc, "l2": f.metrics.l2,
         "linf": f.linf,
         "samples": f.samples, "seconds": f.seconds, "units": units,
+        "aic": criteria.aic, "bic": criteria.bic,
         "attempts": f.attempts,
     });
     if let Some(c) = &f.capped {

@@ -4,6 +4,7 @@
 use anyhow::{bail, Context, Result};
 use gonio_analysis::coefficients::{self, Apertures, Coefficient, Fitted, Kind, Provenance, Request, Set, Source, Support, WAVELENGTH_NM};
 use gonio_analysis::fit;
+use gonio_analysis::fit::file::FittedBrdf;
 use gonio_brdf::{Material, ModelId};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -12,8 +13,9 @@ use std::path::PathBuf;
 pub struct CoefficientsArgs {
     /// Fits (FIT.json from `gonio fit --out`, or a report's fits/*.json),
     /// each of the same data: where the data hold a geometry its value is
-    /// measured (or interpolated) from them; beyond, the best fit (lowest
-    /// AIC) carries it, scaled to the data at the nearest measured
+    /// measured (or interpolated) from them; beyond, the best model's fit
+    /// (lowest AIC; never a rational function, which holds only where its
+    /// samples are: with no model, such a value is refused) carries it, scaled to the data at the nearest measured
     /// incidences, and the spread of the fits within 2× its RMSE
     /// widens the uncertainty (docs/retroreflection.md). The covariance gives
     /// the parameters' part (with the plate and the stage zeros when the
@@ -121,8 +123,11 @@ fn fits_source(paths: &[PathBuf]) -> Result<Source> {
             paths[0].display()
         );
         let f = files.into_iter().next().context("one fit")?;
+        let FittedBrdf::Model(material) = f.brdf else {
+            bail!("{}: a rational fit without its data's support", paths[0].display());
+        };
         return Ok(Source::Model {
-            material: f.material,
+            material,
             covariance: f.covariance,
         });
     }
@@ -143,7 +148,7 @@ fn fits_source(paths: &[PathBuf]) -> Result<Source> {
             None => support = Some(s),
         }
         fits.push(Fitted {
-            material: f.material,
+            brdf: f.brdf,
             covariance: f.covariance,
             rmse,
             aic,

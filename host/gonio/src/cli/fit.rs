@@ -1,11 +1,14 @@
 //! `gonio fit` and `gonio compare`: models fitted to a data file (ALTA `.dat`
 //! or the calibrated sample CSV).
 
+use super::rational::RationalArgs;
 use anyhow::{bail, Context, Result};
-use gonio_analysis::coefficients::{Coefficient, Fitted, Source, Support};
+use gonio_analysis::coefficients::{Coefficient, Source, Support};
+use gonio_analysis::fit::compared::ComparedFit;
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::goodness::Goodness;
 use gonio_analysis::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
+use gonio_analysis::rational::RationalSpec;
 use gonio_analysis::rounding::{figure, significant};
 use gonio_brdf::{ModelId, Param};
 use serde_json::Value;
@@ -88,13 +91,8 @@ pub struct FitArgs {
     /// or `rational` (a rational function through every sample's segment; its plane is --param: back or view, the light-view plane).
     #[arg(long)]
     pub model: String,
-    /// With --model rational: each sample's segment, `sigma` (value ± 2σ: the calibrated CSV's k = 2 interval, ALTA's #VS),
-    /// `abs:WIDTH` (value ± WIDTH, in f_r, sr⁻¹, whatever the file's units) or `rel:WIDTH` (value × (1 ± WIDTH)).
-    #[arg(long, value_name = "SOURCE")]
-    pub segments: Option<String>,
-    /// With --model rational: the highest total degree of numerator and denominator tried (8: 330 coefficients).
-    #[arg(long, value_name = "D")]
-    pub max_degree: Option<usize>,
+    #[command(flatten)]
+    pub rational: RationalArgs,
     /// Hold a parameter at a value, NAME=V (repeatable).
     #[arg(long)]
     pub fix: Vec<String>,
@@ -122,6 +120,10 @@ pub struct CompareArgs {
     /// Overwrite a report already in the --report directory.
     #[arg(long, requires = "report")]
     pub force: bool,
+    /// The rational function's row (its segments: the samples' σ unless
+    /// --segments says otherwise; where none holds them all, a note says why).
+    #[command(flatten)]
+    pub rational: RationalArgs,
     #[command(flatten)]
     pub options: FitOptions,
 }
@@ -208,34 +210,37 @@ fn spec(model: ModelId, fixes: &[String], o: &FitOptions, data: &Dataset, every_
     })
 }
 
+/// One fit of a comparison, its held-out metrics and its fit file's JSON.
 pub struct Outcome {
-    pub fit: Fit,
+    pub fit: ComparedFit,
     pub holdout: Option<fit::Metrics>,
     pub json: Value,
 }
 
-fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain, every_model: bool) -> Result<Outcome> {
+/// Every fit of a comparison, and the fits it tried and could not make.
+pub struct Comparison {
+    pub rows: Vec<Outcome>,
+    pub unfitted: Vec<String>,
+}
+
+fn run_one(model: ModelId, fixes: &[String], o: &FitOptions, d: &Domain, every_model: bool) -> Result<(Fit, Option<fit::Metrics>)> {
     let spec = spec(model, fixes, o, &d.train, every_model)?;
     let f = fit::fit(&d.train, &spec).with_context(|| format!("fitting {}", model.name()))?;
     let holdout = d.holdout.as_ref().map(|h| fit::evaluate(&f.material, h));
-    let json = fit::file::to_json(&f, d.train.units, holdout.as_ref());
-    Ok(Outcome { fit: f, holdout, json })
+    Ok((f, holdout))
 }
 
 pub fn fit_cmd(a: FitArgs) -> Result<()> {
     if a.model == gonio_analysis::rational::file::MODEL {
         return super::rational::fit_cmd(a);
     }
-    if a.segments.is_some() || a.max_degree.is_some() {
+    if a.rational.given() {
         bail!("--segments and --max-degree are options of --model rational, not of {}", a.model);
     }
     let model = ModelId::parse(&a.model)?;
     let d = domain(&a.file, &a.options)?;
-    let Outcome {
-        fit: f,
-        holdout,
-        json: mut v,
-    } = run_one(model, &a.fix, &a.options, &d, false)?;
+    let (f, holdout) = run_one(model, &a.fix, &a.options, &d, false)?;
+    let mut v = fit::file::to_json(&f, d.train.units, holdout.as_ref());
     if !d.train.warnings.is_empty() {
         v["warnings"] = serde_json::json!(d.train.warnings);
     }
@@ -318,23 +323,36 @@ fn goodness_text(g: &Goodness) -> String {
     )
 }
 
-/// Every model fitted to the same data, in catalogue order.
-pub fn compare(d: &Domain, o: &FitOptions) -> Result<Vec<Outcome>> {
+/// Every model fitted to the same data, in catalogue order, then the
+/// rational function if asked for (`None`: models only). A rational
+/// function that no degree allowed can make is a note, not a failure of
+/// the comparison: the models still stand.
+pub fn compare(d: &Domain, o: &FitOptions, rational: Option<&RationalSpec>) -> Result<Comparison> {
     let bar = gonio_acquire::operator::Operator::for_json(o.json).bar(ModelId::ALL.len() as u64, "fitting", "models");
     let mut rows = Vec::new();
     for model in ModelId::ALL {
         bar.set_message(model.name());
-        rows.push(run_one(model, &[], o, d, true)?);
+        let (f, holdout) = run_one(model, &[], o, d, true)?;
+        let fit = ComparedFit::Model(f);
+        let json = fit.to_json(d.train.units, holdout.as_ref());
+        rows.push(Outcome { fit, holdout, json });
         bar.inc(1);
     }
     bar.finish_and_clear();
-    Ok(rows)
+    let mut unfitted = Vec::new();
+    if let Some(spec) = rational {
+        match super::rational::compared(d, spec, o.weights, o.json) {
+            Ok(row) => rows.push(row),
+            Err(e) => unfitted.push(format!("{e:#}")),
+        }
+    }
+    Ok(Comparison { rows, unfitted })
 }
 
 /// R_A and R_L of a comparison, as its report gives them: from the data
-/// where they hold the geometry, from the fits beyond.
+/// where they hold the geometry, from the models' fits beyond.
 pub fn coefficients(d: &Domain, rows: &[Outcome]) -> Result<Vec<Coefficient>> {
-    let fits = rows.iter().map(|r| Fitted::from(&r.fit)).collect();
+    let fits = rows.iter().map(|r| r.fit.fitted()).collect();
     let source = Source::measured(fits, Support::of(&d.train)?)?;
     gonio_analysis::coefficients::compute(&source, &gonio_analysis::coefficients::report_requests())
 }
@@ -345,10 +363,11 @@ pub fn report(
     title: String,
     facts: Vec<(String, String)>,
     d: &Domain,
-    rows: &[Outcome],
+    comparison: &Comparison,
     budget: &[gonio_analysis::calibration::IncidenceBudget],
 ) -> Result<PathBuf> {
-    let fits: Vec<Fit> = rows.iter().map(|r| r.fit.clone()).collect();
+    let rows = &comparison.rows;
+    let fits: Vec<ComparedFit> = rows.iter().map(|r| r.fit.clone()).collect();
     let holdout: Vec<_> = rows.iter().map(|r| r.holdout).collect();
     gonio_analysis::report::write(
         dir,
@@ -357,6 +376,7 @@ pub fn report(
             facts,
             data: &d.train,
             fits: &fits,
+            unfitted: &comparison.unfitted,
             holdout: &holdout,
             budget,
         },
@@ -367,19 +387,21 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
     if let Some(dir) = a.report.as_ref().filter(|d| d.join("report.html").exists() && !a.force) {
         bail!("{} already holds a report; choose another --report or pass --force", dir.display());
     }
+    let rational = a.rational.spec(a.options.param)?;
     let d = domain(&a.file, &a.options)?;
-    let rows = compare(&d, &a.options)?;
+    let comparison = compare(&d, &a.options, Some(&rational))?;
     if let Some(dir) = &a.report {
         let mut facts = vec![("data".to_string(), a.file.display().to_string())];
         facts.extend(d.train.metadata.iter().map(|m| ("metadata".to_string(), m.clone())));
-        let path = report(dir, format!("Model comparison: {}", a.file.display()), facts, &d, &rows, &[])?;
+        let path = report(dir, format!("Model comparison: {}", a.file.display()), facts, &d, &comparison, &[])?;
         if !a.options.json {
             eprintln!("report: {}", path.display());
         }
     }
+    let Comparison { rows, unfitted } = comparison;
     let ranks = ranks(&rows);
     if a.options.json {
-        let out: Vec<Value> = rows
+        let fits: Vec<Value> = rows
             .into_iter()
             .zip(&ranks)
             .map(|(r, k)| {
@@ -388,7 +410,7 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
                 v
             })
             .collect();
-        println!("{}", Value::Array(out));
+        println!("{}", serde_json::json!({"fits": fits, "unfitted": unfitted}));
         return Ok(());
     }
     println!(
@@ -397,39 +419,51 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
         d.train.units
     );
     println!(
-        "{:<16} {:>6} {:>12} {:>12} {:>9} {:>13} {:>13} {:>4} {:>4} {:>8} {:>8}  at bound",
+        "{:<18} {:>6} {:>12} {:>12} {:>9} {:>13} {:>13} {:>4} {:>4} {:>8} {:>8}  at bound",
         "model", "coeffs", "RMSE", "NRMSE", "NCC", "AIC", "BIC", "#AIC", "#BIC", "s", "χ²/dof"
     );
     let mut order: Vec<usize> = (0..rows.len()).collect();
     order.sort_by_key(|&i| ranks[i][0]);
     for i in order {
         let f = &rows[i].fit;
-        let m = &f.metrics;
-        let k = f.material.params.len();
+        let (m, c) = (f.metrics(), f.criteria());
+        let (goodness, at_bound) = match f {
+            ComparedFit::Model(f) => (
+                f.goodness.map_or("–".to_string(), |g| significant(g.reduced_chi2, 3)),
+                f.at_bound.join(", "),
+            ),
+            ComparedFit::Rational { fit, .. } => (
+                "–".to_string(),
+                format!("(degree {}, segments {})", fit.function.degree, fit.segments),
+            ),
+        };
         println!(
-            "{:<16} {k:>6} {:>12} {:>12} {:>9} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2} {:>8}  {}",
-            f.material.model.name(),
+            "{:<18} {:>6} {:>12} {:>12} {:>9} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2} {:>8}  {at_bound}",
+            f.name(),
+            f.coefficients(),
             significant(m.rmse, 4),
             significant(m.nrmse, 4),
             figure(m.ncc, 5),
-            f.aic,
-            f.bic,
+            c.aic,
+            c.bic,
             ranks[i][1],
             ranks[i][2],
-            f.seconds,
-            f.goodness.map_or("–".to_string(), |g| significant(g.reduced_chi2, 3)),
-            f.at_bound.join(", ")
+            f.seconds(),
+            goodness,
         );
+    }
+    for why in &unfitted {
+        eprintln!("note: not fitted: {why}");
     }
     Ok(())
 }
 
 /// Each fit's rank (1 = best) by RMSE, AIC and BIC.
 fn ranks(rows: &[Outcome]) -> Vec<[usize; 3]> {
-    let key = |f: &Fit, c: usize| match c {
-        0 => f.metrics.rmse,
-        1 => f.aic,
-        _ => f.bic,
+    let key = |f: &ComparedFit, c: usize| match c {
+        0 => f.metrics().rmse,
+        1 => f.criteria().aic,
+        _ => f.criteria().bic,
     };
     let by = |c: usize| {
         let mut order: Vec<usize> = (0..rows.len()).collect();

@@ -1,41 +1,89 @@
-//! `gonio fit --model rational`: the rational function through every
+//! `gonio fit --model rational` and `compare`'s rational row: the rational function through every
 //! sample's segment (`gonio_analysis::rational`), as text or JSON, and its
 //! fit file.
 
-use super::fit::{domain, FitArgs, ParamArg};
+use super::fit::{domain, Domain, FitArgs, Outcome, ParamArg};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
 use gonio_analysis::coefficients::Support;
+use gonio_analysis::fit::compared::ComparedFit;
+use gonio_analysis::fit::criteria::Criteria;
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::{self, Weighting};
 use gonio_analysis::moments::Parametrization;
-use gonio_analysis::rational::{self, RationalSpec, SegmentSource};
+use gonio_analysis::rational::{self, RationalFit, RationalSpec};
 use gonio_analysis::rounding::significant;
+
+/// The rational function's options, in `fit --model rational` and `compare`.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct RationalArgs {
+    /// With the rational function: each sample's segment, `sigma` (value ± 2σ: the calibrated CSV's k = 2 interval, ALTA's #VS),
+    /// `abs:WIDTH` (value ± WIDTH, in f_r, sr⁻¹, whatever the file's units) or `rel:WIDTH` (value × (1 ± WIDTH)).
+    #[arg(long, value_name = "SOURCE")]
+    pub segments: Option<String>,
+    /// With the rational function: the highest total degree of numerator and denominator tried (8: 330 coefficients).
+    #[arg(long, value_name = "D")]
+    pub max_degree: Option<usize>,
+}
+
+impl RationalArgs {
+    /// Whether any option was given.
+    pub fn given(&self) -> bool {
+        self.segments.is_some() || self.max_degree.is_some()
+    }
+
+    /// The fit these options ask for, in the plane `--param` names.
+    pub fn spec(&self, param: ParamArg) -> Result<RationalSpec> {
+        Ok(RationalSpec {
+            parametrization: match param {
+                ParamArg::Back => Parametrization::Back,
+                ParamArg::View => Parametrization::LightView,
+            },
+            segments: self.segments.as_deref().unwrap_or("sigma").parse()?,
+            max_degree: self.max_degree.unwrap_or(RationalSpec::MAX_DEGREE),
+        })
+    }
+}
+
+/// The rational function fitted to `d`'s samples, with a progress bar
+/// over the degree.
+fn fitted(d: &Domain, spec: &RationalSpec, json: bool) -> Result<RationalFit> {
+    let bar = Operator::for_json(json).bar(spec.max_degree as u64, "fitting rational", "degree");
+    let f = rational::fit_observed(&d.train, spec, |degree| {
+        bar.set_position(degree as u64);
+        bar.set_message(format!("degree {degree}"));
+    })
+    .context("fitting rational")?;
+    bar.finish_and_clear();
+    Ok(f)
+}
+
+/// The rational function as one row of `compare`: its criteria under the
+/// comparison's `weighting`, as the models are ranked.
+pub fn compared(d: &Domain, spec: &RationalSpec, weighting: Weighting, json: bool) -> Result<Outcome> {
+    let f = fitted(d, spec, json)?;
+    let holdout = d.holdout.as_ref().map(|h| f.function.against(h).0);
+    let criteria = Criteria::of_brdf(&d.train, d.train.units, weighting, f.function.coefficients(), |x| {
+        f.function.eval(x)
+    })?;
+    let fit = ComparedFit::Rational { fit: f, criteria };
+    let json = fit.to_json(d.train.units, holdout.as_ref());
+    Ok(Outcome { fit, holdout, json })
+}
 
 pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let o = &a.options;
     if !a.fix.is_empty() || !o.bounds.is_empty() || o.weights != Weighting::Uniform {
         bail!("--fix, --bounds and --weights are options of the parametric models: a rational function has no parameters to hold or box, and no least-squares sum to weigh (its --segments say how close it must pass)");
     }
-    let segments: SegmentSource = a.segments.as_deref().unwrap_or("sigma").parse()?;
-    let spec = RationalSpec {
-        parametrization: match o.param {
-            ParamArg::Back => Parametrization::Back,
-            ParamArg::View => Parametrization::LightView,
-        },
-        segments,
-        max_degree: a.max_degree.unwrap_or(RationalSpec::MAX_DEGREE),
-    };
+    let spec = a.rational.spec(o.param)?;
     let d = domain(&a.file, o)?;
-    let bar = Operator::for_json(o.json).bar(spec.max_degree as u64, "fitting rational", "degree");
-    let f = rational::fit_observed(&d.train, &spec, |degree| {
-        bar.set_position(degree as u64);
-        bar.set_message(format!("degree {degree}"));
-    })
-    .context("fitting rational")?;
-    bar.finish_and_clear();
+    let f = fitted(&d, &spec, o.json)?;
     let holdout = d.holdout.as_ref().map(|h| f.function.against(h).0);
-    let mut v = rational::file::to_json(&f, d.train.units, holdout.as_ref());
+    let criteria = Criteria::of_brdf(&d.train, d.train.units, Weighting::Uniform, f.function.coefficients(), |x| {
+        f.function.eval(x)
+    })?;
+    let mut v = rational::file::to_json(&f, d.train.units, &criteria, holdout.as_ref());
     if !d.train.warnings.is_empty() {
         v["warnings"] = serde_json::json!(d.train.warnings);
     }

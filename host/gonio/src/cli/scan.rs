@@ -134,7 +134,8 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ..FitOptions::default()
     };
     let domain = fit::domain(&calibrated.csv, &options)?;
-    let rows = fit::compare(&domain, &options)?;
+    let rational = super::rational::RationalArgs::default().spec(options.param)?;
+    let comparison = fit::compare(&domain, &options, Some(&rational))?;
     let mut facts = vec![
         ("head".to_string(), "simulated (gonio demo)".to_string()),
         ("virtual material".to_string(), truth.describe()),
@@ -173,18 +174,27 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         facts.push(("scan time".to_string(), against_bound(outcome.head_time_s, bound)));
     }
     let budget = gonio_analysis::calibration::budget_by_incidence(&calibrated.rows);
-    let report = fit::report(&a.out, format!("gonio demo: {}", truth.describe()), facts, &domain, &rows, &budget)?;
+    let report = fit::report(
+        &a.out,
+        format!("gonio demo: {}", truth.describe()),
+        facts,
+        &domain,
+        &comparison,
+        &budget,
+    )?;
+    let rows = &comparison.rows;
     let best = rows
         .iter()
-        .min_by(|x, y| x.fit.metrics.rmse.total_cmp(&y.fit.metrics.rmse))
+        .min_by(|x, y| x.fit.metrics().rmse.total_cmp(&y.fit.metrics().rmse))
         .context("no model fitted")?;
     if json {
         let mut v = serde_json::to_value(&outcome)?;
         v["calibration"] = calibrated.summary;
         v["models"] = rows.iter().map(|r| r.json.clone()).collect();
         v["material"] = truth.describe().into();
-        v["best_model"] = best.fit.material.model.name().into();
-        v["coefficients"] = super::coefficients::to_json(&fit::coefficients(&domain, &rows)?);
+        v["unfitted"] = serde_json::json!(comparison.unfitted);
+        v["best_model"] = best.fit.name().into();
+        v["coefficients"] = super::coefficients::to_json(&fit::coefficients(&domain, rows)?);
         v["report"] = report.display().to_string().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
@@ -193,10 +203,13 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
             "calibrated: {} of {} samples usable; best model {} (RMSE {} sr⁻¹, NCC {})",
             calibrated.usable,
             calibrated.rows.len(),
-            best.fit.material.model.name(),
-            significant(best.fit.metrics.rmse, 4),
-            figure(best.fit.metrics.ncc, 4)
+            best.fit.name(),
+            significant(best.fit.metrics().rmse, 4),
+            figure(best.fit.metrics().ncc, 4)
         );
+        for why in &comparison.unfitted {
+            println!("not fitted: {why}");
+        }
         println!("report: {}", report.display());
     }
     Ok(())
