@@ -263,7 +263,8 @@ fn brdf_explorer_shaders_compile_and_equal_the_models() {
 const RATIONAL_TOLERANCES: [f64; 2] = [1e-7, 1e-3];
 
 /// A rational function fitted to a material none of the models is (the
-/// glass-bead layer, ±0.5 sr⁻¹), in both planes: the shader is the function,
+/// glass-bead layer, ±0.5 sr⁻¹), in both planes, with and without the
+/// cosine factor: the shader is the function,
 /// to 1e-9 of its peak in double precision and 1e-3 in single, wherever its
 /// denominator is positive.
 #[test]
@@ -272,14 +273,19 @@ fn rational_shaders_compile_and_equal_the_function() {
     let geos = geometries();
     let beads = GlassBeads::default();
     let data = synthetic::samples_of(|d: &Directions| beads.eval(d), &synthetic::belcour_geometries(), 1_500, 0.02, 7);
-    for parametrization in Parametrization::BOTH {
+    let cases = Parametrization::BOTH
+        .map(|p| (p, true))
+        .into_iter()
+        .chain([(Parametrization::Back, false)]);
+    for (parametrization, cosine) in cases {
         let spec = RationalSpec {
             parametrization,
             segments: SegmentSource::Absolute(0.5),
             max_degree: 5,
+            cosine,
         };
         let r = rational::fit(&data, &spec).expect("a rational fit").function;
-        let name = format!("rational-{}", parametrization.name());
+        let name = format!("rational-{}{}", parametrization.name(), if cosine { "" } else { "-plain" });
         let text = brdf_explorer::write_rational(&r, &["test".into()]);
         assert!(parameters(&text).is_empty(), "{name}: the coefficients are in the shader");
         let want: Vec<f64> = geos

@@ -17,6 +17,7 @@ fn fits_within(data: &Dataset, parametrization: Parametrization, max_degree: usi
         parametrization,
         segments: SegmentSource::Absolute(half),
         max_degree,
+        cosine: true,
     };
     let f = rational::fit(data, &spec).unwrap_or_else(|e| panic!("{parametrization:?}: {e:#}"));
     eprintln!(
@@ -40,8 +41,8 @@ fn fits_within(data: &Dataset, parametrization: Parametrization, max_degree: usi
         assert!(v > lo && v < hi, "{v} outside [{lo}, {hi}]");
     }
     assert!(f.linf < 2.0 * half && f.metrics.l2.is_finite());
-    // The lowest degree: the one below was tried and could not be held.
-    let below = f.attempts.iter().find(|a| a.degree + 1 == f.function.degree);
+    // The fewest terms: one fewer was tried and could not be held.
+    let below = f.attempts.iter().find(|a| a.coefficients + 2 == f.function.coefficients());
     assert!(below.is_some_and(|a| !a.feasible), "{:?}", f.attempts);
     f.function.degree
 }

@@ -169,9 +169,10 @@ fn params_cell(f: &ComparedFit) -> String {
             .collect::<Vec<_>>()
             .join("<br>"),
         ComparedFit::Rational { fit, .. } => escape(&format!(
-            "degree {} in the {} plane ({} over {} coefficients), through every segment {}; L∞ {}",
+            "degree {} in the {} plane{} ({} over {} coefficients), through every segment {}; L∞ {}",
             fit.function.degree,
             fit.function.parametrization.name(),
+            if fit.function.cosine { ", times cosθi·cosθo" } else { "" },
             fit.function.numerator.len(),
             fit.function.denominator.len(),
             fit.segments,

@@ -6,6 +6,7 @@ mod common;
 use common::{calibrated_scan, gonio, text};
 use gonio_analysis::fit::data::theta_in;
 use gonio_analysis::formats;
+use gonio_analysis::rational::basis::Basis;
 use gonio_analysis::rational::file::function_of;
 use serde_json::Value;
 
@@ -34,18 +35,17 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     assert_eq!(v["parametrization"], "back");
     assert_eq!(v["segments"], serde_json::json!({"kind": "absolute", "width": 0.5}));
     assert_eq!(v["worst_violation"], 0.0);
-    let degree = v["degree"].as_u64().unwrap() as usize;
-    assert_eq!(
-        v["coefficients"].as_u64().unwrap() as usize,
-        (degree + 1) * (degree + 2) * (degree + 3) / 3
-    );
+    let terms = v["terms"].as_u64().unwrap() as usize;
+    assert_eq!(v["coefficients"].as_u64().unwrap() as usize, 2 * terms);
+    assert_eq!(v["degree"].as_u64().unwrap() as usize, Basis::degree_of(terms));
+    assert_eq!(v["cosine"], true);
     assert!(v["linf"].as_f64().unwrap() < 1.0, "{v}");
-    // The lowest degree: the one below it was tried and could not be held.
+    // The fewest terms: one fewer was tried and could not be held.
     let attempts = v["attempts"].as_array().unwrap();
     assert!(
         attempts
             .iter()
-            .any(|a| a["degree"].as_u64() == Some(degree as u64 - 1) && a["feasible"] == false),
+            .any(|a| a["coefficients"].as_u64() == Some(2 * terms as u64 - 2) && a["feasible"] == false),
         "{v}"
     );
 
@@ -170,7 +170,7 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     let o = gonio(&[&at_30[..], &["--brdf", brdf.to_str().unwrap(), "--plot", plots.to_str().unwrap()]].concat());
     let t = text(&o);
     assert!(
-        o.status.success() && t.contains("every segment held") && t.contains("degrees tried"),
+        o.status.success() && t.contains("every segment held") && t.contains("coefficients tried"),
         "{t}"
     );
     assert!(brdf.is_file() && plots.join("residuals-30.svg").is_file());

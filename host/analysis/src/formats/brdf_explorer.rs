@@ -13,7 +13,6 @@
 //! multiplies by `n·l` itself: the function returns `f_r` (sr⁻¹), grey.
 
 use crate::moments::Parametrization;
-use crate::rational::basis::Basis;
 use crate::rational::Rational;
 use gonio_brdf::{Material, ModelId, Param};
 use std::fmt::Write;
@@ -221,15 +220,18 @@ pub fn write(m: &Material, comments: &[String]) -> String {
 pub fn write_rational(r: &Rational, comments: &[String]) -> String {
     let header = [
         format!(
-            "rational function of degree {} ({} coefficients) fitted by gonio {}",
+            "rational function of degree {} ({} coefficients{}) fitted by gonio {}",
             r.degree,
             r.coefficients(),
+            if r.cosine { ", times cosθi·cosθo" } else { "" },
             env!("CARGO_PKG_VERSION")
         ),
         format!("plane: {}", r.parametrization.name()),
     ];
     // The function was fitted with the light at azimuth 0 (`Directions`):
-    // the light and the view turned about the normal to put it there. An
+    // the light and the view turned about the normal to put it there. The
+    // angle from the light is taken before the turn, which rounds: at the
+    // retro peak the square-root warp would raise its 1e-16 to 1e-8. An
     // in-plane direction is taken by its unit vector, not by atan(0, 0),
     // which GLSL leaves undefined at the retro peak.
     let mut b = String::from(
@@ -240,11 +242,12 @@ pub fn write_rational(r: &Rational, comments: &[String]) -> String {
     );
     b.push_str(match r.parametrization {
         Parametrization::Back => {
-            "    vec3 bkr = unitSum(vec3(-vr.x, -vr.y, vr.z), lr);\n    \
-             float theta = degrees(atan(length(planar(bkr)), bkr.z));\n    vec2 w = planar(bkr);\n"
+            "    vec3 back = unitSum(vec3(-v.x, -v.y, v.z), l);\n    \
+             float theta = degrees(atan(length(planar(back)), back.z));\n    \
+             vec2 w = planar(unitSum(vec3(-vr.x, -vr.y, vr.z), lr));\n"
         }
         Parametrization::LightView => {
-            "    float theta = degrees(atan(length(cross(lr, vr)), dot(lr, vr)));\n    \
+            "    float theta = degrees(atan(length(cross(l, v)), dot(l, v)));\n    \
              vec2 w = vec2(dot(vr, vec3(-lr.z, 0.0, lr.x)), vr.y);\n"
         }
     });
@@ -276,7 +279,7 @@ pub fn write_rational(r: &Rational, comments: &[String]) -> String {
             );
         }
     }
-    let basis = Basis::new(r.degree);
+    let basis = r.basis();
     for (name, coefficients) in [("numerator", &r.numerator), ("denominator", &r.denominator)] {
         let _ = writeln!(b, "    float {name} = 0.0;");
         for ([i, j, k], c) in basis.terms().iter().zip(coefficients.iter()) {
@@ -284,7 +287,11 @@ pub fn write_rational(r: &Rational, comments: &[String]) -> String {
         }
     }
     b.push_str("    if (denominator <= 0.0) {\n        return vec3(0.0);\n    }\n");
-    b.push_str("    float f = cosI * cosO * numerator / denominator;\n");
+    b.push_str(if r.cosine {
+        "    float f = cosI * cosO * numerator / denominator;\n"
+    } else {
+        "    float f = numerator / denominator;\n"
+    });
     document(&header, comments, "", "", &b)
 }
 

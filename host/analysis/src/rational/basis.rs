@@ -6,10 +6,10 @@
 //! `rational_function_legendre`, which Belcour et al. 2014 fitted with): on
 //! [−1, 1] they are orthogonal, so the constraint matrix of a degree-8
 //! basis stays well conditioned where monomials' columns become nearly
-//! parallel. Terms are ordered by total degree, so the basis of degree `d`
-//! is a prefix of that of `d + 1`: a solution at a lower degree is one at
-//! every higher degree (zeros appended), which is what makes bisecting on
-//! the degree sound.
+//! parallel. Terms are ordered by total degree, so a basis of `n` terms
+//! is a prefix of that of `n + 1`: a solution with fewer terms is one with
+//! every larger count (zeros appended), which is what makes bisecting on
+//! the number of terms sound.
 
 use crate::moments::plane::Parametrization;
 use gonio_brdf::Directions;
@@ -73,8 +73,8 @@ impl Domain {
     }
 }
 
-/// The terms of total degree at most `degree`: exponent triples, by total
-/// degree, then lexicographically.
+/// The first terms in graded order: exponent triples by total degree, then
+/// lexicographically. `degree` is the highest total degree among them.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Basis {
     pub degree: usize,
@@ -82,7 +82,16 @@ pub struct Basis {
 }
 
 impl Basis {
+    /// Every term of total degree at most `degree`.
     pub fn new(degree: usize) -> Basis {
+        Basis::with_terms(Self::size(degree))
+    }
+
+    /// The first `count` terms (at least one): a basis between two whole
+    /// degrees, as ALTA's counts are, so that the fit can stop at the
+    /// fewest coefficients rather than at the next whole degree.
+    pub fn with_terms(count: usize) -> Basis {
+        let degree = Self::degree_of(count);
         let mut terms = Vec::with_capacity(Self::size(degree));
         for total in 0..=degree {
             for a in (0..=total).rev() {
@@ -91,7 +100,13 @@ impl Basis {
                 }
             }
         }
+        terms.truncate(count.max(1));
         Basis { degree, terms }
+    }
+
+    /// The total degree of the last of the first `count` terms.
+    pub fn degree_of(count: usize) -> usize {
+        (0..).find(|&d| Self::size(d) >= count).unwrap_or(0)
     }
 
     /// The number of terms of degree at most `degree` in three variables:
@@ -159,6 +174,12 @@ mod tests {
             }
         }
         assert_eq!(Basis::size(3), 20);
+        // Between whole degrees: the prefix, and the degree of its last term.
+        let b = Basis::with_terms(25);
+        assert_eq!((b.len(), b.degree), (25, 4));
+        assert_eq!(&b.terms[..], &Basis::new(4).terms[..25]);
+        assert_eq!(Basis::with_terms(20).degree, 3);
+        assert_eq!(Basis::with_terms(1).degree, 0);
     }
 
     #[test]

@@ -20,6 +20,8 @@ pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, holdout: Opti
         "model": MODEL,
         "parametrization": r.parametrization,
         "degree": r.degree,
+        "terms": r.numerator.len(),
+        "cosine": r.cosine,
         "coefficients": r.coefficients(),
         "domain": r.domain,
         "numerator": r.numerator,
@@ -56,12 +58,13 @@ pub fn function_of(v: &Value) -> Result<Rational> {
             super::RationalSpec::HIGHEST_DEGREE
         );
     }
-    let n = super::basis::Basis::size(r.degree);
-    if r.numerator.len() != n || r.denominator.len() != n {
+    let n = r.numerator.len();
+    if n == 0 || r.denominator.len() != n || super::basis::Basis::degree_of(n) != r.degree {
         bail!(
-            "degree {} has {n} terms, but the numerator has {} and the denominator {}",
+            "degree {} has from {} to {} terms, the same in numerator and denominator, but the numerator has {n} and the denominator {}",
             r.degree,
-            r.numerator.len(),
+            super::basis::Basis::size(r.degree.saturating_sub(1)) + usize::from(r.degree > 0),
+            super::basis::Basis::size(r.degree),
             r.denominator.len()
         );
     }
@@ -82,6 +85,7 @@ mod tests {
         let r = Rational {
             parametrization: Parametrization::LightView,
             degree: 1,
+            cosine: true,
             domain: Domain {
                 lo: [10.0, -5.0, -1.0],
                 hi: [60.0, 5.0, 1.0],
@@ -96,7 +100,11 @@ mod tests {
         assert_eq!(function_of(&v).unwrap().eval(&d), r.eval(&d));
         let mut short = v.clone();
         short["numerator"] = json!([1.0]);
-        assert!(function_of(&short).unwrap_err().to_string().contains("4 terms"));
+        assert!(function_of(&short).unwrap_err().to_string().contains("from 2 to 4 terms"));
+        // A file without `cosine` was fitted with the factor.
+        let mut old = v.clone();
+        old.as_object_mut().unwrap().remove("cosine");
+        assert!(function_of(&old).unwrap().cosine);
         let mut other = v.clone();
         other["model"] = json!("lambert");
         assert!(function_of(&other).is_err());

@@ -1,7 +1,8 @@
-//! The rational fit: the lowest degree whose function passes through every
-//! segment, bracketed by doubling the degree and found by bisection, up to
-//! the highest degree the samples allow; each degree is one programme
-//! (`qp`).
+//! The rational fit: the fewest terms (in graded order, numerator and
+//! denominator alike) whose function passes through every segment,
+//! bracketed by doubling the count and found by bisection, up to the
+//! highest degree the spec and the samples allow; each count is one
+//! programme (`qp`).
 
 use super::basis::{coordinates, Basis, Domain};
 use super::function::Rational;
@@ -19,6 +20,8 @@ pub struct RationalSpec {
     pub segments: SegmentSource,
     /// The highest total degree tried (numerator and denominator alike).
     pub max_degree: usize,
+    /// `cosθi·cosθo·P/Q` (the paper's) or `P/Q` alone.
+    pub cosine: bool,
 }
 
 impl RationalSpec {
@@ -32,10 +35,12 @@ impl RationalSpec {
     pub const HIGHEST_DEGREE: usize = 12;
 }
 
-/// One degree tried.
+/// One count of terms tried.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Attempt {
+    /// The total degree of its last term.
     pub degree: usize,
+    /// Numerator and denominator together (twice the terms).
     pub coefficients: usize,
     pub feasible: bool,
     /// The programme's margin (values over the largest segment end, rows
@@ -43,7 +48,7 @@ pub struct Attempt {
     pub margin: Option<f64>,
     /// Clarabel reached only its reduced accuracy: a function found is
     /// still checked on every segment, but "not held" is then a verdict
-    /// at that accuracy, and a lower degree might hold.
+    /// at that accuracy, and fewer terms might hold.
     pub reduced: bool,
     pub seconds: f64,
 }
@@ -63,13 +68,13 @@ pub struct RationalFit {
     /// The largest distance of a fitted value outside its segment, over the
     /// segment's width (0: every segment holds the function).
     pub worst_violation: f64,
-    /// Why the highest degree tried is what it is, when it is below the
+    /// Why the most terms tried are what they are, when fewer than the
     /// spec's: more coefficients than samples interpolate anything.
     pub capped: Option<String>,
     pub attempts: Vec<Attempt>,
 }
 
-/// Misses beyond this (relative to a segment's width) reject a degree's
+/// Misses beyond this (relative to a segment's width) reject a count's
 /// function: the margins put a solution strictly inside.
 const VIOLATION_TOLERANCE: f64 = 1e-9;
 
@@ -78,8 +83,8 @@ pub fn fit(data: &Dataset, spec: &RationalSpec) -> Result<RationalFit> {
     fit_observed(data, spec, |_| {})
 }
 
-/// As `fit`, calling `trying` with each degree before its programme is
-/// solved (a progress bar's hook).
+/// As `fit`, calling `trying` with each count of coefficients before its
+/// programme is solved (a progress bar's hook).
 pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(usize)) -> Result<RationalFit> {
     let start = Instant::now();
     if spec.max_degree > RationalSpec::HIGHEST_DEGREE {
@@ -98,9 +103,12 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
     let mut rows = Vec::with_capacity(obs.len());
     for (i, (o, s)) in obs.iter().zip(&segs.segments).enumerate() {
         let d = o.directions();
-        let c = d.cos_i() * d.cos_o();
+        let c = if spec.cosine { d.cos_i() * d.cos_o() } else { 1.0 };
         if c.is_nan() || c <= 1e-9 {
-            bail!("{}: grazing, where the cosine factor cosθi·cosθo is zero", sample_text(i, o));
+            bail!(
+                "{}: grazing, where the cosine factor cosθi·cosθo is zero (fit without it: --no-cosine)",
+                sample_text(i, o)
+            );
         }
         rows.push(Row {
             u: domain.unit(points[i]),
@@ -109,15 +117,17 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         });
     }
     let m = obs.len();
-    let allowed = (0..=spec.max_degree).rev().find(|&d| 2 * Basis::size(d) <= m);
-    let Some(top) = allowed else {
+    // The most terms: the spec's degree, or as many as the samples allow.
+    let top = Basis::size(spec.max_degree).min(m / 2);
+    if top == 0 {
         bail!("{m} sample(s): too few for a rational function (a constant over a constant has 2 coefficients)");
-    };
-    let capped = (top < spec.max_degree).then(|| {
+    }
+    let capped = (top < Basis::size(spec.max_degree)).then(|| {
         format!(
-            "degree {} has {} coefficients, more than the {m} samples: degrees up to {top} were tried",
+            "degree {} has {} coefficients, more than the {m} samples: up to {} were tried",
             spec.max_degree,
-            2 * Basis::size(spec.max_degree)
+            2 * Basis::size(spec.max_degree),
+            2 * top
         )
     });
     // Values in units of the largest segment end, so that the margin is
@@ -145,18 +155,19 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         worst
     };
     let mut attempts = Vec::new();
-    // A degree's function if it holds every segment (checked on the
-    // function itself, not taken from the solver), else the sample most in
-    // conflict.
-    let mut attempt = |degree: usize| -> Result<std::result::Result<(Rational, f64), usize>> {
-        trying(degree);
+    // The function of `terms` terms if it holds every segment (checked on
+    // the function itself, not taken from the solver), else the sample
+    // most in conflict.
+    let mut attempt = |terms: usize| -> Result<std::result::Result<(Rational, f64), usize>> {
+        trying(2 * terms);
         let t = Instant::now();
-        let basis = Basis::new(degree);
+        let basis = Basis::with_terms(terms);
         let (held, margin, reduced) = match qp::solve(&basis, &rows)? {
             Outcome::Solved { p, q, margin, reduced } => {
                 let f = Rational {
                     parametrization: spec.parametrization,
-                    degree,
+                    degree: basis.degree,
+                    cosine: spec.cosine,
                     domain,
                     numerator: p.iter().map(|c| c * scale).collect(),
                     denominator: q,
@@ -171,7 +182,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
             Outcome::Infeasible { worst, reduced } => (Err(worst), None, reduced),
         };
         attempts.push(Attempt {
-            degree,
+            degree: basis.degree,
             coefficients: 2 * basis.len(),
             feasible: held.is_ok(),
             margin,
@@ -180,30 +191,32 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         });
         Ok(held)
     };
-    // Galloping (degrees 1, 2, 4, … up to `top`) brackets the lowest
-    // feasible degree within a factor of two, so the costliest programme
-    // solved is at most twice the answer's degree; a bisection inside the
-    // bracket then finds it. Degrees below `lo` are infeasible.
+    // Galloping (1, 2, 4, … terms up to `top`) brackets the fewest terms
+    // that hold within a factor of two, so the costliest programme solved
+    // has at most twice the answer's terms; a bisection inside the bracket
+    // then finds it, to one term, as ALTA's walk does. Counts below `lo`
+    // do not hold.
     let mut lo = 0;
-    let mut d = 1.min(top);
+    let mut n = 1;
     let mut best = loop {
-        match attempt(d)? {
+        match attempt(n)? {
             Ok(held) => break held,
-            Err(worst) if d == top => bail!(
-                "no rational function of degree {top} ({} coefficients) passes through every segment; the sample most in conflict with the others is {}, segment [{}, {}]: widen the segments{}",
-                2 * Basis::size(top),
+            Err(worst) if n == top => bail!(
+                "no rational function of degree {} ({} coefficients) passes through every segment; the sample most in conflict with the others is {}, segment [{}, {}]: widen the segments{}",
+                Basis::degree_of(top),
+                2 * top,
                 sample_text(worst, &obs[worst]),
                 segs.segments[worst].lo,
                 segs.segments[worst].hi,
                 if capped.is_some() { " or measure more samples" } else { " or raise --max-degree" }
             ),
             Err(_) => {
-                lo = d + 1;
-                d = (2 * d).min(top);
+                lo = n + 1;
+                n = (2 * n).min(top);
             }
         }
     };
-    let mut hi = d;
+    let mut hi = n;
     while lo < hi {
         let mid = lo + (hi - lo) / 2;
         match attempt(mid)? {
@@ -268,6 +281,7 @@ mod tests {
             parametrization: Parametrization::Back,
             segments,
             max_degree: RationalSpec::MAX_DEGREE,
+            cosine: true,
         }
     }
 
@@ -300,12 +314,12 @@ mod tests {
         {
             assert!((v - o.value).abs() <= 0.02 * o.value * (1.0 + 1e-9), "{v} against {}", o.value);
         }
-        // The degree found is the lowest: the one below was tried and failed.
+        // The count found is the lowest: one term fewer was tried and failed.
         let below = f
             .attempts
             .iter()
-            .find(|a| a.degree + 1 == f.function.degree)
-            .expect("the degree below was tried");
+            .find(|a| a.coefficients + 2 == f.function.coefficients())
+            .expect("one term fewer was tried");
         assert!(!below.feasible);
     }
 

@@ -2,7 +2,9 @@
 //! the cosine factor of Belcour et al. 2014 §6.B (ALTA's
 //! `rational_function_cosine`: the product of the light's and the view's
 //! cosines), which takes the fall towards grazing out of what the
-//! polynomials must follow.
+//! polynomials must follow; or `P(u)/Q(u)` alone (ALTA's
+//! `rational_function_legendre`), which on a retro lobe over a flat floor
+//! holds absolute segments with fewer terms (`fit-bench rational`).
 
 use super::basis::{coordinates, Basis, Domain};
 use crate::fit::{Dataset, Metrics};
@@ -10,12 +12,22 @@ use crate::moments::plane::Parametrization;
 use gonio_brdf::Directions;
 use serde::{Deserialize, Serialize};
 
+/// What a rational fit file without `cosine` was fitted with.
+fn cosine_factor() -> bool {
+    true
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Rational {
     /// The retro plane the view's coordinates are taken in.
     pub parametrization: Parametrization,
-    /// Total degree of numerator and denominator.
+    /// Total degree of numerator and denominator: that of their last term
+    /// (`Basis::with_terms`; both have as many terms).
     pub degree: usize,
+    /// `f_r = cosθi·cosθo·P/Q` (true; files written before the choice
+    /// existed) or `P/Q`.
+    #[serde(default = "cosine_factor")]
+    pub cosine: bool,
     /// The coordinates' box, mapped onto [−1, 1]³.
     pub domain: Domain,
     pub numerator: Vec<f64>,
@@ -32,7 +44,21 @@ impl Rational {
     /// Outside the fitted box the coordinates are held at its edge
     /// (`Domain::unit`).
     pub fn eval(&self, d: &Directions) -> f64 {
-        self.eval_with(&Basis::new(self.degree), d)
+        self.eval_with(&self.basis(), d)
+    }
+
+    /// The terms its coefficients multiply.
+    pub fn basis(&self) -> Basis {
+        Basis::with_terms(self.numerator.len())
+    }
+
+    /// The factor `P/Q` is multiplied by at `d`.
+    pub fn factor(&self, d: &Directions) -> f64 {
+        if self.cosine {
+            d.cos_i() * d.cos_o()
+        } else {
+            1.0
+        }
     }
 
     /// As `eval`, with the basis built once by the caller.
@@ -44,12 +70,12 @@ impl Rational {
             // samples and a grid, not proven so between.
             return f64::NAN;
         }
-        d.cos_i() * d.cos_o() * basis.eval(&self.numerator, u) / q
+        self.factor(d) * basis.eval(&self.numerator, u) / q
     }
 
     /// The function at every observation of `data`, in `data`'s units.
     pub fn values(&self, data: &Dataset) -> Vec<f64> {
-        let basis = Basis::new(self.degree);
+        let basis = self.basis();
         data.observations
             .iter()
             .map(|o| self.eval_with(&basis, &o.directions()) * o.unit_factor(data.units))

@@ -1,4 +1,4 @@
-//! One degree's programme (Pacanowski et al. 2012, as ALTA's
+//! One basis's programme (Pacanowski et al. 2012, as ALTA's
 //! `rational_fitter_quadprog` poses it): coefficients `x = (p, q)` such
 //! that every sample's segment holds `P/Q`,
 //!
@@ -37,7 +37,7 @@ pub struct Row {
     pub hi: f64,
 }
 
-/// What one degree gives.
+/// What one basis gives.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Outcome {
     /// Numerator and denominator coefficients, and the margin `t` they
@@ -49,7 +49,7 @@ pub enum Outcome {
         margin: f64,
         reduced: bool,
     },
-    /// No function of this degree holds every segment; `worst` is the
+    /// No function of this basis holds every segment; `worst` is the
     /// sample with the largest dual weight at the zero margin, the one most
     /// in conflict with the others.
     Infeasible { worst: usize, reduced: bool },
@@ -63,7 +63,7 @@ fn grid_size(degree: usize) -> usize {
     (2 * degree + 1).max(9)
 }
 
-/// Solves the programme at `basis`'s degree for `rows`.
+/// Solves the programme of `basis` for `rows`.
 ///
 /// By constraint generation: a programme over every row at once costs
 /// Clarabel a factorisation of `m·n²` per interior-point iteration (0.4 s
@@ -134,7 +134,8 @@ pub fn solve(basis: &Basis, rows: &[Row]) -> Result<Outcome> {
         }
     }
     bail!(
-        "the programme at degree {} still had violated segments after {ROUNDS} rounds of constraint generation",
+        "the programme of {} terms (degree {}) still had violated segments after {ROUNDS} rounds of constraint generation",
+        basis.len(),
         basis.degree
     )
 }

@@ -24,12 +24,16 @@ pub struct RationalArgs {
     /// With the rational function: the highest total degree of numerator and denominator tried (8: 330 coefficients).
     #[arg(long, value_name = "D")]
     pub max_degree: Option<usize>,
+    /// With the rational function: fit P/Q alone, without the paper's cosθi·cosθo factor (ALTA's
+    /// rational_function_legendre; often fewer coefficients for absolute segments).
+    #[arg(long)]
+    pub no_cosine: bool,
 }
 
 impl RationalArgs {
     /// Whether any option was given.
     pub fn given(&self) -> bool {
-        self.segments.is_some() || self.max_degree.is_some()
+        self.segments.is_some() || self.max_degree.is_some() || self.no_cosine
     }
 
     /// The fit these options ask for, in the plane `--param` names.
@@ -41,17 +45,19 @@ impl RationalArgs {
             },
             segments: self.segments.as_deref().unwrap_or("sigma").parse()?,
             max_degree: self.max_degree.unwrap_or(RationalSpec::MAX_DEGREE),
+            cosine: !self.no_cosine,
         })
     }
 }
 
 /// The rational function fitted to `d`'s samples, with a progress bar
-/// over the degree.
+/// over the coefficients tried.
 fn fitted(d: &Domain, spec: &RationalSpec, json: bool) -> Result<RationalFit> {
-    let bar = Operator::for_json(json).bar(spec.max_degree as u64, "fitting rational", "degree");
-    let f = rational::fit_observed(&d.train, spec, |degree| {
-        bar.set_position(degree as u64);
-        bar.set_message(format!("degree {degree}"));
+    let most = 2 * gonio_analysis::rational::basis::Basis::size(spec.max_degree);
+    let bar = Operator::for_json(json).bar(most as u64, "fitting rational", "coefficients");
+    let f = rational::fit_observed(&d.train, spec, |coefficients| {
+        bar.set_position(coefficients as u64);
+        bar.set_message(format!("{coefficients} coefficients"));
     })
     .context("fitting rational")?;
     bar.finish_and_clear();
@@ -97,15 +103,16 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     }
     let r = &f.function;
     println!(
-        "rational in the {} plane ({} samples, {:.2} s)",
+        "rational in the {} plane{} ({} samples, {:.2} s)",
         r.parametrization.name(),
+        if r.cosine { ", times cosθi·cosθo" } else { "" },
         f.samples,
         f.seconds
     );
     println!(
-        "  degree {}: {} coefficients ({} over {}); every segment held, segments {}",
-        r.degree,
+        "  {} coefficients, degree {} ({} over {}); every segment held, segments {}",
         r.coefficients(),
+        r.degree,
         r.numerator.len(),
         r.denominator.len(),
         f.segments
@@ -113,16 +120,9 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let tried: Vec<String> = f
         .attempts
         .iter()
-        .map(|t| {
-            format!(
-                "{} ({} coefficients, {})",
-                t.degree,
-                t.coefficients,
-                if t.feasible { "held" } else { "not held" }
-            )
-        })
+        .map(|t| format!("{} ({})", t.coefficients, if t.feasible { "held" } else { "not held" }))
         .collect();
-    println!("  degrees tried: {}", tried.join(", "));
+    println!("  coefficients tried: {}", tried.join(", "));
     println!("  {}  L∞ {}", f.metrics.summary(), significant(f.linf, 4));
     if let Some(h) = &holdout {
         println!("  held out θi {:?}°: {}", o.holdout_theta_i, h.summary());

@@ -111,9 +111,9 @@ const SHARED: [Shared; 2] = [
 ];
 
 /// A build of ALTA and a scratch folder for its files.
-struct Alta {
+pub struct Alta {
     dir: PathBuf,
-    work: PathBuf,
+    pub work: PathBuf,
 }
 
 /// What one `data2brdf` run gave.
@@ -126,7 +126,7 @@ struct Run {
 }
 
 impl Alta {
-    fn locate() -> Result<Alta, String> {
+    pub fn locate() -> Result<Alta, String> {
         let dir = PathBuf::from(std::env::var("ALTA_DIR").map_err(|_| "ALTA_DIR is not set: it names a build of ALTA".to_string())?);
         if !dir.join("build/softs/data2brdf").is_file() {
             return Err(format!("{} holds no build/softs/data2brdf", dir.display()));
@@ -136,7 +136,7 @@ impl Alta {
         Ok(Alta { dir, work })
     }
 
-    fn commit(&self) -> String {
+    pub fn commit(&self) -> String {
         let git = Command::new("git").arg("-C").arg(&self.dir).args(["rev-parse", "HEAD"]).output();
         match git {
             Ok(o) if o.status.success() => String::from_utf8_lossy(&o.stdout).trim().to_string(),
@@ -146,28 +146,38 @@ impl Alta {
 
     /// `data2brdf` on `data` from `start` (ALTA's own default where `None`),
     /// `iterations` capping Ceres's.
-    fn fit(&self, shared: &Shared, data: &Path, start: Option<&[f64]>, iterations: Option<u32>) -> Result<Run, String> {
+    /// `data2brdf --input data --output WORK/fit.brdf ARGS`: what it
+    /// printed, and its wall time.
+    pub fn run(&self, data: &Path, args: &[&str]) -> Result<(String, f64), String> {
         let out = self.work.join("fit.brdf");
         let _ = std::fs::remove_file(&out);
-        let mut cmd = Command::new(self.dir.join("build/softs/data2brdf"));
-        cmd.env("ALTA_PLUGIN_PATH", self.dir.join("build/plugins"))
+        let t0 = Instant::now();
+        let o = Command::new(self.dir.join("build/softs/data2brdf"))
+            .env("ALTA_PLUGIN_PATH", self.dir.join("build/plugins"))
             .arg("--input")
             .arg(data)
             .arg("--output")
             .arg(&out)
-            .args(["--fitter", "nonlinear_fitter_ceres", "--func", shared.func]);
+            .args(args)
+            .stderr(Stdio::null())
+            .output()
+            .map_err(|e| format!("data2brdf: {e}"))?;
+        Ok((String::from_utf8_lossy(&o.stdout).into_owned(), t0.elapsed().as_secs_f64()))
+    }
+
+    fn fit(&self, shared: &Shared, data: &Path, start: Option<&[f64]>, iterations: Option<u32>) -> Result<Run, String> {
+        let mut args = vec!["--fitter", "nonlinear_fitter_ceres", "--func", shared.func];
+        let file = self.work.join("start.brdf");
         if let Some(p) = start {
-            let file = self.work.join("start.brdf");
             std::fs::write(&file, (shared.start_file)(p)).map_err(|e| e.to_string())?;
-            cmd.arg("--bootstrap").arg(file);
+            args.extend(["--bootstrap", file.to_str().ok_or("a scratch path that is not UTF-8")?]);
         }
-        if let Some(n) = iterations {
-            cmd.args(["--ceres-max-num-iterations", &n.to_string()]);
+        let n = iterations.map(|n| n.to_string());
+        if let Some(n) = &n {
+            args.extend(["--ceres-max-num-iterations", n]);
         }
-        let t0 = Instant::now();
-        let o = cmd.stderr(Stdio::null()).output().map_err(|e| format!("data2brdf: {e}"))?;
-        let seconds = t0.elapsed().as_secs_f64();
-        let text = String::from_utf8_lossy(&o.stdout);
+        let (text, seconds) = self.run(data, &args)?;
+        let out = self.work.join("fit.brdf");
         let line = |key: &str| {
             text.lines()
                 .find_map(|l| l.split_once(key).map(|(_, rest)| rest.trim().to_string()))

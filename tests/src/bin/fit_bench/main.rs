@@ -41,6 +41,9 @@
 //! - `alta`: the models ALTA also has, fitted by ALTA's Ceres fitter on the
 //!   same samples from its default start and 24 random ones (`alta.rs`;
 //!   bars: RMSE ratio ≤ 1 + 1e-9, time ratio < 1); needs `ALTA_DIR`.
+//! - `rational`: the rational function through ±0.5 sr⁻¹ segments against
+//!   ALTA's rational fitter on the same samples (`rational.rs`; bars:
+//!   every segment held, coefficient and time ratios ≤ 1); needs `ALTA_DIR`.
 //!
 //! Ours evaluates the samples and the global search's candidates on every
 //! core (`threads`), as the peer's BLAS does.
@@ -52,6 +55,7 @@ mod alta;
 mod cases;
 mod gof;
 mod misfit;
+mod rational;
 mod widen;
 
 use gonio_analysis::fit::{self, transform, FitSpec, Problem};
@@ -176,7 +180,9 @@ fn main() {
     // cases, those whose `SAMPLES/MATERIAL/MODEL` holds FILTER);
     // `fit-bench models [MODEL]`: the per-model figures alone;
     // `fit-bench gof`: the χ² trials alone; `fit-bench alta [N [FILTER]]`:
-    // ALTA's fits beside ours alone. `widen`, `gof` and `alta` need no scipy.
+    // ALTA's fits beside ours alone; `fit-bench rational [MATERIAL]`: the
+    // rational functions beside ALTA's alone. `widen`, `gof`, `alta` and
+    // `rational` need no scipy.
     let mode = std::env::args().nth(1).unwrap_or_default();
     let cases: usize = std::env::args().nth(2).and_then(|s| s.parse().ok()).unwrap_or(usize::MAX);
     let filter = std::env::args().nth(3).unwrap_or_default();
@@ -186,9 +192,15 @@ fn main() {
         "alta" => {
             report.insert("alta".into(), alta::alta(cases, &filter));
         }
+        "rational" => {
+            report.insert(
+                "rational".into(),
+                rational::rational_section(&std::env::args().nth(2).unwrap_or_default()),
+            );
+        }
         _ => {}
     }
-    if matches!(mode.as_str(), "widen" | "gof" | "alta") {
+    if matches!(mode.as_str(), "widen" | "gof" | "alta" | "rational") {
         report.insert("threads".into(), fit::threads().into());
         println!("{}", Value::Object(report));
         return;
