@@ -235,7 +235,10 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         return super::rational::fit_cmd(a);
     }
     if a.rational.given() {
-        bail!("--segments and --max-degree are options of --model rational, not of {}", a.model);
+        bail!(
+            "--segments, --max-degree and --no-cosine are options of --model rational, not of {}",
+            a.model
+        );
     }
     let model = ModelId::parse(&a.model)?;
     let d = domain(&a.file, &a.options)?;
