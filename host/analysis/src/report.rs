@@ -232,7 +232,7 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         }
     );
     let holdout = r.holdout.iter().any(Option::is_some);
-    html.push_str("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt); the rational function (Belcour et al. 2014 §5.B) is the least-norm one of the lowest degree that passes through every sample's segment.</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th>");
+    html.push_str("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt); the rational function (Belcour et al. 2014 §5.B) is the least-norm one of the fewest terms that passes through every sample's segment.</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th>");
     if holdout {
         html.push_str("<th>held-out NRMSE</th><th>held-out NCC</th>");
     }

@@ -299,7 +299,7 @@ fn compare_lists_every_model() {
     names.push("rational");
     let html = common::check_report(&report, &names, &["15", "30", "60"]);
     assert!(
-        html.contains("lowest degree that passes through every sample"),
+        html.contains("fewest terms that passes through every sample"),
         "the rational row is explained"
     );
     // Best first.

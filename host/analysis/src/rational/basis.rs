@@ -9,7 +9,10 @@
 //! parallel. Terms are ordered by total degree, so a basis of `n` terms
 //! is a prefix of that of `n + 1`: a solution with fewer terms is one with
 //! every larger count (zeros appended), which is what makes bisecting on
-//! the number of terms sound.
+//! the number of terms sound for the segments. The positivity grid
+//! (`qp`) grows with the degree, so across a degree's boundary a count
+//! that held can fail with more terms; the bisection then answers a count
+//! that holds, not always the fewest.
 
 use crate::moments::plane::Parametrization;
 use gonio_brdf::Directions;

@@ -195,8 +195,8 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
     // that hold within a factor of two, so the costliest programme solved
     // has at most twice the answer's terms; a bisection inside the bracket
     // then finds it, to one term, as ALTA's walk does. Counts below `lo`
-    // do not hold.
-    let mut lo = 0;
+    // do not hold (none is below one term).
+    let mut lo = 1;
     let mut n = 1;
     let mut best = loop {
         match attempt(n)? {

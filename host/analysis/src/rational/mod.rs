@@ -1,15 +1,16 @@
 //! The non-parametric model of Belcour et al. 2014 (§5.B, Table 1): a
 //! rational function through the *vertical segments* of the data
-//! (Pacanowski et al. 2012, "Rational BRDF"), times a cosine factor.
+//! (Pacanowski et al. 2012, "Rational BRDF"), times a cosine factor or not.
 //! Where a parametric model is fitted in the least-squares sense, this one
 //! is the least-norm function that stays within every sample's interval:
 //! with `--segments sigma` the measurement's own k = 2 uncertainty, so that
 //! the function fits within what was measured, or says which sample no
-//! function of the allowed degree can reach.
+//! function of the allowed terms can reach.
 //!
 //! `basis` the Legendre terms and the coordinates' box, `segments` the
-//! intervals, `qp` one degree's quadratic programme (Clarabel), `fit` the
-//! search on the degree, `function` the result as a BRDF, `file` its JSON.
+//! intervals, `qp` one count's quadratic programme (Clarabel), `fit` the
+//! search on the number of terms, `function` the result as a BRDF, `file`
+//! its JSON.
 
 pub mod basis;
 pub mod file;

@@ -134,7 +134,10 @@ fn fits_source(paths: &[PathBuf]) -> Result<Source> {
     let mut support: Option<Support> = None;
     let mut fits = Vec::new();
     for (f, path) in files.into_iter().zip(paths) {
-        let (Some(s), Some(rmse), Some(aic)) = (f.support, f.rmse, f.aic) else {
+        // A rational function never carries a value, so it needs no AIC
+        // (files of an earlier gonio have none).
+        let aic = f.aic.or(matches!(f.brdf, FittedBrdf::Rational(_)).then_some(f64::INFINITY));
+        let (Some(s), Some(rmse), Some(aic)) = (f.support, f.rmse, aic) else {
             bail!(
                 "{}: a fit without its data's support, RMSE and AIC cannot be weighed against the others",
                 path.display()

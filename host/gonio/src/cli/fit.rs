@@ -344,7 +344,7 @@ pub fn compare(d: &Domain, o: &FitOptions, rational: Option<&RationalSpec>) -> R
     bar.finish_and_clear();
     let mut unfitted = Vec::new();
     if let Some(spec) = rational {
-        match super::rational::compared(d, spec, o.weights, o.json) {
+        match super::rational::compared(d, spec, o.units.unwrap_or(d.train.units), o.weights, o.json) {
             Ok(row) => rows.push(row),
             Err(e) => unfitted.push(format!("{e:#}")),
         }

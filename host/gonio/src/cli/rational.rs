@@ -9,7 +9,7 @@ use gonio_analysis::coefficients::Support;
 use gonio_analysis::fit::compared::ComparedFit;
 use gonio_analysis::fit::criteria::Criteria;
 use gonio_analysis::fit::file::FittedBrdf;
-use gonio_analysis::fit::{self, Weighting};
+use gonio_analysis::fit::{self, Units, Weighting};
 use gonio_analysis::moments::Parametrization;
 use gonio_analysis::rational::{self, RationalFit, RationalSpec};
 use gonio_analysis::rounding::significant;
@@ -64,14 +64,12 @@ fn fitted(d: &Domain, spec: &RationalSpec, json: bool) -> Result<RationalFit> {
     Ok(f)
 }
 
-/// The rational function as one row of `compare`: its criteria under the
-/// comparison's `weighting`, as the models are ranked.
-pub fn compared(d: &Domain, spec: &RationalSpec, weighting: Weighting, json: bool) -> Result<Outcome> {
+/// The rational function as one row of `compare`: its criteria in the
+/// comparison's `units` and under its `weighting`, as the models are ranked.
+pub fn compared(d: &Domain, spec: &RationalSpec, units: Units, weighting: Weighting, json: bool) -> Result<Outcome> {
     let f = fitted(d, spec, json)?;
     let holdout = d.holdout.as_ref().map(|h| f.function.against(h).0);
-    let criteria = Criteria::of_brdf(&d.train, d.train.units, weighting, f.function.coefficients(), |x| {
-        f.function.eval(x)
-    })?;
+    let criteria = Criteria::of_brdf(&d.train, units, weighting, f.function.coefficients(), |x| f.function.eval(x))?;
     let fit = ComparedFit::Rational { fit: f, criteria };
     let json = fit.to_json(d.train.units, holdout.as_ref());
     Ok(Outcome { fit, holdout, json })
@@ -86,9 +84,13 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let d = domain(&a.file, o)?;
     let f = fitted(&d, &spec, o.json)?;
     let holdout = d.holdout.as_ref().map(|h| f.function.against(h).0);
-    let criteria = Criteria::of_brdf(&d.train, d.train.units, Weighting::Uniform, f.function.coefficients(), |x| {
-        f.function.eval(x)
-    })?;
+    let criteria = Criteria::of_brdf(
+        &d.train,
+        o.units.unwrap_or(d.train.units),
+        Weighting::Uniform,
+        f.function.coefficients(),
+        |x| f.function.eval(x),
+    )?;
     let mut v = rational::file::to_json(&f, d.train.units, &criteria, holdout.as_ref());
     if !d.train.warnings.is_empty() {
         v["warnings"] = serde_json::json!(d.train.warnings);

@@ -147,8 +147,8 @@ impl Alta {
     /// `data2brdf` on `data` from `start` (ALTA's own default where `None`),
     /// `iterations` capping Ceres's.
     /// `data2brdf --input data --output WORK/fit.brdf ARGS`: what it
-    /// printed, and its wall time.
-    pub fn run(&self, data: &Path, args: &[&str]) -> Result<(String, f64), String> {
+    /// printed, its wall time, and whether it exited with success.
+    pub fn run(&self, data: &Path, args: &[&str]) -> Result<(String, f64, bool), String> {
         let out = self.work.join("fit.brdf");
         let _ = std::fs::remove_file(&out);
         let t0 = Instant::now();
@@ -162,7 +162,11 @@ impl Alta {
             .stderr(Stdio::null())
             .output()
             .map_err(|e| format!("data2brdf: {e}"))?;
-        Ok((String::from_utf8_lossy(&o.stdout).into_owned(), t0.elapsed().as_secs_f64()))
+        Ok((
+            String::from_utf8_lossy(&o.stdout).into_owned(),
+            t0.elapsed().as_secs_f64(),
+            o.status.success(),
+        ))
     }
 
     fn fit(&self, shared: &Shared, data: &Path, start: Option<&[f64]>, iterations: Option<u32>) -> Result<Run, String> {
@@ -176,7 +180,10 @@ impl Alta {
         if let Some(n) = &n {
             args.extend(["--ceres-max-num-iterations", n]);
         }
-        let (text, seconds) = self.run(data, &args)?;
+        let (text, seconds, success) = self.run(data, &args)?;
+        if !success {
+            return Err("data2brdf failed".into());
+        }
         let out = self.work.join("fit.brdf");
         let line = |key: &str| {
             text.lines()
