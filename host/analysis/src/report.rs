@@ -181,6 +181,27 @@ fn params_cell(f: &ComparedFit) -> String {
     }
 }
 
+/// Removes the fit files an earlier report wrote into `fits_dir` (a report
+/// written again with `--force`): a fit this one does not make (the
+/// rational function, fitted then and not now) must not be left beside
+/// it as if it were. Only files a report names are touched.
+fn remove_earlier_fits(fits_dir: &Path) -> Result<()> {
+    let names: Vec<&str> = gonio_brdf::ModelId::ALL
+        .iter()
+        .map(|m| m.name())
+        .chain([crate::rational::file::MODEL])
+        .collect();
+    for name in names {
+        for ext in ["json", "brdf"] {
+            let path = fits_dir.join(format!("{name}.{ext}"));
+            if path.is_file() {
+                std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Fits sorted best first (RMSE on the fitted samples).
 fn ranked(fits: &[ComparedFit]) -> Vec<usize> {
     let mut order: Vec<usize> = (0..fits.len()).collect();
@@ -193,6 +214,7 @@ fn ranked(fits: &[ComparedFit]) -> Vec<usize> {
 pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     let fits_dir = dir.join("fits");
     std::fs::create_dir_all(&fits_dir).with_context(|| format!("creating {}", fits_dir.display()))?;
+    remove_earlier_fits(&fits_dir)?;
     let order = ranked(r.fits);
     // What the data hold near the laser: kept in every fit file, and what
     // the coefficients rest on.

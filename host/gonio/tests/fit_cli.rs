@@ -319,6 +319,10 @@ fn compare_lists_every_model() {
         "--json",
     ]);
     assert!(forced.status.success(), "{}", text(&forced));
+    // Written again without the rational function: its files from the
+    // first report are gone, the models' are the new ones.
+    assert!(!report.join("fits/rational.json").exists() && !report.join("fits/rational.brdf").exists());
+    assert!(report.join("fits/retro-phong.json").is_file());
 }
 
 #[test]
