@@ -583,3 +583,50 @@ fn a_scan_pauses_and_continues_from_another_terminal() {
     );
     assert!(!live.exists(), "live.json outlives its scan");
 }
+
+#[test]
+fn export_writes_an_rgl_bsdf_and_says_how_closely_it_holds_the_material() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("beads.bsdf");
+    let path = out.to_str().unwrap();
+    let o = gonio(&["export", "--material", "glass-beads", path, "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["format"], "rgl-bsdf");
+    assert_eq!(v["within_tolerance"], true, "{v}");
+    let bytes = std::fs::read(&out).unwrap();
+    assert_eq!(&bytes[..12], b"tensor_file\0");
+    assert_eq!(v["bytes"], bytes.len());
+    // Too coarse for the beads' ring: written, with a warning naming the error.
+    let o = gonio(&[
+        "export",
+        "--material",
+        "glass-beads",
+        path,
+        "--grid",
+        "9",
+        "--warp-grid",
+        "9",
+        "--theta-step",
+        "10",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    assert!(text(&o).contains("warning: the table is too coarse"), "{}", text(&o));
+    // MERL: the three dimensions, then three channels of doubles.
+    let merl = dir.path().join("beads.binary");
+    let o = gonio(&["export", "--material", "glass-beads", merl.to_str().unwrap(), "--json"]);
+    assert!(o.status.success(), "{}", text(&o));
+    let bytes = std::fs::read(&merl).unwrap();
+    assert_eq!(bytes.len(), 12 + 3 * 90 * 90 * 180 * 8);
+    assert_eq!(&bytes[..12], [90i32, 90, 180].map(i32::to_le_bytes).concat());
+    // Mistakes: a material with a fit, a format we do not write, a shader from a material.
+    for (args, needle) in [
+        (vec!["export", "--material", "glass-beads", "fit.json", path], "only OUTPUT"),
+        (vec!["export", "--material", "glass-beads", "x.txt"], "extension"),
+        (vec!["export", "--material", "glass-beads", "x.brdf"], "from a fit"),
+    ] {
+        let o = gonio(&args);
+        assert_eq!(o.status.code(), Some(1), "{args:?}");
+        assert!(text(&o).contains(needle), "{args:?}: {}", text(&o));
+    }
+}

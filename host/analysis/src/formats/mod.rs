@@ -5,6 +5,8 @@
 pub mod alta;
 pub mod brdf_csv;
 pub mod brdf_explorer;
+pub mod merl;
+pub mod rgl;
 
 use crate::fit::Dataset;
 use anyhow::{Context, Result};

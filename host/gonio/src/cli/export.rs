@@ -1,19 +1,52 @@
-//! `gonio export`: a fit (`gonio fit --out FIT.json`) as a Disney BRDF
-//! Explorer `.brdf` file, to look at the model in that tool: a model with
-//! its parameters, or a rational function with its coefficients in the
-//! shader.
+//! `gonio export`: a fit (`gonio fit --out FIT.json`) or a simulated head's
+//! material, written for another tool. The output's extension picks the
+//! format: `.brdf`, a Disney BRDF Explorer shader (a model with its
+//! parameters, or a rational function with its coefficients); `.bsdf`, the
+//! RGL tensor file that Mitsuba 3 and pbrt-v4 render; `.binary`, MERL's
+//! half-difference table (docs/render.md).
 
-use anyhow::{Context, Result};
+use super::material;
+use anyhow::{bail, Context, Result};
 use gonio_analysis::fit::file::{read_fitted, FittedBrdf};
 use gonio_analysis::formats::brdf_explorer;
+use gonio_analysis::formats::merl::Merl;
+use gonio_analysis::formats::rgl::{self, Accuracy, Options, Spectrum};
+use gonio_brdf::Directions;
+use serde_json::json;
 use std::path::{Path, PathBuf};
 
 #[derive(Debug, clap::Args)]
+#[command(
+    after_help = "Examples:\n  gonio export fits/retro-phong.json tape.bsdf\n  gonio export --material glass-beads beads.bsdf\n  gonio export fits/abc-retro.json abc.brdf"
+)]
 pub struct ExportArgs {
-    /// A fit written by `gonio fit --out FIT.json`.
-    pub fit: PathBuf,
-    /// Output `.brdf` file (GLSL `BRDF(L, V, N, X, Y)`; a model's parameters as parameter lines).
-    pub output: PathBuf,
+    /// `FIT.json OUTPUT`, or `OUTPUT` alone with --material. FIT is a fit
+    /// written by `gonio fit --out`; OUTPUT's extension picks the format:
+    /// `.brdf` (BRDF Explorer GLSL), `.bsdf` (RGL tensor file for Mitsuba 3
+    /// and pbrt-v4) or `.binary` (MERL's 90 × 90 × 180 half-difference table).
+    #[arg(value_name = "[FIT] OUTPUT", num_args = 1..=2, required = true)]
+    pub paths: Vec<PathBuf>,
+    /// Export a simulated head's material instead of a fit: `glass-beads`,
+    /// or a model id with --params (the truth a simulated scan is checked against).
+    #[arg(long)]
+    pub material: Option<String>,
+    /// The material's parameters, NAME=V,... (with --material and a model id).
+    #[arg(long, requires = "material")]
+    pub params: Option<String>,
+    /// `.bsdf`: step between incidence slices (degrees; a quarter of it up to 2°).
+    #[arg(long, default_value_t = Options::default().theta_i_step_deg)]
+    pub theta_step: f64,
+    /// `.bsdf`: side of the warped grid the values are tabulated on (odd keeps the retro direction on a node).
+    #[arg(long, default_value_t = Options::default().spectra)]
+    pub grid: usize,
+    /// `.bsdf`: side of the warp's own grid over the half vectors.
+    #[arg(long, default_value_t = Options::default().vndf)]
+    pub warp_grid: usize,
+    /// `.bsdf`: the values at the laser's 633 nm only (`laser`), or copied
+    /// over the visible as a grey material (`visible`, an assumption the
+    /// description states).
+    #[arg(long, value_enum, default_value = "laser")]
+    pub spectrum: Spectrum,
     /// Print one JSON object: what was written (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
@@ -29,12 +62,135 @@ pub fn write_brdf(fitted: &FittedBrdf, source: &str, out: &Path) -> Result<()> {
     std::fs::write(out, text).with_context(|| format!("cannot write {}", out.display()))
 }
 
+/// What is exported: a fit or a material, its name and where it came from.
+enum Source {
+    Fit(FittedBrdf),
+    Material(gonio_brdf::Specimen),
+}
+
+impl Source {
+    fn eval(&self, d: &Directions) -> f64 {
+        match self {
+            Source::Fit(f) => f.eval(d),
+            Source::Material(s) => s.eval(d),
+        }
+    }
+}
+
 pub fn export_cmd(a: ExportArgs) -> Result<()> {
-    let fitted = read_fitted(&a.fit)?;
-    write_brdf(&fitted, &a.fit.display().to_string(), &a.output)?;
-    match a.json {
-        true => println!("{}", serde_json::json!({ "written": a.output, "model": fitted.name() })),
-        false => eprintln!("{} written to {}", fitted.name(), a.output.display()),
+    let (source, name, origin, output) = match (&a.material, a.paths.as_slice()) {
+        (Some(m), [out]) => {
+            let s = material::specimen(m, a.params.as_deref())?;
+            let described = s.describe();
+            (
+                Source::Material(s),
+                m.clone(),
+                format!("the simulated material {described}"),
+                out.clone(),
+            )
+        }
+        (None, [fit, out]) => {
+            let f = read_fitted(fit)?;
+            let name = f.name().to_string();
+            (Source::Fit(f), name, format!("the fit {}", fit.display()), out.clone())
+        }
+        (Some(_), _) => bail!("with --material give only OUTPUT (the material is the source)"),
+        (None, _) => bail!("give FIT.json OUTPUT, or OUTPUT with --material NAME"),
+    };
+    match output.extension().and_then(|e| e.to_str()) {
+        Some("brdf") => {
+            let Source::Fit(fitted) = &source else {
+                bail!("a BRDF Explorer .brdf is written from a fit (FIT.json), not from --material");
+            };
+            write_brdf(fitted, &origin, &output)?;
+            match a.json {
+                true => println!("{}", json!({ "written": output, "format": "brdf-explorer", "model": name })),
+                false => eprintln!("{name} written to {}", output.display()),
+            }
+        }
+        Some("bsdf") => export_bsdf(&a, &source, &name, &origin, &output)?,
+        Some("binary") => {
+            let merl = Merl::tabulate(&|d: &Directions| source.eval(d)).with_context(|| format!("{name} as MERL .binary"))?;
+            let bytes = merl.bytes();
+            std::fs::write(&output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
+            match a.json {
+                true => println!(
+                    "{}",
+                    json!({ "written": output, "format": "merl-binary", "model": name, "bytes": bytes.len() })
+                ),
+                false => eprintln!(
+                    "{name} written to {} (MERL 90 × 90 × 180, grey; isotropic and reciprocal by assumption: docs/render.md)",
+                    output.display()
+                ),
+            }
+        }
+        _ => bail!(
+            "{}: the extension must be .brdf (BRDF Explorer), .bsdf (RGL, for Mitsuba 3 and pbrt-v4) or .binary (MERL)",
+            output.display()
+        ),
     }
     Ok(())
+}
+
+fn export_bsdf(a: &ExportArgs, source: &Source, name: &str, origin: &str, output: &Path) -> Result<()> {
+    let opt = Options {
+        theta_i_step_deg: a.theta_step,
+        spectra: a.grid,
+        vndf: a.warp_grid,
+        spectrum: a.spectrum,
+        ..Options::default()
+    };
+    let spectrum = match a.spectrum {
+        Spectrum::Laser => format!(
+            "values at the head's laser wavelength, {} nm, held for every wavelength",
+            rgl::LASER_NM
+        ),
+        Spectrum::Visible => format!("values measured at {} nm and assumed grey over 360-830 nm", rgl::LASER_NM),
+    };
+    let description = format!("gonio export of {origin} ({name}); {spectrum}; isotropic");
+    let eval = |d: &Directions| source.eval(d);
+    let table = rgl::Table::new(&eval, &description, &opt).with_context(|| format!("{name} as .bsdf"))?;
+    let bytes = table.bytes();
+    std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
+    let acc = rgl::accuracy(&table, &eval, ACCURACY_PAIRS, ACCURACY_LOBE_DEG.to_radians());
+    report_bsdf(a.json, name, output, bytes.len(), table.theta_i().len(), &acc);
+    Ok(())
+}
+
+/// Pairs the written table is checked at, and the radius of the retro and
+/// mirror neighbourhoods a quarter of them each are drawn in.
+const ACCURACY_PAIRS: usize = 4000;
+const ACCURACY_LOBE_DEG: f64 = 3.0;
+
+fn report_bsdf(json: bool, name: &str, output: &Path, bytes: usize, slices: usize, acc: &Accuracy) {
+    let [median, p95, peak] = rgl::TOLERANCE;
+    let ok = acc.within_tolerance();
+    if json {
+        println!(
+            "{}",
+            json!({"written": output, "format": "rgl-bsdf", "model": name, "bytes": bytes, "incidences": slices,
+                   "accuracy": acc, "tolerance": {"median": median, "p95": p95, "retro_peak": peak}, "within_tolerance": ok})
+        );
+        return;
+    }
+    eprintln!(
+        "{name} written to {} ({:.1} MB, {slices} incidences)",
+        output.display(),
+        bytes as f64 / 1e6
+    );
+    eprintln!(
+        "read back as a renderer reads it, at {} direction pairs: median error {:.2} %, 95th percentile {:.2} %, retro peak {:.2} %",
+        acc.pairs,
+        100.0 * acc.median,
+        100.0 * acc.p95,
+        100.0 * acc.retro_peak
+    );
+    if !ok {
+        eprintln!(
+            "warning: the table is too coarse for this material (tolerance: median {} %, 95th percentile {} %, retro peak {} %); raise --grid or --warp-grid, or lower --theta-step",
+            100.0 * median,
+            100.0 * p95,
+            100.0 * peak
+        );
+    }
 }
