@@ -19,6 +19,7 @@ pub mod lobe;
 pub mod moments;
 pub mod plot;
 pub mod rational;
+pub mod render;
 pub mod repeatability;
 pub mod report;
 pub mod rounding;

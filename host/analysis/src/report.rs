@@ -9,8 +9,9 @@ use crate::coefficients::{self, Estimate, Fitted, Kind, Provenance, Source, Supp
 use crate::fit::compared::ComparedFit;
 use crate::fit::file::{self as fit_file, FittedBrdf};
 use crate::fit::{Dataset, Metrics, Units};
-use crate::formats::brdf_explorer;
+use crate::formats::{brdf_explorer, rgl};
 use crate::plot;
+use crate::render;
 use crate::rounding;
 use anyhow::{Context, Result};
 use std::fmt::Write as _;
@@ -192,7 +193,7 @@ fn remove_earlier_fits(fits_dir: &Path) -> Result<()> {
         .chain([crate::rational::file::MODEL])
         .collect();
     for name in names {
-        for ext in ["json", "brdf"] {
+        for ext in ["json", "brdf", "bsdf"] {
             let path = fits_dir.join(format!("{name}.{ext}"));
             if path.is_file() {
                 std::fs::remove_file(&path).with_context(|| format!("cannot remove {}", path.display()))?;
@@ -200,6 +201,70 @@ fn remove_earlier_fits(fits_dir: &Path) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// The best fit as an RGL `.bsdf` in `fits/`, and Mitsuba 3's pictures of
+/// it beside our integration of the same scenes (`render.rs`) where Mitsuba
+/// is installed; without it the section says so and keeps the file.
+fn renders_section(best: &ComparedFit, fits_dir: &Path, plots_dir: &Path) -> Result<String> {
+    let name = best.name();
+    let brdf = best.brdf();
+    let eval = |d: &gonio_brdf::Directions| brdf.eval(d);
+    let mut html = String::from("<h2>Rendered</h2>\n");
+    let description = format!("gonio report: the best fit, {name}; values at 633 nm, held for every wavelength; isotropic");
+    let table = match rgl::Table::new(&eval, &description, &rgl::Options::default()) {
+        Ok(t) => t,
+        Err(e) => {
+            let _ = writeln!(
+                html,
+                "<p>The best fit, {name}, cannot be tabulated for a renderer: {}</p>",
+                escape(&e.to_string())
+            );
+            return Ok(html);
+        }
+    };
+    let file = fits_dir.join(format!("{name}.bsdf"));
+    std::fs::write(&file, table.bytes()).with_context(|| format!("cannot write {}", file.display()))?;
+    let acc = rgl::accuracy(&table, &eval, 4000, 3f64.to_radians());
+    let _ = writeln!(
+        html,
+        "<p>The best fit, {name}, as the RGL file <a href=\"fits/{name}.bsdf\">fits/{name}.bsdf</a> that Mitsuba 3 and \
+         pbrt-v4 render (docs/render.md). Read back as they read it: median error {:.2} %, 95th percentile {:.2} %, \
+         retro peak {:.2} %.</p>",
+        100.0 * acc.median,
+        100.0 * acc.p95,
+        100.0 * acc.retro_peak
+    );
+    std::fs::create_dir_all(plots_dir).with_context(|| format!("creating {}", plots_dir.display()))?;
+    let scenes = render::scenes();
+    for s in &scenes {
+        let png = plots_dir.join(format!("{}.png", s.name));
+        if png.is_file() {
+            std::fs::remove_file(&png).with_context(|| format!("cannot remove {}", png.display()))?;
+        }
+    }
+    match render::with_mitsuba(&file, &scenes, Some(plots_dir)) {
+        Ok(drawn) => {
+            html.push_str("<p>A plane of the material under an orthographic camera 30° from its normal; both pictures at one exposure.</p>\n<div class=\"row\">\n");
+            for (s, m) in scenes.iter().zip(&drawn.means) {
+                let _ = writeln!(
+                    html,
+                    "<figure><img src=\"plots/{n}.png\" alt=\"{n}\"><figcaption>{}: mean radiance {} (Mitsuba {}), {} \
+                     by our integration of the model</figcaption></figure>",
+                    escape(s.caption),
+                    rounding::significant(*m, 4),
+                    escape(&drawn.mitsuba),
+                    rounding::significant(s.mean_radiance(&eval), 4),
+                    n = s.name
+                );
+            }
+            html.push_str("</div>\n");
+        }
+        Err(e) => {
+            let _ = writeln!(html, "<p>Not drawn: {}.</p>", escape(&format!("{e:#}")));
+        }
+    }
+    Ok(html)
 }
 
 /// Fits sorted best first (RMSE on the fitted samples).
@@ -311,6 +376,9 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     }
     if !r.budget.is_empty() {
         html.push_str(&budget_section(r.budget));
+    }
+    if let Some(&best) = order.first() {
+        html.push_str(&renders_section(&r.fits[best], &fits_dir, &dir.join("plots"))?);
     }
     let drawn: Vec<FittedBrdf> = order.iter().take(DRAWN).map(|&i| r.fits[i].brdf()).collect();
     let names: Vec<&str> = drawn.iter().map(FittedBrdf::name).collect();

@@ -68,8 +68,13 @@ pub fn check_report(dir: &std::path::Path, models: &[&str], theta_i: &[&str]) ->
         );
         pictures += row.matches("<img").count();
     }
-    // The fits, the pictures (PNG and SVG), and the R_A picture.
-    assert_eq!(links, 2 * models.len() + 2 * pictures + 1, "links in the report");
+    // The best fit for renderers, and Mitsuba's two pictures of it where
+    // Mitsuba is installed (a note saying why not elsewhere).
+    assert!(html.contains(".bsdf\">fits/"), "the best fit's .bsdf");
+    let renders = html.matches("src=\"plots/render-").count();
+    assert!(renders == 2 || html.contains("<p>Not drawn: "), "renders: {renders}");
+    // The fits, the pictures (PNG and SVG), the R_A picture, the .bsdf and the renders.
+    assert_eq!(links, 2 * models.len() + 2 * pictures + 1 + 1 + renders, "links in the report");
     // Numbers as a physicist writes them: no machine exponents in the text.
     let body = &html[html.find("<body>").unwrap()..];
     let machine = body
