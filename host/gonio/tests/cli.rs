@@ -587,9 +587,10 @@ fn a_scan_pauses_and_continues_from_another_terminal() {
 #[test]
 fn export_writes_an_rgl_bsdf_and_says_how_closely_it_holds_the_material() {
     let dir = tempfile::tempdir().unwrap();
-    let out = dir.path().join("beads.bsdf");
+    let out = dir.path().join("tape.bsdf");
     let path = out.to_str().unwrap();
-    let o = gonio(&["export", "--material", "glass-beads", path, "--json"]);
+    let tape = ["--material", "retro-phong", "--params", "kd=0.05,n=1000,k1=0.8,k2=0.1,k3=0.02,k4=3"];
+    let o = gonio(&[&["export"], &tape[..], &[path, "--json"]].concat());
     assert!(o.status.success(), "{}", text(&o));
     let v: serde_json::Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["format"], "rgl-bsdf");
@@ -597,19 +598,8 @@ fn export_writes_an_rgl_bsdf_and_says_how_closely_it_holds_the_material() {
     let bytes = std::fs::read(&out).unwrap();
     assert_eq!(&bytes[..12], b"tensor_file\0");
     assert_eq!(v["bytes"], bytes.len());
-    // Too coarse for the beads' ring: written, with a warning naming the error.
-    let o = gonio(&[
-        "export",
-        "--material",
-        "glass-beads",
-        path,
-        "--grid",
-        "9",
-        "--warp-grid",
-        "9",
-        "--theta-step",
-        "10",
-    ]);
+    // Too coarse for the beads' ring at the defaults: written, with a warning naming the error.
+    let o = gonio(&["export", "--material", "glass-beads", path]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(text(&o).contains("warning: the table is too coarse"), "{}", text(&o));
     // MERL: the three dimensions, then three channels of doubles.

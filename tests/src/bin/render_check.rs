@@ -60,7 +60,15 @@ fn run() -> Result<bool> {
     let mut cases = Vec::new();
     for (name, specimen) in materials() {
         let eval = |d: &Directions| specimen.eval(d);
-        let table = Table::new(&eval, &format!("render-check: {name}"), &Options::default())?;
+        // The beads' 0.6° ring needs slices 0.125° apart (docs/render.md).
+        let options = match specimen {
+            Specimen::GlassBeads(_) => Options {
+                theta_i_step_deg: 0.125,
+                ..Options::default()
+            },
+            Specimen::Model(_) => Options::default(),
+        };
+        let table = Table::new(&eval, &format!("render-check: {name}"), &options)?;
         let file = dir.path().join(format!("{name}.bsdf"));
         std::fs::write(&file, table.bytes())?;
         cases.push(json!({
@@ -71,7 +79,7 @@ fn run() -> Result<bool> {
             "retro": retro,
             "ours_retro": retro.iter().map(|&w| rgl::fr_cos(&eval, w, w)).collect::<Vec<_>>(),
             "images": scenes.iter().map(|s| s.mean_radiance(&eval)).collect::<Vec<_>>(),
-            "mitsuba_images": render::with_mitsuba(&file, &scenes, None)?.means,
+            "mitsuba_images": render::with_mitsuba(&file, &scenes, Some(dir.path()))?.means,
         }));
     }
     let input = dir.path().join("cases.json");
@@ -90,6 +98,11 @@ fn run() -> Result<bool> {
         script.display()
     );
     let got: Value = serde_json::from_slice(&std::fs::read(&output)?)?;
+    // The report's pictures: written, as PNG.
+    for s in &scenes {
+        let png = std::fs::read(dir.path().join(format!("{}.png", s.name))).with_context(|| format!("{}.png", s.name))?;
+        ensure!(png.starts_with(b"\x89PNG"), "{}.png is not a PNG", s.name);
+    }
     compare(&cases, &got)
 }
 

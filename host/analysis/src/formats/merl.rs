@@ -201,6 +201,31 @@ mod tests {
                 assert!((g / f(&centre) - 1.0).abs() < 1e-12, "{g} vs {}", f(&centre));
             }
         }
+        // The same cells read from the bytes with BRDFRead.cpp's own
+        // arithmetic: offset 12 + 8·(φd + 180·θd + 180·90·θh) per channel
+        // block, times the channel's scale.
+        for &(l, v) in &[
+            (
+                Directions::from_degrees(30.0, 20.0, 40.0).l,
+                Directions::from_degrees(30.0, 20.0, 40.0).v,
+            ),
+            (
+                Directions::from_degrees(60.0, 59.0, 1.0).l,
+                Directions::from_degrees(60.0, 59.0, 1.0).v,
+            ),
+        ] {
+            let (th, td, pd) = half_diff(l, v);
+            let ih = (th / FRAC_PI_2 * 90.0 * 90.0).sqrt() as usize;
+            let id = (td / FRAC_PI_2 * 90.0) as usize;
+            let ip = ((if pd < 0.0 { pd + PI } else { pd }) / PI * 180.0) as usize;
+            let ind = ip + id * 180 + ih * 180 * 90;
+            for (k, scale) in SCALE.iter().enumerate() {
+                let at = 12 + 8 * (k * 90 * 90 * 180 + ind);
+                let raw = f64::from_le_bytes(bytes[at..at + 8].try_into().unwrap());
+                assert!((raw * scale - back.lookup(l, v)[k]).abs() < 1e-12);
+                assert!(raw * scale > 0.0);
+            }
+        }
         let mut wrong = bytes.clone();
         wrong[0] = 91;
         assert!(Merl::read(&wrong).is_err());

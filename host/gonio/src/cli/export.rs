@@ -33,7 +33,7 @@ pub struct ExportArgs {
     /// The material's parameters, NAME=V,... (with --material and a model id).
     #[arg(long, requires = "material")]
     pub params: Option<String>,
-    /// `.bsdf`: step between incidence slices (degrees; a quarter of it up to 2°).
+    /// `.bsdf`: step between incidence slices (degrees; a quarter of it up to 4°).
     #[arg(long, default_value_t = Options::default().theta_i_step_deg)]
     pub theta_step: f64,
     /// `.bsdf`: side of the warped grid the values are tabulated on (odd keeps the retro direction on a node).
@@ -42,9 +42,10 @@ pub struct ExportArgs {
     /// `.bsdf`: side of the warp's own grid over the half vectors.
     #[arg(long, default_value_t = Options::default().vndf)]
     pub warp_grid: usize,
-    /// `.bsdf`: the values at the laser's 633 nm only (`laser`), or copied
-    /// over the visible as a grey material (`visible`, an assumption the
-    /// description states).
+    /// `.bsdf`: the values at the laser's 633 nm only (`laser`, for a
+    /// renderer's spectral variants), copied over the visible as a grey
+    /// material (`visible`), or as grey red, green and blue (`rgb`, for its
+    /// RGB variants); the description states the assumption.
     #[arg(long, value_enum, default_value = "laser")]
     pub spectrum: Spectrum,
     /// Print one JSON object: what was written (errors too: `{"error", "kind"}`).
@@ -140,27 +141,15 @@ fn export_bsdf(a: &ExportArgs, source: &Source, name: &str, origin: &str, output
         spectrum: a.spectrum,
         ..Options::default()
     };
-    let spectrum = match a.spectrum {
-        Spectrum::Laser => format!(
-            "values at the head's laser wavelength, {} nm, held for every wavelength",
-            rgl::LASER_NM
-        ),
-        Spectrum::Visible => format!("values measured at {} nm and assumed grey over 360-830 nm", rgl::LASER_NM),
-    };
-    let description = format!("gonio export of {origin} ({name}); {spectrum}; isotropic");
+    let description = rgl::description(&format!("{origin} ({name})"), a.spectrum);
     let eval = |d: &Directions| source.eval(d);
     let table = rgl::Table::new(&eval, &description, &opt).with_context(|| format!("{name} as .bsdf"))?;
     let bytes = table.bytes();
     std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
-    let acc = rgl::accuracy(&table, &eval, ACCURACY_PAIRS, ACCURACY_LOBE_DEG.to_radians());
+    let acc = rgl::accuracy(&table, &eval, rgl::CHECK_PAIRS, rgl::CHECK_LOBE_DEG.to_radians());
     report_bsdf(a.json, name, output, bytes.len(), table.theta_i().len(), &acc);
     Ok(())
 }
-
-/// Pairs the written table is checked at, and the radius of the retro and
-/// mirror neighbourhoods a quarter of them each are drawn in.
-const ACCURACY_PAIRS: usize = 4000;
-const ACCURACY_LOBE_DEG: f64 = 3.0;
 
 fn report_bsdf(json: bool, name: &str, output: &Path, bytes: usize, slices: usize, acc: &Accuracy) {
     let [median, p95, peak] = rgl::TOLERANCE;

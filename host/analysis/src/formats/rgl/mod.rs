@@ -22,9 +22,9 @@
 //! ([`Options::retro_share`]) is a bump about `m = ωi`. The warp is only a
 //! change of variables (both renderers compute densities from the table
 //! itself), so this moves grid points into the retro lobe without changing
-//! what is evaluated. The retro point then sits at the same place of the
-//! warped square at every incidence, so interpolating between incidences
-//! keeps the peak.
+//! what is evaluated. From 3° of incidence on, the retro point then sits
+//! at the same node of the warped square at every incidence, so
+//! interpolating between incidences keeps the peak.
 //!
 //! The table's incidence is the viewer's: a render sees the material as the
 //! head sees it, with the light where the head's laser is (`models.md`'s
@@ -53,6 +53,14 @@ const THETA_I_MAX_DEG: f64 = 88.0;
 const AZIMUTH_FLAT_SHARE: f64 = 0.2;
 /// Widest the bump about the mirror's half vector grows at grazing incidence (degrees).
 const MIRROR_WIDTH_MAX_DEG: f64 = 15.0;
+/// Incidences up to which the slices are four times as close (degrees):
+/// there the mirror lobe leaves the retro one (at twice the incidence) and
+/// the retro direction's node moves to the middle of the warped square (by
+/// `2 × bump width`, 3° by default).
+pub const FINE_DEG: f64 = 4.0;
+/// Bounds on the options, which keep a file under about 1.5 GB.
+const MIN_STEP_DEG: f64 = 0.05;
+const MAX_SIDE: usize = 513;
 /// Floor of the NDF relative to its largest value, so that `spectra = f·cos·4σ/D`
 /// stays finite at grazing half vectors where `D → 0`.
 const NDF_FLOOR: f64 = 1e-3;
@@ -65,15 +73,19 @@ pub enum Spectrum {
     Laser,
     /// The same values at 360 and 830 nm: a grey material over the visible, by assumption.
     Visible,
+    /// The same values in red, green and blue (an `rgb` table, no
+    /// wavelengths): for a renderer's RGB variants, grey by assumption.
+    Rgb,
 }
 
 /// Sizes of the tables and the share of the warp given to the retro lobe.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Options {
     /// Step between incidence slices over `[0°, 88°]` (degrees); a quarter
-    /// of it up to 2°, where the retro and mirror lobes part.
+    /// of it up to [`FINE_DEG`], where the retro and mirror lobes part and
+    /// the retro direction moves across the warped square.
     pub theta_i_step_deg: f64,
-    /// Side of the warped square's grid (`spectra`, `luminance`, `rgb`).
+    /// Side of the warped square's grid (`spectra` or `rgb`, `luminance`).
     pub spectra: usize,
     /// Side of the `vndf` grid over the half-vector square.
     pub vndf: usize,
@@ -114,14 +126,20 @@ pub struct Table {
     spectra: Grid,
 }
 
-/// The incidences tabulated (radians): steps of `step / 4` up to 2°, where
-/// the mirror lobe leaves the retro one at twice the incidence, then `step`.
+/// The incidences tabulated (radians): steps of `step / 4` up to
+/// [`FINE_DEG`], then `step`. A last step shorter than a quarter of the
+/// others is merged into the one before it, so that the values stay
+/// distinct once stored as `f32`.
 fn incidences(step_deg: f64) -> Vec<f64> {
     let mut out = vec![0.0];
     let mut t: f64 = 0.0;
     while t < THETA_I_MAX_DEG - 1e-9 {
-        t = (t + if t < 2.0 { step_deg / 4.0 } else { step_deg }).min(THETA_I_MAX_DEG);
+        t = (t + if t < FINE_DEG { step_deg / 4.0 } else { step_deg }).min(THETA_I_MAX_DEG);
         out.push(t);
+    }
+    let n = out.len();
+    if n > 2 && out[n - 1] - out[n - 2] < step_deg / 4.0 {
+        out.remove(n - 2);
     }
     out.into_iter().map(f64::to_radians).collect()
 }
@@ -179,12 +197,13 @@ impl Table {
     /// that is NaN, infinite or negative is an error naming its geometry.
     pub fn new(brdf: &dyn Fn(&Directions) -> f64, description: &str, opt: &Options) -> Result<Table> {
         ensure!(
-            opt.theta_i_step_deg > 0.0 && opt.theta_i_step_deg <= 45.0,
-            "the incidence step must be in (0°, 45°]"
+            opt.theta_i_step_deg >= MIN_STEP_DEG && opt.theta_i_step_deg <= 45.0,
+            "the incidence step must be in [{MIN_STEP_DEG}°, 45°]"
         );
+        let sides = [opt.spectra, opt.vndf, opt.ndf];
         ensure!(
-            opt.spectra >= 2 && opt.vndf >= 2 && opt.ndf >= 2,
-            "every table needs at least 2 nodes a side"
+            sides.iter().all(|s| (2..=MAX_SIDE).contains(s)),
+            "every grid side must be in [2, {MAX_SIDE}]"
         );
         ensure!(
             opt.retro_share >= 0.0 && opt.mirror_share >= 0.0 && opt.retro_share + opt.mirror_share < 1.0,
@@ -195,7 +214,7 @@ impl Table {
         let mut bad = None;
         let micro = Microfacet::from_retro(|t| {
             let w = unit(t, 0.0);
-            let f = fr_cos(brdf, w, w) / w[2].max(1e-12);
+            let f = brdf(&Directions { l: w, v: w });
             if !(f.is_finite() && f >= 0.0) && bad.is_none() {
                 bad = Some((t.to_degrees(), f));
             }
@@ -206,6 +225,10 @@ impl Table {
         }
         let (n, v, s) = (opt.ndf, opt.vndf, opt.spectra);
         let d_max = (0..n).map(|k| micro.ndf(u2theta(k as f64 / (n - 1) as f64))).fold(0.0, f64::max);
+        ensure!(
+            d_max > 0.0 && d_max.is_finite(),
+            "cannot tabulate: no retroreflection at any incidence to build the NDF from"
+        );
         let ndf = Grid {
             w: n,
             h: n,
@@ -253,7 +276,13 @@ impl Table {
                     );
                 }
                 let d = ndf.eval(u, 0.0);
-                spectra_values.push((f_cos * scale / d) as f32);
+                let value = f_cos * scale / d;
+                ensure!(
+                    value.is_finite(),
+                    "cannot tabulate: a stored value is {value} (σ = {}, D = {d})",
+                    scale / 4.0
+                );
+                spectra_values.push(value as f32);
                 // The luminance warp: f·cos θo over the warp's own density
                 // of ωo, so that sampling it draws ωo in proportion to f·cos θo.
                 let pdf_wo = pdf / (solid_angle_per_u(u[0]) * 4.0 * cos_im.max(1e-6));
@@ -411,17 +440,24 @@ fn fields(
     opt: &Options,
 ) -> Vec<Field> {
     let (nt, v, s) = (theta_i.len(), opt.vndf, opt.spectra);
-    let wavelengths: Vec<f32> = match opt.spectrum {
-        Spectrum::Laser => vec![LASER_NM],
-        Spectrum::Visible => VISIBLE_NM.to_vec(),
-    };
-    let nl = wavelengths.len();
     let per_slice = |copies: usize| -> Vec<f32> {
         spectra
             .values
             .chunks_exact(s * s)
             .flat_map(|c| std::iter::repeat_n(c, copies).flatten().copied())
             .collect()
+    };
+    let values = |wavelengths: Vec<f32>| {
+        let nl = wavelengths.len();
+        vec![
+            Field::f32("spectra", &[1, nt, nl, s, s], per_slice(nl)),
+            Field::f32("wavelengths", &[nl], wavelengths),
+        ]
+    };
+    let values = match opt.spectrum {
+        Spectrum::Laser => values(vec![LASER_NM]),
+        Spectrum::Visible => values(VISIBLE_NM.to_vec()),
+        Spectrum::Rgb => vec![Field::f32("rgb", &[1, nt, 3, s, s], per_slice(3))],
     };
     vec![
         Field::u8("description", description.as_bytes().to_vec()),
@@ -432,9 +468,10 @@ fn fields(
         Field::f32("sigma", &[opt.ndf, opt.ndf], sigma.values.clone()),
         Field::f32("vndf", &[1, nt, v, v], vndf.to_vec()),
         Field::f32("luminance", &[1, nt, s, s], luminance.to_vec()),
-        Field::f32("spectra", &[1, nt, nl, s, s], per_slice(nl)),
-        Field::f32("wavelengths", &[nl], wavelengths),
     ]
+    .into_iter()
+    .chain(values)
+    .collect()
 }
 
 /// How closely a renderer reading the file gives back the BRDF.
@@ -451,6 +488,21 @@ pub struct Accuracy {
 
 /// The tolerances of a usable table (median, 95th percentile, retro peak).
 pub const TOLERANCE: [f64; 3] = [0.02, 0.10, 0.05];
+/// Pairs a written table is checked at, and the radius (degrees) of the
+/// retro and mirror neighbourhoods a quarter of them each are drawn in.
+pub const CHECK_PAIRS: usize = 4000;
+pub const CHECK_LOBE_DEG: f64 = 3.0;
+
+/// The file's `description`: where the values come from, at which
+/// wavelengths, and what is assumed.
+pub fn description(origin: &str, spectrum: Spectrum) -> String {
+    let values = match spectrum {
+        Spectrum::Laser => format!("values at the head's laser wavelength, {LASER_NM} nm, held for every wavelength"),
+        Spectrum::Visible => format!("values measured at {LASER_NM} nm and assumed grey over 360-830 nm"),
+        Spectrum::Rgb => format!("values measured at {LASER_NM} nm and assumed grey in red, green and blue"),
+    };
+    format!("gonio: {origin}; {values}; isotropic")
+}
 
 impl Accuracy {
     pub fn within_tolerance(&self) -> bool {
@@ -511,9 +563,10 @@ pub fn quantile(sorted: &[f64], p: f64) -> f64 {
         .unwrap_or(f64::NAN)
 }
 
-/// Directions the retro peak is checked at: incidences 0°–80° by 0.5°.
+/// Directions the retro peak is checked at: incidences 0°–80° by 0.0625°,
+/// on the default slices and between them.
 pub fn retro_directions() -> Vec<[f64; 3]> {
-    (0..=160).map(|k| unit((k as f64 * 0.5).to_radians(), 0.3)).collect()
+    (0..=1280).map(|k| unit((k as f64 * 0.0625).to_radians(), 0.3)).collect()
 }
 
 /// Compares the table, read as the plugin reads it, with `brdf` at

@@ -4,7 +4,7 @@
 //! name, rank, type code, data offset and shape (little endian), and the
 //! data of every field aligned to 8 bytes. Written here rather than through
 //! a crate because no Rust crate reads or writes this format; [`read`] is
-//! for the tests and `gonio` to look at what was written.
+//! for the tests, to look at what was written.
 
 use anyhow::{bail, ensure, Context, Result};
 
