@@ -199,8 +199,22 @@ fn fit_and_plot_draw_every_picture() {
         plots.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", text(&o));
-    let o = gonio(&["fit", f, "--model", "lambert", "--out", fit_b.to_str().unwrap()]);
+    // --bsdf: the renderer's file as well, beside the fit's one JSON object.
+    let bsdf = dir.path().join("b.bsdf");
+    let o = gonio(&[
+        "fit",
+        f,
+        "--model",
+        "lambert",
+        "--out",
+        fit_b.to_str().unwrap(),
+        "--bsdf",
+        bsdf.to_str().unwrap(),
+        "--json",
+    ]);
     assert!(o.status.success(), "{}", text(&o));
+    serde_json::from_slice::<serde_json::Value>(&o.stdout).expect("one JSON object");
+    assert!(std::fs::read(&bsdf).unwrap().starts_with(b"tensor_file\0"));
     // The fit as a BRDF Explorer shader (its GLSL is checked in tests/tests/brdf_export.rs).
     let brdf = dir.path().join("a.brdf");
     let o = gonio(&["export", fit_a.to_str().unwrap(), brdf.to_str().unwrap()]);

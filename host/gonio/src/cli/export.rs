@@ -141,31 +141,65 @@ fn export_bsdf(a: &ExportArgs, source: &Source, name: &str, origin: &str, output
         spectrum: a.spectrum,
         ..Options::default()
     };
-    let description = rgl::description(&format!("{origin} ({name})"), a.spectrum);
-    let eval = |d: &Directions| source.eval(d);
-    let table = rgl::Table::new(&eval, &description, &opt).with_context(|| format!("{name} as .bsdf"))?;
-    let bytes = table.bytes();
-    std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
-    let acc = rgl::accuracy(&table, &eval, rgl::CHECK_PAIRS, rgl::CHECK_LOBE_DEG.to_radians());
-    report_bsdf(a.json, name, output, bytes.len(), table.theta_i().len(), &acc);
+    let written = write_bsdf(&|d: &Directions| source.eval(d), name, origin, output, &opt)?;
+    report_bsdf(a.json, name, output, &written);
     Ok(())
 }
 
-fn report_bsdf(json: bool, name: &str, output: &Path, bytes: usize, slices: usize, acc: &Accuracy) {
+/// What a `.bsdf` written holds: its size, its incidences, and how closely
+/// a renderer reading it gives the material back.
+pub struct Written {
+    pub bytes: usize,
+    pub incidences: usize,
+    pub accuracy: Accuracy,
+}
+
+/// Tabulates `brdf` as an RGL `.bsdf` at `output` and checks it as a renderer reads it.
+pub fn write_bsdf(brdf: &dyn Fn(&Directions) -> f64, name: &str, origin: &str, output: &Path, opt: &Options) -> Result<Written> {
+    let description = rgl::description(&format!("{origin} ({name})"), opt.spectrum);
+    let table = rgl::Table::new(brdf, &description, opt).with_context(|| format!("{name} as .bsdf"))?;
+    let bytes = table.bytes();
+    std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
+    let accuracy = rgl::accuracy(&table, brdf, rgl::CHECK_PAIRS, rgl::CHECK_LOBE_DEG.to_radians());
+    Ok(Written {
+        bytes: bytes.len(),
+        incidences: table.theta_i().len(),
+        accuracy,
+    })
+}
+
+/// The warning for a table outside the tolerance, with its measured errors.
+pub fn coarse_warning(acc: &Accuracy) -> Option<String> {
     let [median, p95, peak] = rgl::TOLERANCE;
-    let ok = acc.within_tolerance();
+    (!acc.within_tolerance()).then(|| {
+        format!(
+            "warning: the table is too coarse for this material (median {:.2} %, 95th percentile {:.2} %, retro peak {:.2} %; tolerance {} %, {} %, {} %); raise --grid or --warp-grid, or lower --theta-step (gonio export)",
+            100.0 * acc.median,
+            100.0 * acc.p95,
+            100.0 * acc.retro_peak,
+            100.0 * median,
+            100.0 * p95,
+            100.0 * peak
+        )
+    })
+}
+
+fn report_bsdf(json: bool, name: &str, output: &Path, w: &Written) {
+    let [median, p95, peak] = rgl::TOLERANCE;
+    let acc = &w.accuracy;
     if json {
         println!(
             "{}",
-            json!({"written": output, "format": "rgl-bsdf", "model": name, "bytes": bytes, "incidences": slices,
-                   "accuracy": acc, "tolerance": {"median": median, "p95": p95, "retro_peak": peak}, "within_tolerance": ok})
+            json!({"written": output, "format": "rgl-bsdf", "model": name, "bytes": w.bytes, "incidences": w.incidences,
+                   "accuracy": acc, "tolerance": {"median": median, "p95": p95, "retro_peak": peak}, "within_tolerance": acc.within_tolerance()})
         );
         return;
     }
     eprintln!(
-        "{name} written to {} ({:.1} MB, {slices} incidences)",
+        "{name} written to {} ({:.1} MB, {} incidences)",
         output.display(),
-        bytes as f64 / 1e6
+        w.bytes as f64 / 1e6,
+        w.incidences
     );
     eprintln!(
         "read back as a renderer reads it, at {} direction pairs: median error {:.2} %, 95th percentile {:.2} %, retro peak {:.2} %",
@@ -174,12 +208,7 @@ fn report_bsdf(json: bool, name: &str, output: &Path, bytes: usize, slices: usiz
         100.0 * acc.p95,
         100.0 * acc.retro_peak
     );
-    if !ok {
-        eprintln!(
-            "warning: the table is too coarse for this material (tolerance: median {} %, 95th percentile {} %, retro peak {} %); raise --grid or --warp-grid, or lower --theta-step",
-            100.0 * median,
-            100.0 * p95,
-            100.0 * peak
-        );
+    if let Some(w) = coarse_warning(acc) {
+        eprintln!("{w}");
     }
 }

@@ -102,6 +102,10 @@ pub struct FitArgs {
     /// Write the fit as a Disney BRDF Explorer shader (.brdf) as well.
     #[arg(long)]
     pub brdf: Option<PathBuf>,
+    /// Write the fit as an RGL .bsdf for Mitsuba 3 and pbrt-v4 as well, at
+    /// `gonio export`'s default resolution (a warning on stderr if too coarse).
+    #[arg(long)]
+    pub bsdf: Option<PathBuf>,
     /// Draw the data and the fit into this directory (PNG and SVG).
     #[arg(long)]
     pub plot: Option<PathBuf>,
@@ -293,10 +297,19 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
 /// |ρ| beyond which two parameters are named as correlated.
 const STRONG_CORRELATION: f64 = 0.95;
 
-/// What `--brdf` and `--plot` ask of a fit: its shader, its pictures over `data`.
+/// What `--brdf`, `--bsdf` and `--plot` ask of a fit: its shader, its
+/// renderer's file, its pictures over `data`.
 pub fn write_drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<()> {
+    let origin = format!("a fit to {}", a.file.display());
     if let Some(out) = &a.brdf {
-        super::export::write_brdf(fitted, &a.file.display().to_string(), out)?;
+        super::export::write_brdf(fitted, &origin, out)?;
+    }
+    if let Some(out) = &a.bsdf {
+        let opt = gonio_analysis::formats::rgl::Options::default();
+        let written = super::export::write_bsdf(&|d| fitted.eval(d), fitted.name(), &origin, out, &opt)?;
+        if let Some(w) = super::export::coarse_warning(&written.accuracy) {
+            eprintln!("{w}");
+        }
     }
     if let Some(dir) = &a.plot {
         gonio_analysis::plot::render(data, std::slice::from_ref(fitted), dir, &Default::default())?;
