@@ -35,6 +35,7 @@ pub mod microfacet;
 pub mod tensor;
 
 use anyhow::{bail, ensure, Result};
+use gonio_brdf::frame::{cross, dot, normalize};
 use gonio_brdf::Directions;
 use marginal::{Grid, Marginal};
 use microfacet::Microfacet;
@@ -164,10 +165,6 @@ fn unit(theta: f64, phi: f64) -> [f64; 3] {
     [theta.sin() * phi.cos(), theta.sin() * phi.sin(), theta.cos()]
 }
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
 /// Polar angle, accurate near the normal (the plugin's `elevation`).
 fn elevation(d: [f64; 3]) -> f64 {
     let dist = (d[0] * d[0] + d[1] * d[1] + (d[2] - 1.0).powi(2)).sqrt();
@@ -286,7 +283,7 @@ impl Table {
                 // The luminance warp: f·cos θo over the warp's own density
                 // of ωo, so that sampling it draws ωo in proportion to f·cos θo.
                 let pdf_wo = pdf / (solid_angle_per_u(u[0]) * 4.0 * cos_im.max(1e-6));
-                lum_slice.push(if cos_im > 0.0 { f_cos.max(0.0) / pdf_wo } else { 0.0 });
+                lum_slice.push(if cos_im > 0.0 { f_cos / pdf_wo } else { 0.0 });
             }
             let mean = lum_slice.iter().sum::<f64>() / lum_slice.len() as f64;
             luminance.extend(lum_slice.iter().map(|&l| (l + 1e-3 * mean.max(1e-30)) as f32));
@@ -314,9 +311,7 @@ impl Table {
         if wi[2] <= 0.0 || wo[2] <= 0.0 {
             return 0.0;
         }
-        let s = [wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]];
-        let len = dot(s, s).sqrt();
-        let m = [s[0] / len, s[1] / len, s[2] / len];
+        let m = normalize([wi[0] + wo[0], wi[1] + wo[1], wi[2] + wo[2]]);
         let (theta_i, phi_i) = (elevation(wi), wi[1].atan2(wi[0]));
         let (theta_m, phi_m) = (elevation(m), m[1].atan2(m[0]));
         let u_wi = [theta2u(theta_i), phi2u(phi_i)];
@@ -516,12 +511,12 @@ fn near(rng: &mut impl Rng, w: [f64; 3], radius: f64) -> [f64; 3] {
         let cos_r = 1.0 - rng.random::<f64>() * (1.0 - radius.cos());
         let sin_r = (1.0 - cos_r * cos_r).max(0.0).sqrt();
         let phi = rng.random::<f64>() * 2.0 * PI;
-        let t = gonio_brdf::frame::normalize(if w[2].abs() < 0.9 {
-            gonio_brdf::frame::cross(w, [0.0, 0.0, 1.0])
+        let t = normalize(if w[2].abs() < 0.9 {
+            cross(w, [0.0, 0.0, 1.0])
         } else {
-            gonio_brdf::frame::cross(w, [1.0, 0.0, 0.0])
+            cross(w, [1.0, 0.0, 0.0])
         });
-        let b = gonio_brdf::frame::cross(w, t);
+        let b = cross(w, t);
         let d: [f64; 3] = std::array::from_fn(|k| cos_r * w[k] + sin_r * (phi.cos() * t[k] + phi.sin() * b[k]));
         if d[2] > 1e-3 {
             return d;
