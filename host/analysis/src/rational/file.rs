@@ -24,6 +24,7 @@ pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, holdout: Opti
         "cosine": r.cosine,
         "coefficients": r.coefficients(),
         "domain": r.domain,
+        "order": r.order,
         "numerator": r.numerator,
         "denominator": r.denominator,
         "segments": f.segments,
@@ -78,7 +79,7 @@ pub fn function_of(v: &Value) -> Result<Rational> {
 mod tests {
     use super::*;
     use crate::moments::Parametrization;
-    use crate::rational::basis::Domain;
+    use crate::rational::basis::{Domain, TermOrder};
 
     #[test]
     fn a_function_survives_its_file_and_bad_files_are_refused() {
@@ -90,6 +91,7 @@ mod tests {
                 lo: [10.0, -5.0, -1.0],
                 hi: [60.0, 5.0, 1.0],
             },
+            order: TermOrder::Alta,
             numerator: vec![1.0, 0.1, 0.2, 0.3],
             denominator: vec![2.0, 0.0, 0.0, 0.1],
         };
@@ -101,10 +103,15 @@ mod tests {
         let mut short = v.clone();
         short["numerator"] = json!([1.0]);
         assert!(function_of(&short).unwrap_err().to_string().contains("from 2 to 4 terms"));
-        // A file without `cosine` was fitted with the factor.
+        // A file without `cosine` was fitted with the factor; one without
+        // `order` has its terms in the order used before ALTA's, which at
+        // degree 1 puts θi, x′, y′ alike.
         let mut old = v.clone();
         old.as_object_mut().unwrap().remove("cosine");
-        assert!(function_of(&old).unwrap().cosine);
+        old.as_object_mut().unwrap().remove("order");
+        let read = function_of(&old).unwrap();
+        assert!(read.cosine);
+        assert_eq!(read.order, TermOrder::FirstFalling);
         let mut other = v.clone();
         other["model"] = json!("lambert");
         assert!(function_of(&other).is_err());

@@ -4,7 +4,7 @@
 //! highest degree the spec and the samples allow; each count is one
 //! programme (`qp`).
 
-use super::basis::{coordinates, Basis, Domain};
+use super::basis::{coordinates, Basis, Domain, TermOrder};
 use super::function::Rational;
 use super::qp::{self, Outcome, Row};
 use super::segments::{sample_text, SegmentSource, Segments};
@@ -44,12 +44,8 @@ pub struct Attempt {
     pub coefficients: usize,
     pub feasible: bool,
     /// The programme's margin (values over the largest segment end, rows
-    /// and coefficients of unit norm); `None` where it was not positive.
+    /// and coefficients of unit norm); `None` where no function held.
     pub margin: Option<f64>,
-    /// Clarabel reached only its reduced accuracy: a function found is
-    /// still checked on every segment, but "not held" is then a verdict
-    /// at that accuracy, and fewer terms might hold.
-    pub reduced: bool,
     pub seconds: f64,
 }
 
@@ -162,31 +158,27 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         trying(2 * terms);
         let t = Instant::now();
         let basis = Basis::with_terms(terms);
-        let (held, margin, reduced) = match qp::solve(&basis, &rows)? {
-            Outcome::Solved { p, q, margin, reduced } => {
+        let (held, margin) = match qp::solve(&basis, &rows)? {
+            Outcome::Solved { p, q, margin } => {
                 let f = Rational {
                     parametrization: spec.parametrization,
                     degree: basis.degree,
                     cosine: spec.cosine,
                     domain,
+                    order: TermOrder::Alta,
                     numerator: p.iter().map(|c| c * scale).collect(),
                     denominator: q,
                 };
                 let (miss, at) = worst_of(&f);
-                (
-                    if miss <= VIOLATION_TOLERANCE { Ok((f, miss)) } else { Err(at) },
-                    Some(margin),
-                    reduced,
-                )
+                (if miss <= VIOLATION_TOLERANCE { Ok((f, miss)) } else { Err(at) }, Some(margin))
             }
-            Outcome::Infeasible { worst, reduced } => (Err(worst), None, reduced),
+            Outcome::Infeasible { worst } => (Err(worst), None),
         };
         attempts.push(Attempt {
             degree: basis.degree,
             coefficients: 2 * basis.len(),
             feasible: held.is_ok(),
             margin,
-            reduced,
             seconds: t.elapsed().as_secs_f64(),
         });
         Ok(held)

@@ -6,7 +6,7 @@
 //! `rational_function_legendre`), which on a retro lobe over a flat floor
 //! holds absolute segments with fewer terms (`fit-bench rational`).
 
-use super::basis::{coordinates, Basis, Domain};
+use super::basis::{coordinates, Basis, Domain, TermOrder};
 use crate::fit::{Dataset, Metrics};
 use crate::moments::plane::Parametrization;
 use gonio_brdf::Directions;
@@ -17,12 +17,17 @@ fn cosine_factor() -> bool {
     true
 }
 
+/// The order of a rational fit file without `order`.
+fn first_order() -> TermOrder {
+    TermOrder::FirstFalling
+}
+
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Rational {
     /// The retro plane the view's coordinates are taken in.
     pub parametrization: Parametrization,
     /// Total degree of numerator and denominator: that of their last term
-    /// (`Basis::with_terms`; both have as many terms).
+    /// (`Basis::in_order`; both have as many terms).
     pub degree: usize,
     /// `f_r = cosθi·cosθo·P/Q` (true; files written before the choice
     /// existed) or `P/Q`.
@@ -30,6 +35,10 @@ pub struct Rational {
     pub cosine: bool,
     /// The coordinates' box, mapped onto [−1, 1]³.
     pub domain: Domain,
+    /// The terms' order within a degree (files written before ALTA's
+    /// order was adopted have none, and are in the first one).
+    #[serde(default = "first_order")]
+    pub order: TermOrder,
     pub numerator: Vec<f64>,
     pub denominator: Vec<f64>,
 }
@@ -49,7 +58,7 @@ impl Rational {
 
     /// The terms its coefficients multiply.
     pub fn basis(&self) -> Basis {
-        Basis::with_terms(self.numerator.len())
+        Basis::in_order(self.numerator.len(), self.order)
     }
 
     /// The factor `P/Q` is multiplied by at `d`.

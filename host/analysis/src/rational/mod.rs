@@ -8,10 +8,12 @@
 //! function of the allowed terms can reach.
 //!
 //! `basis` the Legendre terms and the coordinates' box, `segments` the
-//! intervals, `qp` one count's quadratic programme (Clarabel), `fit` the
+//! intervals, `qp` one count's quadratic programme, `active_set` its
+//! solver (Goldfarb–Idnani), `fit` the
 //! search on the number of terms, `function` the result as a BRDF, `file`
 //! its JSON.
 
+pub mod active_set;
 pub mod basis;
 pub mod file;
 pub mod fit;
