@@ -11,8 +11,9 @@ crate would build the engine's C sources with cmake on every clean machine.
                                the marks' own cost (the `overhead` bracket).
     emulate.py costs IMAGE NAME  the same, and on stderr the functions the
                                longest stretch called NAME ran in.
-    emulate.py boot IMAGE      run `gonio-head` from reset to its first idle
-                               wait; print its instruction count and pins.
+
+The unmodified `gonio-head` image runs on the virtual board (board/), which
+takes this module's ELF loader and instruction counter.
 
 Instructions are counted per translated block by a hook in C (count.c, built
 here with `cc`): the first time a block runs, its Thumb-2 instructions are
@@ -33,8 +34,6 @@ from unicorn import (
     UC_ARCH_ARM,
     UC_HOOK_BLOCK,
     UC_HOOK_CODE,
-    UC_HOOK_MEM_READ,
-    UC_HOOK_MEM_WRITE,
     UC_MODE_MCLASS,
     UC_MODE_THUMB,
     Uc,
@@ -47,7 +46,8 @@ FLASH = (0x0800_0000, 1 << 20)
 SRAM = (0x2000_0000, 128 << 10)
 CCM = (0x1000_0000, 64 << 10)
 # Peripherals (APB, AHB1/2) and the core's system control space, as plain
-# memory: the probes touch neither, but cortex-m-rt enables the FPU there.
+# memory for the probes: they touch neither, but cortex-m-rt enables the FPU
+# there.
 PERIPHERALS = (0x4000_0000, 0x1000_0000)
 SYSTEM = (0xE000_0000, 0x0010_0000)
 # A run that has not reached its end after this long is stuck.
@@ -111,10 +111,12 @@ def counter_library():
 
 
 class Machine:
-    def __init__(self, elf):
+    def __init__(self, elf, plain=(PERIPHERALS, SYSTEM)):
+        """`plain`: the regions beside memory mapped as plain memory (the
+        virtual board maps its own registers there instead)."""
         self.uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
         self.uc.ctl_set_cpu_model(arm.UC_CPU_ARM_CORTEX_M4)
-        for base, size in (FLASH, SRAM, CCM, PERIPHERALS, SYSTEM):
+        for base, size in (FLASH, SRAM, CCM, *plain):
             self.uc.mem_map(base, size)
         for addr, blob in elf.segments:
             self.uc.mem_write(addr, blob)
@@ -278,109 +280,7 @@ def costs(path, profile_name=None):
     }
 
 
-# --- Booting the unmodified image ---------------------------------------
-
-RCC = 0x4002_3800
-PWR = 0x4000_7000
-TIM4_CNT = 0x4000_0824
-OTG_FS = 0x5000_0000
-GPIO = {"A": 0x4002_0000, "B": 0x4002_0400, "C": 0x4002_0800}
-# The safe state at the executor's first idle wait (chip/pins.rs): laser
-# enable PB0 low, STEP PC0/PC4/PC8 low, active-low EN PC2/PC6/PC10 high, all
-# driven (output mode).
-SAFE_PINS = [("B", 0, 0), ("C", 0, 0), ("C", 4, 0), ("C", 8, 0), ("C", 2, 1), ("C", 6, 1), ("C", 10, 1)]
-
-
-def boot(path, limit=200_000_000):
-    """Runs the image from reset to the executor's first WFE (its idle wait),
-    with the registers it polls answering as RM0090 says: the RCC's ready
-    bits follow their enable bits and SWS follows SW, the regulator reports
-    ready, the USB core's reset completes and its AHB is idle, TIM4 (the
-    time driver) counts. Returns the instructions to get there and the pins."""
-    elf = Elf(path)
-    m = Machine(elf)
-    uc = m.uc
-    # System memory: the unique device ID the USB serial number is made of.
-    uc.mem_map(0x1FFF_0000, 0x1_0000)
-    uc.mem_write(0x1FFF_7A10, bytes(range(0x31, 0x3D)))
-    word = lambda a: struct.unpack("<I", uc.mem_read(a, 4))[0]
-    put = lambda a, v: uc.mem_write(a, struct.pack("<I", v & 0xFFFF_FFFF))
-
-    def on_read(uc, _access, address, _size, _value, _user):
-        a = address & ~3
-        if a == RCC:  # CR: HSIRDY, HSERDY, PLLRDY, PLLI2SRDY follow their ON bits
-            v = word(a)
-            for on in (0, 16, 24, 26):
-                v = v | (1 << (on + 1)) if v >> on & 1 else v & ~(1 << (on + 1))
-            put(a, v)
-        elif a == RCC + 0x08:  # CFGR: SWS = SW
-            v = word(a)
-            put(a, (v & ~0xC) | ((v & 3) << 2))
-        elif a in (RCC + 0x70, RCC + 0x74):  # BDCR LSERDY, CSR LSIRDY
-            v = word(a)
-            put(a, v | 2 if v & 1 else v & ~2)
-        elif a == PWR + 0x04:  # CSR: VOSRDY
-            put(a, word(a) | 1 << 14)
-        elif a == OTG_FS + 0x10:  # GRSTCTL: AHBIDL, soft resets complete
-            put(a, (word(a) | 1 << 31) & ~0x3F)
-        elif a == TIM4_CNT:
-            put(a, (word(a) + 1) & 0xFFFF)
-
-    def on_write(uc, _access, address, _size, value, _user):
-        for base in GPIO.values():
-            if address & ~3 == base + 0x18:  # BSRR -> ODR
-                odr = word(base + 0x14)
-                odr = (odr | (value & 0xFFFF)) & ~((value >> 16) & 0xFFFF)
-                put(base + 0x14, odr)
-
-    uc.hook_add(UC_HOOK_MEM_READ, on_read, begin=PERIPHERALS[0], end=PERIPHERALS[0] + 0x2000_0000 - 1)
-    uc.hook_add(UC_HOOK_MEM_WRITE, on_write, begin=GPIO["A"], end=GPIO["C"] + 0x3FF)
-    state = {}
-
-    def stop(reason):
-        def hook(uc, address, _size, _user):
-            state.setdefault("stop", (reason, address))
-            uc.emu_stop()
-
-        return hook
-
-    text = [(a, b) for a, b in elf.segments if FLASH[0] <= a < FLASH[0] + FLASH[1]]
-    for base, blob in text:
-        for off in range(0, len(blob) - 1, 2):
-            if blob[off] == 0x20 and blob[off + 1] == 0xBF:  # WFE
-                uc.hook_add(UC_HOOK_CODE, stop("idle"), begin=base + off, end=base + off)
-    # A fault, an unexpected interrupt, or a panic (every panic goes through
-    # core::panicking::panic_fmt) ends the boot there.
-    fatal = [n for n in elf.symbols if n in ("HardFault", "DefaultHandler_") or n.endswith("9panic_fmt")]
-    for name in fatal:
-        a = elf.symbols[name] & ~1
-        uc.hook_add(UC_HOOK_CODE, stop("panic" if "panic" in name else name), begin=a, end=a)
-    pc = m.reset()
-    try:
-        uc.emu_start(pc, 0xFFFF_FFFF, count=limit)
-    except UcError as e:
-        at = uc.reg_read(arm.UC_ARM_REG_PC)
-        raise SystemExit(f"boot failed at pc {at:#010x} after {m.executed} instructions: {e}")
-    reason, at = state.get("stop", ("limit", uc.reg_read(arm.UC_ARM_REG_PC)))
-    pins = {}
-    for port, pin, want in SAFE_PINS:
-        base = GPIO[port]
-        mode = word(base) >> (2 * pin) & 3
-        level = word(base + 0x14) >> pin & 1
-        pins[f"P{port}{pin}"] = {"output": mode == 1, "level": level, "safe": mode == 1 and level == want}
-    return {
-        "stopped_at": reason,
-        "pc": at,
-        "boot_instructions": m.executed,
-        "boot_safe_pins": reason == "idle" and all(p["safe"] for p in pins.values()),
-        "pins": pins,
-    }
-
-
 def main():
-    if len(sys.argv) == 3 and sys.argv[1] == "boot":
-        print(json.dumps(boot(sys.argv[2])))
-        return
     if len(sys.argv) not in (3, 4) or sys.argv[1] != "costs":
         raise SystemExit(__doc__)
     print(json.dumps(costs(sys.argv[2], sys.argv[3] if len(sys.argv) == 4 else None)))

@@ -1,0 +1,148 @@
+"""The virtual STM32F405 board: the core, its memory map and the
+peripheral models wired together, running an unmodified image from reset.
+
+    python3 tests/chip/board/board.py IMAGE [--seconds S] [--set PB12=1@0.5 ...]
+
+runs IMAGE for S seconds of virtual time (default 2), the plant driving
+each `--set` input pin to its level at its time, and prints one JSON
+object: where it stopped and why, the instructions executed, the
+interrupts taken, the watchdog's reloads, every change of a driven pin
+with its time, and every driven pin's level at the end."""
+
+import argparse
+import json
+import os
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+
+from emulate import Elf, Machine  # noqa: E402
+
+from bus import Bus, Plain  # noqa: E402
+from clock import HZ, Clock  # noqa: E402
+from core import Core, Fault  # noqa: E402
+from gpio import EXTI_BASE, GPIO_BASE, SYSCFG_BASE, Exti, Port, Syscfg  # noqa: E402
+from nvic import Nvic, SystemResetRequest  # noqa: E402
+from otg import OTG_FS_BASE, OtgFs  # noqa: E402
+from system import FLASH_BASE, IWDG_BASE, PWR_BASE, RCC_BASE, Iwdg, Rcc  # noqa: E402
+from timer import Timer  # noqa: E402
+
+# The reference board's wiring (firmware/src/bin/head/chip/pins.rs): the
+# E-STOP and the three home switches are normally closed to ground, so the
+# plant holds them low unless a test opens them (`--set PB12=1@T`).
+CLOSED_SWITCHES = ("PB12", "PC3", "PC7", "PC11")
+# The safe state: laser enable and STEP low, the drivers' active-low EN high.
+SAFE = {"PB0": 0, "PC0": 0, "PC4": 0, "PC8": 0, "PC2": 1, "PC6": 1, "PC10": 1}
+IRQ_NAMES = {28: "TIM2", 29: "TIM3", 30: "TIM4", 50: "TIM5", 40: "EXTI15_10", 56: "DMA2_STREAM0", 67: "OTG_FS", 18: "ADC"}
+UID = 0x1FFF_7A10
+
+
+class WatchdogReset(Exception):
+    """The IWDG reached 0: the system resets."""
+
+
+class Board:
+    def __init__(self, image):
+        self.elf = Elf(image)
+        self.clock = Clock()
+        self.machine = Machine(self.elf, plain=())
+        uc = self.uc = self.machine.uc
+        # System memory: the 96-bit unique ID the USB serial number is made of.
+        uc.mem_map(0x1FFF_0000, 0x1_0000)
+        uc.mem_write(UID, bytes(range(0x31, 0x3D)))
+        self.nvic = Nvic()
+        self.rcc = Rcc()
+        self.pins = []  # (seconds, pin, level) of every driven change
+        bus = Bus(uc)
+        for i, (name, irq, bits) in enumerate((("TIM2", 28, 32), ("TIM3", 29, 16), ("TIM4", 30, 16), ("TIM5", 50, 32))):
+            setattr(self, name.lower(), bus.attach(0x4000_0000 + 0x400 * i, 0x400, Timer(name, irq, bits, self.clock, self.nvic, self.rcc)))
+        self.iwdg = bus.attach(IWDG_BASE, 0x400, Iwdg(self.clock, self._watchdog))
+        bus.attach(PWR_BASE, 0x400, Plain("PWR", {0x04: 1 << 14}))  # CSR VOSRDY
+        self.syscfg = bus.attach(SYSCFG_BASE, 0x400, Syscfg())
+        self.exti = bus.attach(EXTI_BASE, 0x400, Exti(self.nvic, self.syscfg))
+        self.ports = {}
+        for i, letter in enumerate("ABCDE"):
+            self.ports[letter] = bus.attach(GPIO_BASE + 0x400 * i, 0x400, Port(letter, self))
+        bus.attach(RCC_BASE, 0x400, self.rcc)
+        bus.attach(FLASH_BASE, 0x400, Plain("FLASH"))
+        bus.attach(OTG_FS_BASE, 0x1000, OtgFs())
+        bus.attach(0xE000_E000, 0x1000, self.nvic)
+        bus.map([(0x4000_0000, 0x1000_0000), (OTG_FS_BASE, 0x4_0000), (0xE000_0000, 0x10_0000)])
+        self.core = Core(self.machine, self.elf, self.nvic, self.clock)
+        for name in CLOSED_SWITCHES:
+            self.set_input(name, 0, 0.0)
+
+    def log_pin(self, port, pin, level):
+        """A driven pin's level, when it changes or when it starts to be
+        driven."""
+        self.pins.append((self.clock.now / HZ, f"P{port.letter}{pin}", level))
+
+    def edge(self, port, pin, level):
+        self.exti.edge(port.index, pin, rising=bool(level))
+
+    def set_input(self, name, level, at):
+        """The plant drives pin `name` (`PB12`) to `level` from `at` seconds."""
+        port, pin = self.ports[name[1]], int(name[2:])
+        self.clock.at(int(at * HZ), lambda: port.set_input(pin, level))
+
+    def driven_pins(self):
+        """Every pin driven at the end (output or alternate function), its level."""
+        return {
+            f"P{p.letter}{n}": p.level[n] for p in self.ports.values() for n in range(16) if p.mode(n) in (1, 2)
+        }
+
+    def _watchdog(self):
+        raise WatchdogReset()
+
+    def run(self, seconds):
+        started = time.monotonic()
+        reason = "time"
+        try:
+            self.core.run(int(seconds * HZ))
+        except WatchdogReset:
+            reason = "watchdog reset"
+        except SystemResetRequest:
+            reason = "system reset request"
+        except Fault as e:
+            reason = f"fault: {e}"
+        reloads = self.iwdg.reloads
+        gaps = [b - a for a, b in zip(reloads, reloads[1:])]
+        return {
+            "stopped": reason,
+            "virtual_seconds": self.clock.now / HZ,
+            "host_seconds": round(time.monotonic() - started, 3),
+            "instructions": self.core.instructions,
+            "interrupts": {IRQ_NAMES.get(i, str(i)): n for i, n in enumerate(self.nvic.taken) if n},
+            "watchdog": {
+                "running": self.iwdg.running,
+                "reloads": len(reloads),
+                "longest_gap_s": max(gaps) / HZ if gaps else None,
+                "timeout_s": self.iwdg._period() / HZ,
+            },
+            "pins": [{"t": round(t, 9), "pin": p, "level": v} for t, p, v in self.pins],
+            "driven_at_end": self.driven_pins(),
+            "unsafe": [{"t": round(t, 9), "pin": p, "level": v} for t, p, v in self.pins if SAFE.get(p, v) != v],
+            "safe_at_end": all(self.driven_pins().get(p) == v for p, v in SAFE.items()),
+            "first_sleep_instructions": self.core.first_sleep,
+            "exti_edges": [{"line": n, "rising": r, "latched": l} for n, r, l in self.exti.edges],
+        }
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("image")
+    ap.add_argument("--seconds", type=float, default=2.0)
+    ap.add_argument("--set", action="append", default=[], metavar="PIN=LEVEL@SECONDS")
+    args = ap.parse_args()
+    board = Board(args.image)
+    for spec in args.set:
+        pin, rest = spec.split("=")
+        level, at = rest.split("@")
+        board.set_input(pin, int(level), float(at))
+    print(json.dumps(board.run(args.seconds)))
+
+
+if __name__ == "__main__":
+    main()

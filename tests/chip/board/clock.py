@@ -1,0 +1,55 @@
+"""The board's virtual time: CPU cycles at 168 MHz, advanced by the
+instructions the core executes (one cycle each) and skipped over while it
+sleeps, with the events the peripherals schedule on it."""
+
+import heapq
+
+HZ = 168_000_000
+
+
+class Event:
+    __slots__ = ("cycle", "action", "cancelled")
+
+    def __init__(self, cycle, action):
+        self.cycle = cycle
+        self.action = action
+        self.cancelled = False
+
+    def cancel(self):
+        self.cancelled = True
+
+
+class Clock:
+    def __init__(self):
+        self.base = 0  # cycles at the start of the current run of the core
+        self.executed = lambda: 0  # instructions since then (the core's counter)
+        self._queue = []
+        self._seq = 0
+
+    @property
+    def now(self):
+        return self.base + self.executed()
+
+    def seconds(self):
+        return self.now / HZ
+
+    def at(self, cycle, action):
+        """Calls `action()` once the clock reaches `cycle` (never earlier
+        than now)."""
+        e = Event(max(cycle, self.now), action)
+        self._seq += 1
+        heapq.heappush(self._queue, (e.cycle, self._seq, e))
+        return e
+
+    def next(self):
+        while self._queue and self._queue[0][2].cancelled:
+            heapq.heappop(self._queue)
+        return self._queue[0][0] if self._queue else None
+
+    def fire_due(self):
+        while True:
+            n = self.next()
+            if n is None or n > self.now:
+                return
+            _, _, e = heapq.heappop(self._queue)
+            e.action()

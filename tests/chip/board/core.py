@@ -1,0 +1,251 @@
+"""The Cortex-M4F core on unicorn, with what unicorn leaves out of M-class
+mode: taking exceptions (stacking, preemption by priority, tail-chaining,
+the FPU's extended frame), returning from them, and sleeping in WFE.
+
+unicorn 2.1 executes Thumb-2 and the FPU, and reports a handler's
+`bx lr` to an EXC_RETURN value as interrupt 8 with PC at that value (less
+its low bit); everything else an exception does is done here, as the
+ARMv7-M Architecture Reference Manual describes it (B1.5.6 entry, B1.5.7
+return, B1.5.18 WFE):
+
+- entry pushes `r0–r3, r12, lr, pc, xPSR` (and `s0–s15, FPSCR` when
+  CONTROL.FPCA says the thread used the FPU) on the current stack, 8-byte
+  aligned (xPSR bit 9 records the padding), sets IPSR, LR = EXC_RETURN
+  and PC = the vector;
+- an exception preempts when its group priority is lower than the
+  running one (the active exceptions', or PRIMASK's 0);
+- on return a pending exception that would preempt the context returned to
+  is taken at once without unstacking (tail-chaining);
+- WFE clears the event register if set, else sleeps until an exception is
+  taken; SEV sets it (the executor's pender is SEV alone).
+
+Time: one cycle per instruction, counted per translated block (count.c);
+sleep skips to the next event of the clock."""
+
+import struct
+
+from unicorn import UC_HOOK_CODE, UC_HOOK_INTR, UcError
+from unicorn import arm_const as arm
+
+from nvic import EXTERNAL
+
+WFE, WFI, SEV, CPSIE_I = 0xBF20, 0xBF30, 0xBF40, 0xB662
+FRAME = (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2, arm.UC_ARM_REG_R3, arm.UC_ARM_REG_R12, arm.UC_ARM_REG_LR)
+FP_FRAME = [getattr(arm, f"UC_ARM_REG_S{i}") for i in range(16)]
+# unicorn's interrupt number for an exception return (QEMU's EXCP_EXCEPTION_EXIT).
+EXCEPTION_EXIT = 8
+# Cycles a run of the core lasts at most: a pending interrupt masked by
+# PRIMASK is taken at the `cpsie` that unmasks it, by BASEPRI at the end of
+# a run at the latest.
+SLICE = 16_800
+
+
+class Fault(Exception):
+    """The core stopped where real silicon would fault or lock up."""
+
+
+class Core:
+    def __init__(self, machine, elf, nvic, clock):
+        self.m = machine
+        self.uc = machine.uc
+        self.nvic = nvic
+        self.clock = clock
+        self.event = False  # the event register
+        self.sleeping = False
+        self.stop_reason = None
+        self.instructions = 0
+        self.first_sleep = None  # instructions from reset to the first idle wait
+        clock.executed = lambda: self.m.executed - self._run_start
+        self._run_start = 0
+        nvic.on_change = self._interrupts_changed
+        text = [(a, b) for a, b in elf.segments if 0x0800_0000 <= a < 0x0810_0000]
+        for base, blob in text:
+            for off in range(0, len(blob) - 1, 2):
+                half = blob[off] | blob[off + 1] << 8
+                hook = {WFE: self._on_wfe, WFI: self._on_wfe, SEV: self._on_sev, CPSIE_I: self._on_cpsie}.get(half)
+                # A half-word inside a 32-bit instruction is never where an
+                # instruction starts, so its hook never fires.
+                if hook:
+                    self.uc.hook_add(UC_HOOK_CODE, hook, begin=base + off, end=base + off)
+        self.uc.hook_add(UC_HOOK_INTR, self._on_interrupt)
+        self.pc = machine.reset() | 1
+
+    # --- hooks -------------------------------------------------------------
+    def _on_sev(self, uc, address, size, _user):
+        self.event = True
+
+    def _on_wfe(self, uc, address, size, _user):
+        if self.event:
+            self.event = False
+        else:
+            self.sleeping = True
+            if self.first_sleep is None:
+                self.first_sleep = self.instructions + self.m.executed - self._run_start
+            self.stop_reason = "sleep"
+            uc.emu_stop()
+        uc.reg_write(arm.UC_ARM_REG_PC, (address + 2) | 1)
+
+    def _on_cpsie(self, uc, address, size, _user):
+        if self.nvic.best_pending() is not None:
+            uc.reg_write(arm.UC_ARM_REG_PRIMASK, 0)
+            uc.reg_write(arm.UC_ARM_REG_PC, (address + 2) | 1)
+            self.stop_reason = "unmasked"
+            uc.emu_stop()
+
+    def _on_interrupt(self, uc, intno, _user):
+        if intno != EXCEPTION_EXIT:
+            pc = uc.reg_read(arm.UC_ARM_REG_PC)
+            raise Fault(f"exception {intno} at pc {pc:#010x} (a fault on silicon)")
+        self._return(uc.reg_read(arm.UC_ARM_REG_PC) | 1)
+
+    def _interrupts_changed(self):
+        """A peripheral or a register write changed what may be taken: end
+        the current run so that it is taken at this instruction."""
+        if self.nvic.best_pending() is not None and self._running:
+            self.stop_reason = "interrupt"
+            self.uc.emu_stop()
+
+    _running = False
+
+    # --- exceptions ----------------------------------------------------------
+    def _current_exception(self):
+        return self.uc.reg_read(arm.UC_ARM_REG_IPSR) & 0x1FF
+
+    def _execution_priority(self, active_excluding=None):
+        p = self.nvic.running_priority(active_excluding)
+        if self.uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1:
+            p = min(p, 0)
+        basepri = self.uc.reg_read(arm.UC_ARM_REG_BASEPRI) & 0xF0
+        if basepri:
+            p = min(p, self.nvic.group(basepri))
+        return p
+
+    def _can_take(self, priority_limit):
+        best = self.nvic.best_pending()
+        return best[1] if best is not None and best[0] < priority_limit else None
+
+    def _vector(self, exception):
+        address = self.nvic.vtor + 4 * exception
+        if address < 0x10_0000:
+            # Address 0 aliases the boot memory: main flash, BOOT0 low (RM0090 §2.4).
+            address += 0x0800_0000
+        return struct.unpack("<I", self.uc.mem_read(address, 4))[0]
+
+    def take_pending(self):
+        """Takes the pending exception that may preempt now, if any."""
+        uc = self.uc
+        if uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1:
+            return False
+        irq = self._can_take(self._execution_priority())
+        if irq is None:
+            return False
+        self._enter(irq)
+        return True
+
+    def _enter(self, irq):
+        uc = self.uc
+        control = uc.reg_read(arm.UC_ARM_REG_CONTROL)
+        if control & 2 and self._current_exception() == 0:
+            raise Fault("thread mode on the process stack: not modelled (the image uses MSP only)")
+        handler = self._current_exception() != 0
+        fp = bool(control & 4)
+        xpsr = uc.reg_read(arm.UC_ARM_REG_XPSR)
+        sp = uc.reg_read(arm.UC_ARM_REG_MSP)
+        words = 26 if fp else 8
+        pad = (sp - 4 * words) & 4
+        sp = sp - 4 * words - pad
+        values = [uc.reg_read(r) for r in FRAME] + [self.pc & ~1, xpsr | (pad and 1 << 9) | 1 << 24]
+        frame = struct.pack("<8I", *[v & 0xFFFF_FFFF for v in values])
+        if fp:
+            frame += struct.pack("<16I", *[uc.reg_read(r) & 0xFFFF_FFFF for r in FP_FRAME])
+            frame += struct.pack("<2I", uc.reg_read(arm.UC_ARM_REG_FPSCR), 0)
+        try:
+            uc.mem_write(sp, frame)
+        except UcError as e:
+            raise Fault(f"stacking at {sp:#010x} failed: {e} (a stack overflow locks up the core)")
+        uc.reg_write(arm.UC_ARM_REG_MSP, sp)
+        exc_return = 0xFFFF_FFF1 if handler else 0xFFFF_FFF9
+        if fp:
+            exc_return &= ~0x10
+        uc.reg_write(arm.UC_ARM_REG_CONTROL, control & ~4)
+        self._dispatch(irq, exc_return)
+
+    def _dispatch(self, irq, exc_return):
+        uc = self.uc
+        uc.reg_write(arm.UC_ARM_REG_IPSR, irq + EXTERNAL)
+        uc.reg_write(arm.UC_ARM_REG_LR, exc_return)
+        self.nvic.enter(irq)
+        self.pc = self._vector(irq + EXTERNAL) | 1
+        uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+        self.sleeping = False
+
+    def _return(self, exc_return):
+        uc = self.uc
+        leaving = self._current_exception() - EXTERNAL
+        if leaving < 0:
+            raise Fault(f"return from exception {leaving + EXTERNAL}: only interrupts are taken here")
+        self.nvic.leave(leaving)
+        to_thread = exc_return & 0xF != 0x1
+        # Tail-chaining: the next exception would preempt what is returned to.
+        limit = self.nvic.running_priority() if not to_thread else 256
+        best = self.nvic.best_pending()
+        if best is not None and best[0] < limit:
+            self._dispatch(best[1], exc_return)
+            uc.emu_stop()
+            self.stop_reason = "tail-chain"
+            return
+        fp = not exc_return & 0x10
+        sp = uc.reg_read(arm.UC_ARM_REG_MSP)
+        words = 26 if fp else 8
+        frame = struct.unpack(f"<{words}I", uc.mem_read(sp, 4 * words))
+        for reg, v in zip(FRAME, frame[:6]):
+            uc.reg_write(reg, v)
+        pc, xpsr = frame[6], frame[7]
+        if fp:
+            for reg, v in zip(FP_FRAME, frame[8:24]):
+                uc.reg_write(reg, v)
+            uc.reg_write(arm.UC_ARM_REG_FPSCR, frame[24])
+        sp += 4 * words + (4 if xpsr >> 9 & 1 else 0)
+        uc.reg_write(arm.UC_ARM_REG_MSP, sp)
+        uc.reg_write(arm.UC_ARM_REG_XPSR, xpsr & ~(1 << 9))
+        control = uc.reg_read(arm.UC_ARM_REG_CONTROL)
+        uc.reg_write(arm.UC_ARM_REG_CONTROL, control | 4 if fp else control & ~4)
+        self.pc = pc | 1
+        uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+        # What the return unmasked may be taken now.
+        if self.nvic.best_pending() is not None:
+            self.stop_reason = "returned"
+            uc.emu_stop()
+
+    # --- running -------------------------------------------------------------
+    def run(self, until):
+        """Runs the core to cycle `until` (virtual time), taking exceptions
+        and sleeping as events come."""
+        clock = self.clock
+        while clock.now < until:
+            clock.fire_due()
+            self.take_pending()
+            if self.sleeping:
+                nxt = clock.next()
+                if nxt is None or nxt >= until:
+                    clock.base = until
+                    return
+                clock.base = max(nxt, clock.now)
+                continue
+            nxt = clock.next()
+            budget = min(until, nxt if nxt is not None else until, clock.now + SLICE) - clock.now
+            self._run_start = self.m.executed
+            self.stop_reason = None
+            self._running = True
+            try:
+                self.uc.emu_start(self.pc, 0xFFFF_FFFF, count=max(budget, 1))
+            except UcError as e:
+                at = self.uc.reg_read(arm.UC_ARM_REG_PC)
+                raise Fault(f"{e} at pc {at:#010x}")
+            finally:
+                self._running = False
+                executed = self.m.executed - self._run_start
+                self._run_start = self.m.executed
+                clock.base += max(executed, 1)
+                self.instructions += executed
+            self.pc = self.uc.reg_read(arm.UC_ARM_REG_PC) | 1

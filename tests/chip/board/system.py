@@ -1,0 +1,100 @@
+"""Clocks, flash interface, power and the independent watchdog, as RM0090
+describes them (§6 RCC, §3.8 FLASH, §5 PWR, §21 IWDG)."""
+
+from bus import Block
+from clock import HZ
+
+RCC_BASE, FLASH_BASE, PWR_BASE, IWDG_BASE = 0x4002_3800, 0x4002_3C00, 0x4000_7000, 0x4000_3000
+
+
+class Rcc(Block):
+    """Every ready bit follows its enable (HSI, HSE, PLL, PLLI2S, LSE, LSI),
+    SWS follows SW, and CSR keeps the reset flags (cleared by RMVF). The
+    oscillators are taken to start at once: the image polls, and nothing
+    times them."""
+
+    name = "RCC"
+    READY = {0x00: (0, 16, 24, 26), 0x70: (0,), 0x74: (0,)}  # CR, BDCR (LSE), CSR (LSI)
+
+    def __init__(self):
+        # RM0090 reset values: CR HSION|HSIRDY, PLLCFGR, CFGR 0, CSR PORRSTF|PINRSTF.
+        self.regs = {0x00: 0x0000_0083, 0x04: 0x2400_3010, 0x74: 0x0E00_0000}
+
+    def read(self, offset):
+        v = self.regs.get(offset, 0)
+        if offset == 0x08:
+            v = (v & ~0xC) | (v & 3) << 2
+        return v
+
+    def write(self, offset, value):
+        if offset in self.READY:
+            for on in self.READY[offset]:
+                value = value | 1 << (on + 1) if value >> on & 1 else value & ~(1 << (on + 1))
+        if offset == 0x74:  # CSR: LSION, LSIRDY; RMVF clears the reset flags
+            flags = 0 if value >> 24 & 1 else self.regs.get(0x74, 0) & 0xFE00_0000
+            value = value & 3 | flags
+        self.regs[offset] = value
+
+    def reset(self, cause_bit):
+        """A system reset: registers to their reset values, CSR's flags kept
+        with `cause_bit` (29 IWDGRSTF, 28 SFTRSTF) and PINRSTF set, BDCR kept
+        (the backup domain is not reset)."""
+        flags = self.regs.get(0x74, 0) & 0xFE00_0000 | 1 << cause_bit | 1 << 26
+        bdcr = self.regs.get(0x70, 0)
+        self.__init__()
+        self.regs[0x74] = flags
+        self.regs[0x70] = bdcr
+
+    def apb1_timer_hz(self):
+        """TIM2–5's clock: PCLK1, doubled when APB1 is divided (RM0090 §6.2)."""
+        cfgr = self.regs.get(0x08, 0)
+        sysclk = HZ if cfgr & 3 == 2 else 16_000_000
+        ppre1 = cfgr >> 10 & 7
+        return sysclk if ppre1 < 4 else 2 * sysclk // (2 << (ppre1 - 4))
+
+
+class Iwdg(Block):
+    """The independent watchdog on the 32 kHz LSI: KR 0xCCCC starts it,
+    0xAAAA reloads, 0x5555 unlocks PR and RLR; it counts RLR down at
+    LSI/(4·2^PR) and resets the system at 0. DBGMCU's freeze bit matters
+    under a debugger only, and no debugger halts this core."""
+
+    name = "IWDG"
+    LSI_HZ = 32_000
+
+    def __init__(self, clock, on_expiry):
+        self.clock = clock
+        self.on_expiry = on_expiry
+        self.pr, self.rlr = 0, 0xFFF
+        self.unlocked = False
+        self.running = False
+        self.reloaded_at = 0
+        self.expiry = None
+        self.reloads = []  # cycles of every reload
+
+    def _period(self):
+        return (4 << self.pr) * (self.rlr + 1) * HZ // self.LSI_HZ
+
+    def _arm(self):
+        if self.expiry:
+            self.expiry.cancel()
+        self.reloaded_at = self.clock.now
+        self.expiry = self.clock.at(self.clock.now + self._period(), self.on_expiry)
+
+    def read(self, offset):
+        return {0x04: self.pr, 0x08: self.rlr}.get(offset, 0)
+
+    def write(self, offset, value):
+        value &= 0xFFFF
+        if offset == 0x00:
+            if value == 0xCCCC:
+                self.running = True
+                self._arm()
+            elif value == 0xAAAA and self.running:
+                self.reloads.append(self.clock.now)
+                self._arm()
+            self.unlocked = value == 0x5555
+        elif offset == 0x04 and self.unlocked:
+            self.pr = value & 7
+        elif offset == 0x08 and self.unlocked:
+            self.rlr = value & 0xFFF
