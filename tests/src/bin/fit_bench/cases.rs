@@ -44,9 +44,10 @@ fn generators() -> Vec<Generator> {
     ]
 }
 
-const RETRO_MODELS: [ModelId; 5] = [
+const RETRO_MODELS: [ModelId; 6] = [
     ModelId::RetroPhong,
     ModelId::AbcRetro,
+    ModelId::AbcRetroPerLobe,
     ModelId::BeckmannRetro,
     ModelId::BlinnRetro,
     ModelId::Lafortune,
