@@ -11,6 +11,9 @@ with its time, and every driven pin's level at the end."""
 
 import argparse
 import json
+import select
+import signal
+import tty
 import os
 import sys
 import time
@@ -26,6 +29,7 @@ from core import Core, Fault  # noqa: E402
 from gpio import EXTI_BASE, GPIO_BASE, SYSCFG_BASE, Exti, Port, Syscfg  # noqa: E402
 from nvic import Nvic, SystemResetRequest  # noqa: E402
 from otg import OTG_FS_BASE, OtgFs  # noqa: E402
+from usb_host import Host  # noqa: E402
 from system import FLASH_BASE, IWDG_BASE, PWR_BASE, RCC_BASE, Iwdg, Rcc  # noqa: E402
 from timer import Timer  # noqa: E402
 
@@ -67,12 +71,21 @@ class Board:
             self.ports[letter] = bus.attach(GPIO_BASE + 0x400 * i, 0x400, Port(letter, self))
         bus.attach(RCC_BASE, 0x400, self.rcc)
         bus.attach(FLASH_BASE, 0x400, Plain("FLASH"))
-        bus.attach(OTG_FS_BASE, 0x1000, OtgFs())
+        # The core's registers and its four FIFO windows (0x1000–0x4FFF).
+        self.otg = bus.attach(OTG_FS_BASE, 0x5000, OtgFs(self.nvic))
         bus.attach(0xE000_E000, 0x1000, self.nvic)
         bus.map([(0x4000_0000, 0x1000_0000), (OTG_FS_BASE, 0x4_0000), (0xE000_0000, 0x10_0000)])
         self.core = Core(self.machine, self.elf, self.nvic, self.clock)
         for name in CLOSED_SWITCHES:
             self.set_input(name, 0, 0.0)
+        self.host = None
+        self.stop_requested = False
+
+    def plug(self, stream=None):
+        """A USB host on the bus from now on, bridging `stream` (a file
+        descriptor) to the CDC-ACM port once it is open."""
+        self.host = Host(self.otg, self.clock, stream)
+        self.host.start()
 
     def log_pin(self, port, pin, level):
         """A driven pin's level, when it changes or when it starts to be
@@ -96,17 +109,31 @@ class Board:
     def _watchdog(self):
         raise WatchdogReset()
 
-    def run(self, seconds):
+    def run(self, seconds, paced=False):
+        """Runs to `seconds` of virtual time; `paced`: never ahead of the
+        wall clock (a program on the pseudo-terminal times its requests in
+        real time), waiting for the host's bytes meanwhile."""
         started = time.monotonic()
         reason = "time"
         try:
-            self.core.run(int(seconds * HZ))
+            if paced:
+                step = HZ // 200
+                while self.clock.now < int(seconds * HZ) and not self.stop_requested:
+                    self.core.run(min(self.clock.now + step, int(seconds * HZ)))
+                    ahead = self.clock.now / HZ - (time.monotonic() - started)
+                    if ahead > 0:
+                        stream = self.host.stream if self.host else None
+                        select.select([stream] if stream is not None else [], [], [], ahead)
+            else:
+                self.core.run(int(seconds * HZ))
         except WatchdogReset:
             reason = "watchdog reset"
         except SystemResetRequest:
             reason = "system reset request"
         except Fault as e:
             reason = f"fault: {e}"
+        if self.stop_requested and reason == "time":
+            reason = "stopped (SIGTERM)"
         reloads = self.iwdg.reloads
         gaps = [b - a for a, b in zip(reloads, reloads[1:])]
         return {
@@ -126,6 +153,16 @@ class Board:
             "unsafe": [{"t": round(t, 9), "pin": p, "level": v} for t, p, v in self.pins if SAFE.get(p, v) != v],
             "safe_at_end": all(self.driven_pins().get(p) == v for p, v in SAFE.items()),
             "first_sleep_instructions": self.core.first_sleep,
+            "usb": None
+            if self.host is None
+            else {
+                "state": self.host.state,
+                "error": self.host.error,
+                "address": self.otg.address,
+                "log": self.host.log,
+                "device_descriptor": self.host.descriptor.hex() if self.host.descriptor else None,
+                "configuration_bytes": len(self.host.configuration or b""),
+            },
             "exti_edges": [{"line": n, "rising": r, "latched": l} for n, r, l in self.exti.edges],
         }
 
@@ -135,13 +172,29 @@ def main():
     ap.add_argument("image")
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--set", action="append", default=[], metavar="PIN=LEVEL@SECONDS")
+    ap.add_argument("--usb", action="store_true", help="a USB host enumerates the device and opens its port")
+    ap.add_argument(
+        "--pty",
+        action="store_true",
+        help="bridge the open port to a pseudo-terminal (its path on stderr first), paced to the wall clock",
+    )
     args = ap.parse_args()
     board = Board(args.image)
+    # SIGTERM ends a paced run where it is, and the report is printed.
+    signal.signal(signal.SIGTERM, lambda *_: setattr(board, "stop_requested", True))
+    if args.pty:
+        master, slave = os.openpty()
+        tty.setraw(slave)
+        os.set_blocking(master, False)
+        print(f"pty {os.ttyname(slave)}", file=sys.stderr, flush=True)
+        board.plug(master)
+    elif args.usb:
+        board.plug()
     for spec in args.set:
         pin, rest = spec.split("=")
         level, at = rest.split("@")
         board.set_input(pin, int(level), float(at))
-    print(json.dumps(board.run(args.seconds)))
+    print(json.dumps(board.run(args.seconds, paced=args.pty)))
 
 
 if __name__ == "__main__":

@@ -52,6 +52,12 @@
 //!   enable and STEP stay low and the drivers' EN high throughout, the time
 //!   driver interrupts at every half period of its counter, the E-STOP's
 //!   edge is taken once, and the watchdog is reloaded within 0.5 s.
+//! - `usb_session`: the same image with a USB host on the board's bus
+//!   (`board/usb_host.py`: bus reset, descriptors, address, configuration,
+//!   line coding and DTR, then bulk transfers) bridged to a pseudo-terminal,
+//!   where the host crate's own client (`HeadClient` on a `Port`, as `gonio
+//!   scan --port` drives a real head) asks its identity and status. Failing
+//!   to enumerate, to identify or to answer fails the run.
 //! - `step_rate_hz_3axes_at_50pct_cpu` (≥ 50 000): per-axis step rate that
 //!   three axes sustain on half the CPU, from the mean handler cost.
 //! - `await_free_stack_bytes_max`: the stack the serve loop's deepest poll
@@ -135,6 +141,63 @@ fn board_run(root: &Path, image: &Path) -> Result<Value> {
     Ok(run)
 }
 
+/// The unmodified image on the board with a USB host that opens its port
+/// and bridges it to a pseudo-terminal, driven by the host crate's own
+/// client (`HeadClient` on a `Port`, as `gonio scan --port` drives a real
+/// head): it identifies itself and answers a status request. Returns the
+/// client's view and the board's report.
+fn usb_session(root: &Path, image: &Path) -> Result<Value> {
+    use gonio_acquire::client::HeadClient;
+    use gonio_acquire::target::Port;
+    use gonio_shared::icd::StatusEndpoint;
+    use std::io::{BufRead, BufReader};
+    use std::process::Stdio;
+
+    let mut board = Command::new("python3")
+        .arg(root.join("tests/chip/board/board.py"))
+        .arg(image)
+        .args(["--pty", "--seconds", "120"])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .context("running python3 tests/chip/board/board.py --pty")?;
+    let mut err = BufReader::new(board.stderr.take().context("the board's stderr")?);
+    let mut line = String::new();
+    err.read_line(&mut line).context("reading the board's pseudo-terminal")?;
+    let path = line.strip_prefix("pty ").map(str::trim).map(str::to_string);
+    let client = path
+        .clone()
+        .context(format!("the board printed {line:?}, not its pseudo-terminal"))
+        .and_then(|path| {
+            let rt = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
+            rt.block_on(async {
+                let head = HeadClient::connect(&Port(path)).await?;
+                let identity = head.identity().clone();
+                let status = head.request::<StatusEndpoint>(&()).await?;
+                head.close().await;
+                anyhow::Ok((identity, status))
+            })
+        });
+    // The board prints its report when told to stop.
+    let _ = Command::new("kill").arg("-TERM").arg(board.id().to_string()).status();
+    let out = board.wait_with_output().context("waiting for the board")?;
+    let mut rest = String::new();
+    let _ = std::io::Read::read_to_string(&mut err, &mut rest);
+    let report: Value = serde_json::from_slice(&out.stdout).with_context(|| format!("the board's report (stderr: {rest})"))?;
+    let (identity, status) = client.with_context(|| format!("the host's client on the board's port; the board: {}", report["usb"]))?;
+    Ok(json!({
+        "identity": {
+            "board": identity.board.as_str(),
+            "serial": identity.serial.as_str(),
+            "firmware_version": identity.firmware_version.as_str(),
+            "simulated": identity.simulated,
+            "protocol_version": identity.protocol_version,
+        },
+        "status": { "state": format!("{:?}", status.state), "laser_on": status.laser_on, "drivers_enabled": status.drivers_enabled, "estop_open": status.estop_open },
+        "board": { "stopped": report["stopped"], "virtual_seconds": report["virtual_seconds"], "host_seconds": report["host_seconds"], "interrupts": report["interrupts"], "usb": report["usb"], "unsafe": report["unsafe"] },
+    }))
+}
+
 fn main() -> Result<()> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
@@ -162,6 +225,7 @@ fn main() -> Result<()> {
     let run = python(&root, "emulate.py", &["costs".as_ref(), images.join("gonio-cost").as_os_str()])?;
     // The unmodified image on the virtual board, from reset.
     let board = board_run(&root, &images.join("gonio-head"))?;
+    let usb = usb_session(&root, &images.join("gonio-head"))?;
     let p = &run["probes"];
     let max = |name: &str| p[name]["max"].as_u64().with_context(|| format!("no figure for {name}"));
     let mean = |name: &str| -> Result<f64> {
@@ -252,6 +316,7 @@ fn main() -> Result<()> {
             "watchdog": board["watchdog"],
             "driven_at_end": board["driven_at_end"],
         },
+        "usb_session": usb,
         "bars": {
             "step_event_instructions_max": 250,
             "resume_instructions_max": 1_000_000,

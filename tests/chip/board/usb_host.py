@@ -1,0 +1,170 @@
+"""A synthetic USB host on the board's bus: it resets the bus, enumerates
+the device (descriptors, address, configuration), opens the CDC-ACM port
+(line coding, DTR) as an operating system's driver does when a program
+opens the port, and then moves bytes between a byte stream (a
+pseudo-terminal's master side) and the bulk endpoints.
+
+It runs as a coroutine on the virtual clock: each transaction is one call
+into the OTG model, and a NAK is retried a little later, the firmware
+running in between, as a host controller retries. Control transfers are
+always finished (status stage included): the driver does not poll its bus
+while one is open."""
+
+import os
+import struct
+
+from clock import HZ
+
+US = HZ // 1_000_000
+MS = HZ // 1000
+RETRY = 20 * US  # after a NAK
+PACKET_TIME = 50 * US  # a 64-byte full-speed packet on the wire
+CDC_OUT, CDC_IN = 1, 2
+GIVE_UP = 2 * HZ  # a transaction NAKed this long is an error of the device
+
+
+class HostError(Exception):
+    pass
+
+
+class Host:
+    def __init__(self, otg, clock, stream=None):
+        self.otg = otg
+        self.clock = clock
+        self.stream = stream  # a file descriptor, read and written raw
+        self.to_device = bytearray()
+        self.log = []  # (seconds, what)
+        self.descriptor = None
+        self.configuration = None
+        self.state = "detached"
+        self.received = bytearray()  # what came from bulk IN when no stream
+        self.error = None
+
+    def start(self):
+        self.proc = self._run()
+        self.clock.at(self.clock.now + MS, self._step)
+
+    def _step(self):
+        try:
+            delay = next(self.proc)
+        except StopIteration:
+            return
+        except HostError as e:
+            self.error = str(e)
+            self.state = "error"
+            return
+        self.clock.at(self.clock.now + delay, self._step)
+
+    def _note(self, what):
+        self.log.append((round(self.clock.now / HZ, 6), what))
+
+    # --- transactions, retried while NAKed -------------------------------------
+    def _until(self, attempt, what):
+        since = self.clock.now
+        while True:
+            result = attempt()
+            if result[0] != "NAK":
+                return result
+            if self.clock.now - since > GIVE_UP:
+                raise HostError(f"{what}: NAKed for {GIVE_UP / HZ} s")
+            yield RETRY
+
+    def _setup(self, packet):
+        yield from self._until(lambda: (self.otg.setup(packet),), "SETUP")
+        yield PACKET_TIME
+
+    def control_in(self, request_type, request, value, index, length):
+        """A control read: SETUP, IN data until short or complete, OUT status."""
+        yield from self._setup(struct.pack("<BBHHH", request_type, request, value, index, length))
+        data = bytearray()
+        while True:
+            status, chunk = yield from self._until(lambda: self.otg.in_(0), f"control IN {request:#x} data")
+            if status == "STALL":
+                raise HostError(f"control IN {request:#x} {value:#x} stalled")
+            data += chunk
+            yield PACKET_TIME
+            if len(chunk) < 64 or len(data) >= length:
+                break
+        status = yield from self._until(lambda: (self.otg.out(0, b""),), "control IN status")
+        if status[0] == "STALL":
+            raise HostError(f"control IN {request:#x} status stalled")
+        yield PACKET_TIME
+        return bytes(data)
+
+    def control_out(self, request_type, request, value, index, payload=b""):
+        """A control write: SETUP, OUT data if any, IN status (a ZLP)."""
+        yield from self._setup(struct.pack("<BBHHH", request_type, request, value, index, len(payload)))
+        if payload:
+            status = yield from self._until(lambda: (self.otg.out(0, payload),), f"control OUT {request:#x} data")
+            if status[0] == "STALL":
+                raise HostError(f"control OUT {request:#x} stalled")
+            yield PACKET_TIME
+        status, chunk = yield from self._until(lambda: self.otg.in_(0), f"control OUT {request:#x} status")
+        if status == "STALL":
+            raise HostError(f"control OUT {request:#x} {value:#x} stalled")
+        if chunk:
+            raise HostError(f"control OUT {request:#x}: a status stage with {len(chunk)} bytes")
+        yield PACKET_TIME
+
+    # --- the host's life --------------------------------------------------------
+    def _run(self):
+        while not (self.otg.connected and self.otg.gahbcfg & 1):
+            yield MS
+        self._note("attached")
+        self.otg.bus_reset()
+        yield 10 * MS
+        self.otg.reset_done()
+        yield MS
+        self.descriptor = yield from self.control_in(0x80, 6, 0x0100, 0, 64)
+        vid, pid = struct.unpack_from("<HH", self.descriptor, 8)
+        self._note(f"device {vid:04x}:{pid:04x}")
+        yield from self.control_out(0x00, 5, 5, 0)
+        if self.otg.address != 5:
+            raise HostError(f"SET_ADDRESS 5: the device answers at {self.otg.address}")
+        header = yield from self.control_in(0x80, 6, 0x0200, 0, 9)
+        total = struct.unpack_from("<H", header, 2)[0]
+        self.configuration = yield from self.control_in(0x80, 6, 0x0200, 0, total)
+        yield from self.control_out(0x00, 9, 1, 0)
+        self._note("configured")
+        # What an operating system's CDC-ACM driver does when a program
+        # opens the port: 115 200 8N1, then DTR and RTS.
+        yield from self.control_out(0x21, 0x20, 0, 0, struct.pack("<IBBB", 115_200, 0, 0, 8))
+        yield from self.control_out(0x21, 0x22, 3, 0)
+        self.state = "open"
+        self._note("port open (DTR)")
+        yield from self._bridge()
+
+    def _bridge(self):
+        """Bulk OUT what the stream sends, bulk IN to the stream; a frame
+        (full-speed) per round when idle, back to back while data flows."""
+        while True:
+            busy = False
+            if self.stream is not None:
+                try:
+                    self.to_device += os.read(self.stream, 4096)
+                except BlockingIOError:
+                    pass
+                except OSError:
+                    pass  # no program holds the port open
+            if self.to_device:
+                chunk = bytes(self.to_device[:64])
+                status = self.otg.out(CDC_OUT, chunk)
+                if status == "ACK":
+                    del self.to_device[:64]
+                    busy = True
+                elif status == "STALL":
+                    raise HostError("bulk OUT stalled")
+            status, data = self.otg.in_(CDC_IN)
+            if status == "ACK":
+                busy = True
+                if self.stream is not None:
+                    try:
+                        os.write(self.stream, data)
+                    except OSError:
+                        pass
+                else:
+                    self.received += data
+            elif status == "STALL":
+                raise HostError("bulk IN stalled")
+            self.otg.start_of_frame()
+            yield PACKET_TIME if busy else MS
