@@ -11,7 +11,6 @@ with its time, and every driven pin's level at the end."""
 
 import argparse
 import json
-import select
 import signal
 import tty
 import os
@@ -81,10 +80,11 @@ class Board:
         self.host = None
         self.stop_requested = False
 
-    def plug(self, stream=None):
+    def plug(self, stream=None, replug=False):
         """A USB host on the bus from now on, bridging `stream` (a file
-        descriptor) to the CDC-ACM port once it is open."""
-        self.host = Host(self.otg, self.clock, stream)
+        descriptor) to the CDC-ACM port while a program holds it open;
+        `replug`: the cable pulled and plugged back after each session."""
+        self.host = Host(self.otg, self.clock, stream, replug)
         self.host.start()
 
     def log_pin(self, port, pin, level):
@@ -112,7 +112,7 @@ class Board:
     def run(self, seconds, paced=False):
         """Runs to `seconds` of virtual time; `paced`: never ahead of the
         wall clock (a program on the pseudo-terminal times its requests in
-        real time), waiting for the host's bytes meanwhile."""
+        real time)."""
         started = time.monotonic()
         reason = "time"
         try:
@@ -120,10 +120,11 @@ class Board:
                 step = HZ // 200
                 while self.clock.now < int(seconds * HZ) and not self.stop_requested:
                     self.core.run(min(self.clock.now + step, int(seconds * HZ)))
+                    # The host reads the terminal at its own steps; a closed
+                    # terminal reads as ready at once, so this sleeps.
                     ahead = self.clock.now / HZ - (time.monotonic() - started)
                     if ahead > 0:
-                        stream = self.host.stream if self.host else None
-                        select.select([stream] if stream is not None else [], [], [], ahead)
+                        time.sleep(ahead)
             else:
                 self.core.run(int(seconds * HZ))
         except WatchdogReset:
@@ -157,6 +158,7 @@ class Board:
             if self.host is None
             else {
                 "state": self.host.state,
+                "sessions": self.host.sessions,
                 "error": self.host.error,
                 "address": self.otg.address,
                 "log": self.host.log,
@@ -178,6 +180,7 @@ def main():
         action="store_true",
         help="bridge the open port to a pseudo-terminal (its path on stderr first), paced to the wall clock",
     )
+    ap.add_argument("--replug", action="store_true", help="after each session, the cable pulled and plugged back")
     args = ap.parse_args()
     board = Board(args.image)
     # SIGTERM ends a paced run where it is, and the report is printed.
@@ -187,7 +190,9 @@ def main():
         tty.setraw(slave)
         os.set_blocking(master, False)
         print(f"pty {os.ttyname(slave)}", file=sys.stderr, flush=True)
-        board.plug(master)
+        # Held by the programs that open it only: its closing is seen.
+        os.close(slave)
+        board.plug(master, replug=args.replug)
     elif args.usb:
         board.plug()
     for spec in args.set:

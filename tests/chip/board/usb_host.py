@@ -1,8 +1,9 @@
 """A synthetic USB host on the board's bus: it resets the bus, enumerates
 the device (descriptors, address, configuration), opens the CDC-ACM port
 (line coding, DTR) as an operating system's driver does when a program
-opens the port, and then moves bytes between a byte stream (a
-pseudo-terminal's master side) and the bulk endpoints.
+opens the port, moves bytes between a byte stream (a pseudo-terminal's
+master side) and the bulk endpoints, and drops DTR when the program
+closes the port; optionally the cable is then pulled and plugged back.
 
 It runs as a coroutine on the virtual clock: each transaction is one call
 into the OTG model, and a NAK is retried a little later, the firmware
@@ -28,7 +29,7 @@ class HostError(Exception):
 
 
 class Host:
-    def __init__(self, otg, clock, stream=None):
+    def __init__(self, otg, clock, stream=None, replug=False):
         self.otg = otg
         self.clock = clock
         self.stream = stream  # a file descriptor, read and written raw
@@ -39,6 +40,9 @@ class Host:
         self.state = "detached"
         self.received = bytearray()  # what came from bulk IN when no stream
         self.error = None
+        self.sessions = 0
+        # After each session, unplug the cable and plug it back in.
+        self.replug = replug
 
     def start(self):
         self.proc = self._run()
@@ -111,6 +115,18 @@ class Host:
         while not (self.otg.connected and self.otg.gahbcfg & 1):
             yield MS
         self._note("attached")
+        while True:
+            yield from self._enumerate()
+            yield from self._session()
+            if not self.replug:
+                return
+            # The cable out (the bus idles: the device suspends) and back in.
+            self._note("unplugged")
+            self.otg.suspend()
+            yield 100 * MS
+            self._note("plugged")
+
+    def _enumerate(self):
         self.otg.bus_reset()
         yield 10 * MS
         self.otg.reset_done()
@@ -126,26 +142,42 @@ class Host:
         self.configuration = yield from self.control_in(0x80, 6, 0x0200, 0, total)
         yield from self.control_out(0x00, 9, 1, 0)
         self._note("configured")
-        # What an operating system's CDC-ACM driver does when a program
-        # opens the port: 115 200 8N1, then DTR and RTS.
-        yield from self.control_out(0x21, 0x20, 0, 0, struct.pack("<IBBB", 115_200, 0, 0, 8))
-        yield from self.control_out(0x21, 0x22, 3, 0)
-        self.state = "open"
-        self._note("port open (DTR)")
-        yield from self._bridge()
 
-    def _bridge(self):
-        """Bulk OUT what the stream sends, bulk IN to the stream; a frame
-        (full-speed) per round when idle, back to back while data flows."""
+    def _port_open(self):
+        """Whether a program holds the pseudo-terminal open (reading its
+        master side fails with EIO when none does); without a stream, the
+        port is open from the start."""
+        if self.stream is None:
+            return True
+        try:
+            self.to_device += os.read(self.stream, 4096)
+        except BlockingIOError:
+            pass
+        except OSError:
+            return False
+        return True
+
+    def _set_dtr(self, on):
+        """What an operating system's CDC-ACM driver does when a program
+        opens the port (115 200 8N1, then DTR and RTS) and closes it."""
+        if on:
+            yield from self.control_out(0x21, 0x20, 0, 0, struct.pack("<IBBB", 115_200, 0, 0, 8))
+        yield from self.control_out(0x21, 0x22, 3 if on else 0, 0)
+        self.state = "open" if on else "closed"
+        self._note("port open (DTR)" if on else "port closed (DTR dropped)")
+
+    def _session(self):
+        """Waits for a program to open the port, bridges the bulk endpoints
+        while it is open, and drops DTR when it closes the port."""
+        while not self._port_open():
+            yield MS
+        yield from self._set_dtr(True)
+        self.sessions += 1
         while True:
+            if not self._port_open():
+                yield from self._set_dtr(False)
+                return
             busy = False
-            if self.stream is not None:
-                try:
-                    self.to_device += os.read(self.stream, 4096)
-                except BlockingIOError:
-                    pass
-                except OSError:
-                    pass  # no program holds the port open
             if self.to_device:
                 chunk = bytes(self.to_device[:64])
                 status = self.otg.out(CDC_OUT, chunk)

@@ -144,8 +144,9 @@ fn board_run(root: &Path, image: &Path) -> Result<Value> {
 /// The unmodified image on the board with a USB host that opens its port
 /// and bridges it to a pseudo-terminal, driven by the host crate's own
 /// client (`HeadClient` on a `Port`, as `gonio scan --port` drives a real
-/// head): it identifies itself and answers a status request. Returns the
-/// client's view and the board's report.
+/// head): it identifies itself and answers a status request, in a second
+/// session too, after the port was closed and the cable pulled and plugged
+/// back. Returns the client's view of the second and the board's report.
 fn usb_session(root: &Path, image: &Path) -> Result<Value> {
     use gonio_acquire::client::HeadClient;
     use gonio_acquire::target::Port;
@@ -156,7 +157,7 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
     let mut board = Command::new("python3")
         .arg(root.join("tests/chip/board/board.py"))
         .arg(image)
-        .args(["--pty", "--seconds", "120"])
+        .args(["--pty", "--replug", "--seconds", "120"])
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()
@@ -171,11 +172,23 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
         .and_then(|path| {
             let rt = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
             rt.block_on(async {
-                let head = HeadClient::connect(&Port(path)).await?;
-                let identity = head.identity().clone();
-                let status = head.request::<StatusEndpoint>(&()).await?;
-                head.close().await;
-                anyhow::Ok((identity, status))
+                // Two sessions: the port closed after the first, the cable
+                // then pulled and plugged back in (the board's host does it).
+                let mut seen = Vec::new();
+                for session in 1..=2 {
+                    let head = HeadClient::connect(&Port(path.clone()))
+                        .await
+                        .with_context(|| format!("session {session}"))?;
+                    let identity = head.identity().clone();
+                    let status = head
+                        .request::<StatusEndpoint>(&())
+                        .await
+                        .with_context(|| format!("session {session}: status"))?;
+                    head.close().await;
+                    seen.push((identity, status));
+                    tokio::time::sleep(std::time::Duration::from_millis(500)).await;
+                }
+                seen.pop().context("no session")
             })
         });
     // The board prints its report when told to stop.

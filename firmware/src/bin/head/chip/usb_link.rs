@@ -7,6 +7,7 @@
 //! --port PATH` drives both through one code path, and the head needs no
 //! driver on any operating system.
 
+use core::sync::atomic::{AtomicU32, Ordering};
 use embassy_executor::Spawner;
 use embassy_futures::select::{select, Either};
 use embassy_stm32::peripherals::{PA11, PA12, USB_OTG_FS};
@@ -33,15 +34,39 @@ const SEND_TIMEOUT_MS: u64 = 500;
 
 static RX: Channel<CriticalSectionRawMutex, Frame, 4> = Channel::new();
 static TX: Channel<CriticalSectionRawMutex, Frame, 8> = Channel::new();
-static DISCONNECTED: Signal<CriticalSectionRawMutex, ()> = Signal::new();
-static CONNECTED: Signal<CriticalSectionRawMutex, ()> = Signal::new();
+/// Sessions started since boot: each start and each end is signalled with
+/// the session's number, so that an end nobody was serving (a bus reset or
+/// suspend while the head waited between sessions) cannot end the next
+/// one. Without the number the virtual board showed it: after the port was
+/// closed and the cable pulled and plugged back, the next session's first
+/// request met that stale end, and the head never answered again.
+static SESSION: AtomicU32 = AtomicU32::new(0);
+static DISCONNECTED: Signal<CriticalSectionRawMutex, u32> = Signal::new();
+static CONNECTED: Signal<CriticalSectionRawMutex, u32> = Signal::new();
 
-/// The core's end of the USB link.
-pub struct UsbLink;
+fn start_session() {
+    CONNECTED.signal(SESSION.fetch_add(1, Ordering::Relaxed).wrapping_add(1));
+}
+
+fn end_session() {
+    DISCONNECTED.signal(SESSION.load(Ordering::Relaxed));
+}
+
+/// The core's end of the USB link: the session it serves (0 before the
+/// first).
+pub struct UsbLink {
+    session: u32,
+}
 
 impl UsbLink {
     pub async fn wait_connection(&mut self) {
-        CONNECTED.wait().await;
+        self.session = CONNECTED.wait().await;
+    }
+
+    /// Whether a signalled end concerns this session (or a later one), not
+    /// one that ended before it started.
+    fn ends_this(&self, ended: u32) -> bool {
+        ended.wrapping_sub(self.session) < u32::MAX / 2
     }
 }
 
@@ -53,16 +78,20 @@ fn copy(f: Frame, buf: &mut [u8]) -> usize {
 
 impl Link for UsbLink {
     async fn recv(&mut self, buf: &mut [u8]) -> Result<usize, LinkError> {
-        match select(RX.receive(), DISCONNECTED.wait()).await {
-            Either::First(f) => Ok(copy(f, buf)),
-            Either::Second(()) => Err(LinkError::Closed),
+        loop {
+            match select(RX.receive(), DISCONNECTED.wait()).await {
+                Either::First(f) => return Ok(copy(f, buf)),
+                Either::Second(ended) if self.ends_this(ended) => return Err(LinkError::Closed),
+                Either::Second(_) => {}
+            }
         }
     }
 
     fn try_recv(&mut self, buf: &mut [u8]) -> Option<Result<usize, LinkError>> {
-        if DISCONNECTED.signaled() {
-            DISCONNECTED.reset();
-            return Some(Err(LinkError::Closed));
+        if let Some(ended) = DISCONNECTED.try_take() {
+            if self.ends_this(ended) {
+                return Some(Err(LinkError::Closed));
+            }
         }
         RX.try_receive().ok().map(|f| Ok(copy(f, buf)))
     }
@@ -89,7 +118,7 @@ struct BusWatch;
 
 impl embassy_usb::Handler for BusWatch {
     fn reset(&mut self) {
-        DISCONNECTED.signal(());
+        end_session();
     }
 
     /// A suspend ends the session (the head goes safe); a resume without a
@@ -99,17 +128,17 @@ impl embassy_usb::Handler for BusWatch {
     /// replugged. What was queued belongs to the session that ended.
     fn suspended(&mut self, suspended: bool) {
         if suspended {
-            DISCONNECTED.signal(());
+            end_session();
         } else {
             RX.clear();
             TX.clear();
-            CONNECTED.signal(());
+            start_session();
         }
     }
 
     fn configured(&mut self, configured: bool) {
         if !configured {
-            DISCONNECTED.signal(());
+            end_session();
         }
     }
 }
@@ -133,10 +162,11 @@ async fn rx_task(mut rx: Receiver<'static, UsbDriver>, control: ControlChanged<'
             control.control_changed().await;
         }
         // What is queued belongs to the session that ended. A disconnect the
-        // core has not seen yet stays signalled: it ends its serve loop.
+        // core has not seen yet stays signalled: it ends its serve loop, and
+        // only that one (`UsbLink::ends_this`).
         RX.clear();
         TX.clear();
-        CONNECTED.signal(());
+        start_session();
         loop {
             match select(rx.read_packet(&mut pkt), control.control_changed()).await {
                 Either::First(Ok(n)) => dec.feed(&pkt[..n], |f| {
@@ -152,7 +182,7 @@ async fn rx_task(mut rx: Receiver<'static, UsbDriver>, control: ControlChanged<'
             }
         }
         dec = Decoder::new();
-        DISCONNECTED.signal(());
+        end_session();
     }
 }
 
@@ -208,5 +238,5 @@ pub fn start(spawner: &Spawner, usb: Peri<'static, USB_OTG_FS>, dp: Peri<'static
     spawner.must_spawn(usb_device(builder.build()));
     spawner.must_spawn(rx_task(rx, control));
     spawner.must_spawn(tx_task(tx));
-    UsbLink
+    UsbLink { session: 0 }
 }
