@@ -20,7 +20,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
-from emulate import Elf, Machine  # noqa: E402
+from emulate import Elf, Machine, by_function  # noqa: E402
 
 from bus import Bus, Plain  # noqa: E402
 from clock import HZ, Clock  # noqa: E402
@@ -58,9 +58,12 @@ class Board:
         self.nvic = Nvic()
         self.rcc = Rcc()
         self.pins = []  # (seconds, pin, level) of every driven change
-        bus = Bus(uc)
+        bus = self.bus = Bus(uc)
         for i, (name, irq, bits) in enumerate((("TIM2", 28, 32), ("TIM3", 29, 16), ("TIM4", 30, 16), ("TIM5", 50, 32))):
             setattr(self, name.lower(), bus.attach(0x4000_0000 + 0x400 * i, 0x400, Timer(name, irq, bits, self.clock, self.nvic, self.rcc)))
+        # TIM3's internal trigger 1 is TIM2 (RM0090 Table 93).
+        self.tim3.triggers[1] = self.tim2
+        self.tim2.slaves.append(self.tim3)
         self.iwdg = bus.attach(IWDG_BASE, 0x400, Iwdg(self.clock, self._watchdog))
         bus.attach(PWR_BASE, 0x400, Plain("PWR", {0x04: 1 << 14}))  # CSR VOSRDY
         self.syscfg = bus.attach(SYSCFG_BASE, 0x400, Syscfg())
@@ -75,6 +78,7 @@ class Board:
         bus.attach(0xE000_E000, 0x1000, self.nvic)
         bus.map([(0x4000_0000, 0x1000_0000), (OTG_FS_BASE, 0x4_0000), (0xE000_0000, 0x10_0000)])
         self.core = Core(self.machine, self.elf, self.nvic, self.clock)
+        self.machine.start_profile()
         for name in CLOSED_SWITCHES:
             self.set_input(name, 0, 0.0)
         self.host = None
@@ -154,6 +158,12 @@ class Board:
             "unsafe": [{"t": round(t, 9), "pin": p, "level": v} for t, p, v in self.pins if SAFE.get(p, v) != v],
             "safe_at_end": all(self.driven_pins().get(p) == v for p, v in SAFE.items()),
             "first_sleep_instructions": self.core.first_sleep,
+            # The stack is the 64 KiB of CCM RAM below 0x1001_0000 (memory.x).
+            "stack_bytes_max": 0x1001_0000 - self.machine.counter.lowest_sp,
+            "busiest_functions": dict(by_function(self.elf, self.machine.profile(), top=8)),
+            "busiest_registers": {
+                f"{a:#010x}": n for a, n in sorted(self.bus.accesses.items(), key=lambda kv: -kv[1])[:8]
+            },
             "usb": None
             if self.host is None
             else {

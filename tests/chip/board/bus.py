@@ -38,11 +38,11 @@ class Plain(Block):
 
 
 class Bus:
-    def __init__(self, uc, on_access=None):
+    def __init__(self, uc):
         self.uc = uc
         self.blocks = []  # (base, size, block)
         self.pages = {}
-        self.on_access = on_access
+        self.accesses = {}  # address → reads and writes: where the image polls
 
     def attach(self, base, size, block):
         self.blocks.append((base, size, block))
@@ -76,12 +76,14 @@ class Bus:
 
     def _read(self, uc, offset, size, page):
         address = page + offset
+        self.accesses[address] = self.accesses.get(address, 0) + 1
         blk, off = self._find(address)
         word = blk.read(off & ~3)
         shift = 8 * (off & 3)
         return (word >> shift) & ((1 << (8 * size)) - 1)
 
     def _write(self, uc, offset, size, value, page):
+        self.accesses[page + offset] = self.accesses.get(page + offset, 0) + 1
         blk, off = self._find(page + offset)
         if size < 4:
             # A narrower write: the block's own handling if it has one (byte

@@ -241,7 +241,8 @@ class Core:
                 self.uc.emu_start(self.pc, 0xFFFF_FFFF, count=max(budget, 1))
             except UcError as e:
                 at = self.uc.reg_read(arm.UC_ARM_REG_PC)
-                raise Fault(f"{e} at pc {at:#010x}")
+                sp = self.uc.reg_read(arm.UC_ARM_REG_SP)
+                raise Fault(f"{e} at pc {at:#010x}, sp {sp:#010x}")
             finally:
                 self._running = False
                 executed = self.m.executed - self._run_start

@@ -3,16 +3,25 @@ prescaler and, with ARPE, the auto-reload are preloaded and take effect
 at an update event (overflow or EGR.UG); a compare flag is set whenever
 the counter becomes equal to its CCR, whether or not its interrupt is
 enabled; status flags are cleared by writing 0 (rc_w0); the interrupt
-line is asserted while a flag and its enable are both set.
+line is asserted while a flag and its enable are both set. A timer in
+external clock mode 1 (SMCR.SMS = 111) counts the update events of the
+master its trigger selects (TIM3's ITR1 is TIM2, whose TRGO is its
+update event when CR2.MMS = 010).
 
-The counter is not stepped tick by tick: it is a linear function of the
-virtual time between events, and the next overflow or match is scheduled
-on the clock."""
+The counter is not stepped tick by tick: it is a function of the virtual
+time between changes, flags are brought up to date whenever the timer is
+touched, and only what the core can observe by itself is scheduled on the
+clock (an overflow or compare whose interrupt is enabled, an update that
+loads a preload). A slave's input edges are its master's update instants,
+computed, not scheduled. Not modelled yet: the compare outputs on the
+pins (PWM), down and centre-aligned counting, input capture."""
 
 from fractions import Fraction
 
 from bus import Block
 from clock import HZ
+
+UIE_UIF = 1
 
 
 class Timer(Block):
@@ -31,30 +40,88 @@ class Timer(Block):
         self.cnt0 = 0
         self.t0 = Fraction(0)
         self.event = None
-        self.on_trgo = None  # called at each update event when CR2.MMS = 010
+        self.triggers = {}  # ITRx → the master timer
+        self.slaves = []
         self.updates = 0
         self.matches = [0, 0, 0, 0]
 
-    # --- time ----------------------------------------------------------------
-    def _tick(self):
-        return Fraction(HZ * (self.psc + 1), self.rcc.apb1_timer_hz())
-
+    # --- the counter's input ----------------------------------------------------
     @property
     def running(self):
         return self.cr1 & 1
 
+    def _master(self):
+        """The master whose updates clock this timer, in external clock
+        mode 1 on an internal trigger."""
+        if self.smcr & 7 == 7:
+            return self.triggers.get(self.smcr >> 4 & 7)
+        return None
+
+    def _tick(self):
+        return Fraction(HZ * (self.psc + 1), self.rcc.apb1_timer_hz())
+
+    def _edges(self, a, b):
+        """Counter ticks in (a, b]."""
+        master = self._master()
+        if self._external():
+            return master.updates_in(a, b) // (self.psc + 1) if master else 0
+        return int((b - a) / self._tick())
+
+    def _external(self):
+        return self.smcr & 7 == 7
+
+    def _after(self, n):
+        """The instant of the n-th tick after t0."""
+        master = self._master()
+        if self._external():
+            return master.update_at(self.t0, n * (self.psc + 1)) if master and master.running else None
+        return self.t0 + n * self._tick()
+
+    # --- this timer as a master ---------------------------------------------------
+    def _first_overflow(self):
+        return self.t0 + (self.arr + 1 - self.cnt0) * self._tick()
+
+    def updates_in(self, a, b):
+        """Its overflows in (a, b], at its present settings."""
+        if not self.running or self._external() or b <= a:
+            return 0
+        first, period = self._first_overflow(), (self.arr + 1) * self._tick()
+
+        def upto(t):  # overflows at or before t
+            return 0 if t < first else int((t - first) / period) + 1
+
+        return upto(b) - upto(a)
+
+    def update_at(self, after, n):
+        """The instant of its n-th overflow after `after`."""
+        first, period = self._first_overflow(), (self.arr + 1) * self._tick()
+        k = 0 if after < first else int((after - first) / period) + 1
+        return first + (k + n - 1) * period
+
+    # --- time ---------------------------------------------------------------
     def _advance(self):
-        """Brings the counter to now; returns whether it wrapped."""
+        """Brings the counter and its flags to now."""
+        now = Fraction(self.clock.now)
         if not self.running:
-            self.t0 = Fraction(self.clock.now)
-            return False
-        tick = self._tick()
-        ticks = int((self.clock.now - self.t0) / tick)
-        self.t0 += ticks * tick
-        count = self.cnt0 + ticks
-        wrapped = count > self.arr
-        self.cnt0 = count % (self.arr + 1)
-        return wrapped
+            self.t0 = now
+            return
+        k = self._edges(self.t0, now)
+        if self._external():
+            self.t0 = now
+        else:
+            self.t0 += k * self._tick()
+        if k == 0:
+            return
+        span = self.arr + 1
+        old = self.cnt0
+        for ch in range(4):
+            if self.ccr[ch] <= self.arr and (k >= span or (self.ccr[ch] - old - 1) % span < k):
+                self.sr |= 1 << (ch + 1)
+                self.matches[ch] += 1
+        wrapped = old + k > self.arr
+        self.cnt0 = (old + k) % span
+        if wrapped:
+            self._update_event(hardware=True)
 
     def _schedule(self):
         if self.event:
@@ -63,24 +130,31 @@ class Timer(Block):
         if not self.running:
             return
         span = self.arr + 1
-        ahead = [self.arr - self.cnt0 + 1]
-        for ccr in self.ccr:
-            if ccr <= self.arr:
-                d = (ccr - self.cnt0) % span
+        ahead = []
+        preload_pending = self.psc_pre != self.psc or self.arr_pre != self.arr
+        if self.dier & UIE_UIF or preload_pending:
+            ahead.append(self.arr - self.cnt0 + 1)
+        for ch in range(4):
+            if self.dier >> (ch + 1) & 1 and self.ccr[ch] <= self.arr:
+                d = (self.ccr[ch] - self.cnt0) % span
                 ahead.append(d or span)
-        at = self.t0 + min(ahead) * self._tick()
-        self.event = self.clock.at(int(-(-at // 1)), self._due)
+        if not ahead:
+            return
+        at = self._after(min(ahead))
+        if at is not None:
+            self.event = self.clock.at(int(-(-at // 1)), self._due)
 
     def _due(self):
         self.event = None
-        if self._advance():
-            self._update_event(hardware=True)
-        for ch in range(4):
-            if self.cnt0 == self.ccr[ch]:
-                self.sr |= 1 << (ch + 1)
-                self.matches[ch] += 1
+        # The slaves count this timer's updates at its settings up to now,
+        # before an update here loads new ones.
+        for s in self.slaves:
+            s._advance()
+        self._advance()
         self._line()
         self._schedule()
+        for s in self.slaves:
+            s._schedule()
 
     def _update_event(self, hardware):
         """UEV: preloads take effect; UIF unless UG with URS set."""
@@ -89,16 +163,15 @@ class Timer(Block):
         self.updates += 1
         if hardware or not self.cr1 >> 2 & 1:
             self.sr |= 1
-        if self.cr2 >> 4 & 7 == 2 and self.on_trgo:
-            self.on_trgo()
 
     def _line(self):
         self.nvic.line(self.irq, bool(self.sr & self.dier & 0x5F))
 
     # --- registers -------------------------------------------------------------
     def read(self, offset):
+        self._advance()
+        self._line()
         if offset == 0x24:
-            self._advance()
             return self.cnt0
         return {
             0x00: self.cr1,
@@ -114,6 +187,9 @@ class Timer(Block):
         }.get(offset, self.ccr[(offset - 0x34) // 4] if 0x34 <= offset <= 0x40 else 0)
 
     def write(self, offset, value):
+        # A slave counts this timer's updates at its settings until now.
+        for s in self.slaves:
+            s._advance()
         self._advance()
         if offset == 0x00:
             self.cr1 = value & 0x3FF
@@ -130,6 +206,8 @@ class Timer(Block):
                 self.cnt0 = 0
                 self.t0 = Fraction(self.clock.now)
                 self._update_event(hardware=False)
+                for s in self.slaves:
+                    s._trigger_edge(self)
             self.sr |= value & 0x1E
         elif offset in (0x18, 0x1C):
             self.ccmr[(offset - 0x18) // 4] = value
@@ -148,3 +226,19 @@ class Timer(Block):
             self.ccr[(offset - 0x34) // 4] = value & self.top
         self._line()
         self._schedule()
+        for s in self.slaves:
+            s._schedule()
+
+    def _trigger_edge(self, master):
+        """A software update of `master` (EGR.UG) is one more input edge
+        when this timer counts its updates (psc 0)."""
+        if self.running and self._master() is master and self.psc == 0:
+            span = self.arr + 1
+            for ch in range(4):
+                if self.ccr[ch] == (self.cnt0 + 1) % span:
+                    self.sr |= 1 << (ch + 1)
+            if self.cnt0 == self.arr:
+                self._update_event(hardware=True)
+            self.cnt0 = (self.cnt0 + 1) % span
+            self._line()
+            self._schedule()

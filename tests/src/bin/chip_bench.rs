@@ -91,6 +91,10 @@ fn python(root: &Path, script: &str, args: &[&std::ffi::OsStr]) -> Result<Value>
     serde_json::from_slice(&out.stdout).with_context(|| format!("reading what {script} printed"))
 }
 
+/// The longest the laser may stay on for a measurement whose conversions
+/// never come (s).
+const LASER_STALL_S: f64 = 1.0;
+
 /// Virtual seconds the unmodified image runs on the board, and when the
 /// plant opens the E-STOP.
 const BOARD_SECONDS: &str = "3";
@@ -150,7 +154,7 @@ fn board_run(root: &Path, image: &Path) -> Result<Value> {
 fn usb_session(root: &Path, image: &Path) -> Result<Value> {
     use gonio_acquire::client::HeadClient;
     use gonio_acquire::target::Port;
-    use gonio_shared::icd::StatusEndpoint;
+    use gonio_shared::icd::{MeasureEndpoint, MeasureRequest, StatusEndpoint};
     use std::io::{BufRead, BufReader};
     use std::process::Stdio;
 
@@ -175,6 +179,7 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
                 // Two sessions: the port closed after the first, the cable
                 // then pulled and plugged back in (the board's host does it).
                 let mut seen = Vec::new();
+                let mut measure = None;
                 for session in 1..=2 {
                     let head = HeadClient::connect(&Port(path.clone()))
                         .await
@@ -184,11 +189,28 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
                         .request::<StatusEndpoint>(&())
                         .await
                         .with_context(|| format!("session {session}: status"))?;
+                    if session == 1 {
+                        // A measurement with no light on the photodiode's
+                        // converter: the board models no ADC or DMA yet, so
+                        // no conversion ever arrives. The head must give up,
+                        // say so, and turn the laser off.
+                        let sent = std::time::Instant::now();
+                        let r = tokio::time::timeout(
+                            std::time::Duration::from_secs(15),
+                            head.request::<MeasureEndpoint>(&MeasureRequest { at: None }),
+                        )
+                        .await;
+                        measure = Some(match r {
+                            Err(_) => format!("no answer in {:.1} s", sent.elapsed().as_secs_f64()),
+                            Ok(Ok(_)) => "measured".to_string(),
+                            Ok(Err(e)) => format!("refused after {:.1} s: {e:#}", sent.elapsed().as_secs_f64()),
+                        });
+                    }
                     head.close().await;
                     seen.push((identity, status));
                     tokio::time::sleep(std::time::Duration::from_millis(500)).await;
                 }
-                seen.pop().context("no session")
+                anyhow::Ok((seen.pop().context("no session")?, measure))
             })
         });
     // The board prints its report when told to stop.
@@ -197,8 +219,48 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
     let mut rest = String::new();
     let _ = std::io::Read::read_to_string(&mut err, &mut rest);
     let report: Value = serde_json::from_slice(&out.stdout).with_context(|| format!("the board's report (stderr: {rest})"))?;
-    let (identity, status) = client.with_context(|| format!("the host's client on the board's port; the board: {}", report["usb"]))?;
+    let ((identity, status), measure) =
+        client.with_context(|| format!("the host's client on the board's port; the board: {}", report["usb"]))?;
+    // The laser enable's high stretches, from the board's pin log (s).
+    let mut laser = Vec::new();
+    let mut on = None;
+    for p in report["pins"].as_array().into_iter().flatten().filter(|p| p["pin"] == "PB0") {
+        let t = p["t"].as_f64().unwrap_or(f64::NAN);
+        match (p["level"].as_u64(), on) {
+            (Some(1), None) => on = Some(t),
+            (Some(0), Some(from)) => {
+                laser.push(json!([from, t]));
+                on = None;
+            }
+            _ => {}
+        }
+    }
+    if let Some(from) = on {
+        laser.push(json!([from, null]));
+    }
+    let mut problems = Vec::new();
+    if !report["stopped"].as_str().is_some_and(|s| s.starts_with("stopped")) {
+        problems.push(format!("the board stopped: {}", report["stopped"]));
+    }
+    if !measure.as_deref().is_some_and(|m| m.starts_with("refused")) {
+        problems.push(format!("a measurement with no conversions: {measure:?} (it must be refused)"));
+    }
+    // The laser is on for a measurement only: every stretch ends, within
+    // the second a stalled conversion chain may take to be given up.
+    let longest = laser
+        .iter()
+        .map(|s| s[1].as_f64().map_or(f64::INFINITY, |off| off - s[0].as_f64().unwrap_or(0.0)))
+        .fold(0.0, f64::max);
+    if longest > LASER_STALL_S {
+        problems.push(format!("the laser stayed on {longest} s (bar {LASER_STALL_S} s): {laser:?}"));
+    }
+    if !problems.is_empty() {
+        bail!("the image over USB on the virtual board: {}", problems.join("; "));
+    }
     Ok(json!({
+        "measure_without_conversions": measure,
+        "laser_on_stretches_s": laser,
+        "laser_on_longest_s": longest,
         "identity": {
             "board": identity.board.as_str(),
             "serial": identity.serial.as_str(),
@@ -207,7 +269,7 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
             "protocol_version": identity.protocol_version,
         },
         "status": { "state": format!("{:?}", status.state), "laser_on": status.laser_on, "drivers_enabled": status.drivers_enabled, "estop_open": status.estop_open },
-        "board": { "stopped": report["stopped"], "virtual_seconds": report["virtual_seconds"], "host_seconds": report["host_seconds"], "interrupts": report["interrupts"], "usb": report["usb"], "unsafe": report["unsafe"] },
+        "board": { "stack_bytes_max": report["stack_bytes_max"], "busiest_functions": report["busiest_functions"], "busiest_registers": report["busiest_registers"], "instructions": report["instructions"], "stopped": report["stopped"], "virtual_seconds": report["virtual_seconds"], "host_seconds": report["host_seconds"], "interrupts": report["interrupts"], "usb": report["usb"], "unsafe": report["unsafe"] },
     }))
 }
 
@@ -328,6 +390,7 @@ fn main() -> Result<()> {
             "interrupts": board["interrupts"],
             "watchdog": board["watchdog"],
             "driven_at_end": board["driven_at_end"],
+            "stack_bytes_max": board["stack_bytes_max"],
         },
         "usb_session": usb,
         "bars": {

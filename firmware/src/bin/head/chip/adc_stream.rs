@@ -6,6 +6,7 @@
 //! the ring buffer reports an overrun when the core falls behind, and the core
 //! flags the sample.
 
+use embassy_futures::select::{select, Either};
 use embassy_stm32::adc::{Adc, RxDma, SampleTime};
 use embassy_stm32::dma::{ReadableRingBuffer, TransferOptions};
 use embassy_stm32::gpio::{Flex, OutputType};
@@ -15,6 +16,7 @@ use embassy_stm32::timer::low_level::{MasterMode, OutputCompareMode, SlaveMode, 
 use embassy_stm32::timer::simple_pwm::PwmPin;
 use embassy_stm32::timer::{Ch1, Channel};
 use embassy_stm32::Peri;
+
 use gonio_firmware::demod::MAX_M;
 use gonio_firmware::hw::{AdcStream, ChopTiming, Overrun};
 use static_cell::StaticCell;
@@ -34,6 +36,8 @@ pub struct TimedAdc {
     sample_clock: Timer<'static, TIM2>,
     chop: Timer<'static, TIM3>,
     running: bool,
+    /// How long a period may take before the chain counts as stopped (µs).
+    stall_us: u64,
     // Kept so the ADC clock and the pins stay configured.
     _adc: Adc<'static, ADC1>,
     _input: Flex<'static>,
@@ -85,6 +89,7 @@ impl TimedAdc {
             sample_clock,
             chop,
             running: false,
+            stall_us: 0,
             _adc: adc,
             _input: input,
             _chop_pin: chop_pin,
@@ -100,6 +105,10 @@ impl AdcStream for TimedAdc {
     fn start(&mut self, t: ChopTiming) {
         self.stop();
         let m = t.samples_per_period.max(2) as u32;
+        // The ring's length plus one period, in µs of the timer clock, and
+        // a millisecond for the DMA's interrupt and the executor.
+        let samples = (2 * MAX_M) as u64 + m as u64;
+        self.stall_us = samples * t.ticks_per_sample.max(2) as u64 * 1_000_000 / Self::TIMER_HZ as u64 + 1_000;
         self.sample_clock.regs_core().psc().write_value(0);
         self.sample_clock.set_max_compare_value(t.ticks_per_sample.max(2) - 1);
         self.sample_clock.regs_core().cnt().write(|w| w.set_cnt(0));
@@ -148,10 +157,25 @@ impl AdcStream for TimedAdc {
         self.running = false;
     }
 
+    /// A period that has not arrived when the whole ring could have filled
+    /// once more means the chain stopped (a trigger, conversion or transfer
+    /// that no longer comes): the stream stops, chop dark, and this and every
+    /// later read until the next `start` fail at once, so the core ends the
+    /// measurement and turns the laser off (it reports it as a lost block,
+    /// `Fault::AdcOverrun` on the second). Without it the read waited for
+    /// ever with the laser on: on the virtual board, whose converter had no
+    /// model, a measurement held the laser on until the host gave up (15 s)
+    /// and closed the port.
     async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
         if !self.running {
             return Err(Overrun);
         }
-        self.ring.read_exact(out).await.map(|_| ()).map_err(|_| Overrun)
+        match select(self.ring.read_exact(out), embassy_time::Timer::after_micros(self.stall_us)).await {
+            Either::First(r) => r.map(|_| ()).map_err(|_| Overrun),
+            Either::Second(()) => {
+                self.stop();
+                Err(Overrun)
+            }
+        }
     }
 }

@@ -17,6 +17,7 @@ use embassy_time::Timer;
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::hw::{Board, Clock, Hardware};
 use gonio_firmware::Head;
+use static_cell::StaticCell;
 use step_timer::StepTimer5;
 use {defmt_rtt as _, panic_probe as _};
 
@@ -73,6 +74,18 @@ fn clocks() -> Config {
     config
 }
 
+/// The head lives in a static, built in a function of its own. Built in
+/// `main`, its temporaries made `main`'s poll frame 31 KiB, and every
+/// request is handled on top of that frame: with a measurement's frames
+/// (handle 13 KiB, measure_checked 16 KiB, accumulate 6 KiB) the first
+/// measurement overflowed the 64 KiB stack. The virtual board found it
+/// (`chip-bench`, `usb_session`).
+#[inline(never)]
+fn make_head(hw: Hardware<Stm32Board>, info: HeadInfo) -> &'static mut Head<Stm32Board> {
+    static HEAD: StaticCell<Head<Stm32Board>> = StaticCell::new();
+    HEAD.init(Head::new(gonio_firmware::config::REFERENCE, hw, info))
+}
+
 #[embassy_executor::main]
 async fn main(spawner: Spawner) {
     let p = embassy_stm32::init(clocks());
@@ -108,7 +121,7 @@ async fn main(spawner: Spawner) {
         simulated: false,
         protocol_version: gonio_shared::PROTOCOL_VERSION,
     };
-    let mut head = Head::new(gonio_firmware::config::REFERENCE, hw, info);
+    let head = make_head(hw, info);
     if restarted_by_watchdog {
         head.restarted_by(gonio_shared::Fault::WatchdogReset);
     }
