@@ -17,7 +17,9 @@ return, B1.5.18 WFE):
 - on return a pending exception that would preempt the context returned to
   is taken at once without unstacking (tail-chaining);
 - WFE clears the event register if set, else sleeps until an exception is
-  taken; SEV sets it (the executor's pender is SEV alone).
+  taken; SEV and every exception return set it;
+- a pending interrupt masked by PRIMASK is taken right after the `cpsie i`
+  or `msr PRIMASK` that unmasks it.
 
 Time: one cycle per instruction, counted per translated block (count.c);
 sleep skips to the next event of the clock."""
@@ -63,6 +65,10 @@ class Core:
             for off in range(0, len(blob) - 1, 2):
                 half = blob[off] | blob[off + 1] << 8
                 hook = {WFE: self._on_wfe, WFI: self._on_wfe, SEV: self._on_sev, CPSIE_I: self._on_cpsie}.get(half)
+                # `msr PRIMASK, rN` (F38n 8810): how cortex-m's critical
+                # sections end, restoring the mask they found.
+                if half & 0xFFF0 == 0xF380 and off + 3 < len(blob) and blob[off + 2] | blob[off + 3] << 8 == 0x8810:
+                    hook = self._on_msr_primask
                 # A half-word inside a 32-bit instruction is never where an
                 # instruction starts, so its hook never fires.
                 if hook:
@@ -89,6 +95,17 @@ class Core:
         if self.nvic.best_pending() is not None:
             uc.reg_write(arm.UC_ARM_REG_PRIMASK, 0)
             uc.reg_write(arm.UC_ARM_REG_PC, (address + 2) | 1)
+            self.stop_reason = "unmasked"
+            uc.emu_stop()
+
+    def _on_msr_primask(self, uc, address, size, _user):
+        """Unmasking with a pending interrupt: done here, and the interrupt
+        taken right after the instruction, as on silicon."""
+        rn = uc.mem_read(address, 2)[0] & 0xF
+        value = uc.reg_read(arm.UC_ARM_REG_R0 + rn) if rn < 13 else 0
+        if not value & 1 and self.nvic.best_pending() is not None:
+            uc.reg_write(arm.UC_ARM_REG_PRIMASK, 0)
+            uc.reg_write(arm.UC_ARM_REG_PC, (address + 4) | 1)
             self.stop_reason = "unmasked"
             uc.emu_stop()
 
@@ -185,11 +202,14 @@ class Core:
         if leaving < 0:
             raise Fault(f"return from exception {leaving + EXTERNAL}: only interrupts are taken here")
         self.nvic.leave(leaving)
-        to_thread = exc_return & 0xF != 0x1
-        # Tail-chaining: the next exception would preempt what is returned to.
-        limit = self.nvic.running_priority() if not to_thread else 256
+        # An exception return sets the event register (B1.5.18).
+        self.event = True
+        # Tail-chaining: the next exception would preempt what is returned
+        # to (its active exceptions, PRIMASK, BASEPRI); a new entry clears
+        # FPCA, the stacked frame staying the one EXC_RETURN describes.
         best = self.nvic.best_pending()
-        if best is not None and best[0] < limit:
+        if best is not None and best[0] < self._execution_priority():
+            uc.reg_write(arm.UC_ARM_REG_CONTROL, uc.reg_read(arm.UC_ARM_REG_CONTROL) & ~4)
             self._dispatch(best[1], exc_return)
             uc.emu_stop()
             self.stop_reason = "tail-chain"

@@ -113,6 +113,9 @@ class Nvic(Block):
             self._apply(self.pending, offset, 0x200, value, True)
         elif 0x280 <= offset < 0x2A0:
             self._apply(self.pending, offset, 0x280, value, False)
+            # A line still asserted stays pending (PM0214 §4.2.4).
+            for irq in range(IRQS):
+                self.pending[irq] = self.pending[irq] or self.level[irq]
         elif 0x400 <= offset < 0x400 + IRQS:
             for k in range(4):
                 if offset - 0x400 + k < IRQS:

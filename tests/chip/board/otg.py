@@ -90,8 +90,9 @@ class OtgFs(Block):
     def daint(self):
         v = 0
         for n in range(ENDPOINTS):
-            txfe = 1 << 7 if not self.tx[n] and self.diepempmsk >> n & 1 else 0
-            if self.ins[n].int & (self.diepmsk | txfe):
+            # TXFE (bit 7) is the FIFO's state, enabled by DIEPEMPMSK.
+            ints = self.ins[n].int | (1 << 7 if not self.tx[n] else 0)
+            if ints & (self.diepmsk | (1 << 7 if self.diepempmsk >> n & 1 else 0)):
                 v |= 1 << n
             if self.outs[n].int & self.doepmsk:
                 v |= 1 << (16 + n)

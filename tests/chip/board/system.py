@@ -72,14 +72,17 @@ class Iwdg(Block):
         self.expiry = None
         self.reloads = []  # cycles of every reload
 
-    def _period(self):
-        return (4 << self.pr) * (self.rlr + 1) * HZ // self.LSI_HZ
+    def _period(self, count=None):
+        """Cycles to count `count` (RLR's) down to 0: LSI over 4·2^PR, at most
+        256."""
+        count = self.rlr if count is None else count
+        return min(4 << self.pr, 256) * (count + 1) * HZ // self.LSI_HZ
 
-    def _arm(self):
+    def _arm(self, count=None):
         if self.expiry:
             self.expiry.cancel()
         self.reloaded_at = self.clock.now
-        self.expiry = self.clock.at(self.clock.now + self._period(), self.on_expiry)
+        self.expiry = self.clock.at(self.clock.now + self._period(count), self.on_expiry)
 
     def read(self, offset):
         return {0x04: self.pr, 0x08: self.rlr}.get(offset, 0)
@@ -87,9 +90,9 @@ class Iwdg(Block):
     def write(self, offset, value):
         value &= 0xFFFF
         if offset == 0x00:
-            if value == 0xCCCC:
+            if value == 0xCCCC:  # the count starts from its reset value, 0xFFF
                 self.running = True
-                self._arm()
+                self._arm(0xFFF)
             elif value == 0xAAAA and self.running:
                 self.reloads.append(self.clock.now)
                 self._arm()

@@ -157,7 +157,10 @@ class Timer(Block):
             s._schedule()
 
     def _update_event(self, hardware):
-        """UEV: preloads take effect; UIF unless UG with URS set."""
+        """UEV: preloads take effect; UIF unless UG with URS set. UDIS
+        suppresses it (a UG still restarts the counter)."""
+        if self.cr1 >> 1 & 1:
+            return
         self.psc = self.psc_pre
         self.arr = self.arr_pre
         self.updates += 1
@@ -169,6 +172,9 @@ class Timer(Block):
 
     # --- registers -------------------------------------------------------------
     def read(self, offset):
+        # Its settings may change after this, its slaves must have counted.
+        for s in self.slaves:
+            s._advance()
         self._advance()
         self._line()
         if offset == 0x24:
