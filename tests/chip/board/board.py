@@ -140,6 +140,7 @@ class Board:
         if self.stop_requested and reason == "time":
             reason = "stopped (SIGTERM)"
         reloads = self.iwdg.reloads
+        driven = self.driven_pins()
         gaps = [b - a for a, b in zip(reloads, reloads[1:])]
         return {
             "stopped": reason,
@@ -154,9 +155,9 @@ class Board:
                 "timeout_s": self.iwdg._period() / HZ,
             },
             "pins": [{"t": round(t, 9), "pin": p, "level": v} for t, p, v in self.pins],
-            "driven_at_end": self.driven_pins(),
+            "driven_at_end": driven,
             "unsafe": [{"t": round(t, 9), "pin": p, "level": v} for t, p, v in self.pins if SAFE.get(p, v) != v],
-            "safe_at_end": all(self.driven_pins().get(p) == v for p, v in SAFE.items()),
+            "safe_at_end": all(driven.get(p) == v for p, v in SAFE.items()),
             "first_sleep_instructions": self.core.first_sleep,
             # The stack is the 64 KiB of CCM RAM below 0x1001_0000 (memory.x).
             "stack_bytes_max": 0x1001_0000 - self.machine.counter.lowest_sp,

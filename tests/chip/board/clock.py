@@ -30,9 +30,6 @@ class Clock:
     def now(self):
         return self.base + self.executed()
 
-    def seconds(self):
-        return self.now / HZ
-
     def at(self, cycle, action):
         """Calls `action()` once the clock reaches `cycle` (never earlier
         than now)."""

@@ -54,7 +54,7 @@ class Core:
         self.clock = clock
         self.event = False  # the event register
         self.sleeping = False
-        self.stop_reason = None
+        self._running = False  # inside `emu_start`
         self.instructions = 0
         self.first_sleep = None  # instructions from reset to the first idle wait
         clock.executed = lambda: self.m.executed - self._run_start
@@ -87,7 +87,6 @@ class Core:
             self.sleeping = True
             if self.first_sleep is None:
                 self.first_sleep = self.instructions + self.m.executed - self._run_start
-            self.stop_reason = "sleep"
             uc.emu_stop()
         uc.reg_write(arm.UC_ARM_REG_PC, (address + 2) | 1)
 
@@ -95,7 +94,6 @@ class Core:
         if self.nvic.best_pending() is not None:
             uc.reg_write(arm.UC_ARM_REG_PRIMASK, 0)
             uc.reg_write(arm.UC_ARM_REG_PC, (address + 2) | 1)
-            self.stop_reason = "unmasked"
             uc.emu_stop()
 
     def _on_msr_primask(self, uc, address, size, _user):
@@ -106,7 +104,6 @@ class Core:
         if not value & 1 and self.nvic.best_pending() is not None:
             uc.reg_write(arm.UC_ARM_REG_PRIMASK, 0)
             uc.reg_write(arm.UC_ARM_REG_PC, (address + 4) | 1)
-            self.stop_reason = "unmasked"
             uc.emu_stop()
 
     def _on_interrupt(self, uc, intno, _user):
@@ -119,10 +116,7 @@ class Core:
         """A peripheral or a register write changed what may be taken: end
         the current run so that it is taken at this instruction."""
         if self.nvic.best_pending() is not None and self._running:
-            self.stop_reason = "interrupt"
             self.uc.emu_stop()
-
-    _running = False
 
     # --- exceptions ----------------------------------------------------------
     def _current_exception(self):
@@ -137,10 +131,6 @@ class Core:
             p = min(p, self.nvic.group(basepri))
         return p
 
-    def _can_take(self, priority_limit):
-        best = self.nvic.best_pending()
-        return best[1] if best is not None and best[0] < priority_limit else None
-
     def _vector(self, exception):
         address = self.nvic.vtor + 4 * exception
         if address < 0x10_0000:
@@ -150,14 +140,9 @@ class Core:
 
     def take_pending(self):
         """Takes the pending exception that may preempt now, if any."""
-        uc = self.uc
-        if uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1:
-            return False
-        irq = self._can_take(self._execution_priority())
-        if irq is None:
-            return False
-        self._enter(irq)
-        return True
+        best = self.nvic.best_pending()
+        if best is not None and best[0] < self._execution_priority():
+            self._enter(best[1])
 
     def _enter(self, irq):
         uc = self.uc
@@ -212,7 +197,6 @@ class Core:
             uc.reg_write(arm.UC_ARM_REG_CONTROL, uc.reg_read(arm.UC_ARM_REG_CONTROL) & ~4)
             self._dispatch(best[1], exc_return)
             uc.emu_stop()
-            self.stop_reason = "tail-chain"
             return
         fp = not exc_return & 0x10
         sp = uc.reg_read(arm.UC_ARM_REG_MSP)
@@ -234,7 +218,6 @@ class Core:
         uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
         # What the return unmasked may be taken now.
         if self.nvic.best_pending() is not None:
-            self.stop_reason = "returned"
             uc.emu_stop()
 
     # --- running -------------------------------------------------------------
@@ -255,7 +238,6 @@ class Core:
             nxt = clock.next()
             budget = min(until, nxt if nxt is not None else until, clock.now + SLICE) - clock.now
             self._run_start = self.m.executed
-            self.stop_reason = None
             self._running = True
             try:
                 self.uc.emu_start(self.pc, 0xFFFF_FFFF, count=max(budget, 1))

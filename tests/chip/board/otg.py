@@ -72,7 +72,6 @@ class OtgFs(Block):
         self.dcfg = 0
         self.dctl = 1 << 1  # SDIS: soft-disconnected until the driver connects
         self.frame = 0
-        self.enumerated = False
         self.ins = [Endpoint() for _ in range(ENDPOINTS)]
         self.outs = [Endpoint() for _ in range(ENDPOINTS)]
         self.rx = []  # entries (status word, [data words])
@@ -125,7 +124,6 @@ class OtgFs(Block):
         FIFOs are cleared (a choice: RM0090 leaves them to the driver, whose
         reset handling flushes the FIFOs but would wait on a stale EPENA)."""
         self.dcfg &= ~(0x7F << 4)
-        self.enumerated = False
         for n in range(ENDPOINTS):
             self.ins[n].ctl &= ~EPENA
             self.tx[n].clear()
@@ -136,7 +134,6 @@ class OtgFs(Block):
 
     def reset_done(self):
         self.gintsts |= 1 << ENUMDNE
-        self.enumerated = True
         self.update()
 
     def suspend(self):
@@ -294,6 +291,7 @@ class OtgFs(Block):
         return self.regs.get(offset, 0)
 
     def write(self, offset, value):
+        ep = self._ep(offset)
         if offset >= 0x1000:
             n = offset // 0x1000 - 1
             if n < ENDPOINTS:
@@ -330,8 +328,8 @@ class OtgFs(Block):
             self.daintmsk = value
         elif offset == 0x834:
             self.diepempmsk = value
-        elif self._ep(offset):
-            eps, n, r = self._ep(offset)
+        elif ep:
+            eps, n, r = ep
             e = eps[n]
             if r == 0x00:
                 keep = e.ctl & (NAKSTS | EPENA)

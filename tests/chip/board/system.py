@@ -68,7 +68,6 @@ class Iwdg(Block):
         self.pr, self.rlr = 0, 0xFFF
         self.unlocked = False
         self.running = False
-        self.reloaded_at = 0
         self.expiry = None
         self.reloads = []  # cycles of every reload
 
@@ -81,7 +80,6 @@ class Iwdg(Block):
     def _arm(self, count=None):
         if self.expiry:
             self.expiry.cancel()
-        self.reloaded_at = self.clock.now
         self.expiry = self.clock.at(self.clock.now + self._period(count), self.on_expiry)
 
     def read(self, offset):

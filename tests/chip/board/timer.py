@@ -42,8 +42,6 @@ class Timer(Block):
         self.event = None
         self.triggers = {}  # ITRx → the master timer
         self.slaves = []
-        self.updates = 0
-        self.matches = [0, 0, 0, 0]
 
     # --- the counter's input ----------------------------------------------------
     @property
@@ -117,7 +115,6 @@ class Timer(Block):
         for ch in range(4):
             if self.ccr[ch] <= self.arr and (k >= span or (self.ccr[ch] - old - 1) % span < k):
                 self.sr |= 1 << (ch + 1)
-                self.matches[ch] += 1
         wrapped = old + k > self.arr
         self.cnt0 = (old + k) % span
         if wrapped:
@@ -163,7 +160,6 @@ class Timer(Block):
             return
         self.psc = self.psc_pre
         self.arr = self.arr_pre
-        self.updates += 1
         if hardware or not self.cr1 >> 2 & 1:
             self.sr |= 1
 

@@ -38,7 +38,6 @@ class Host:
         self.descriptor = None
         self.configuration = None
         self.state = "detached"
-        self.received = bytearray()  # what came from bulk IN when no stream
         self.error = None
         self.sessions = 0
         # After each session, unplug the cable and plug it back in.
@@ -189,13 +188,12 @@ class Host:
             status, data = self.otg.in_(CDC_IN)
             if status == "ACK":
                 busy = True
+                # Without a stream, what the device sends is dropped.
                 if self.stream is not None:
                     try:
                         os.write(self.stream, data)
                     except OSError:
                         pass
-                else:
-                    self.received += data
             elif status == "STALL":
                 raise HostError("bulk IN stalled")
             self.otg.start_of_frame()

@@ -171,14 +171,13 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
     err.read_line(&mut line).context("reading the board's pseudo-terminal")?;
     let path = line.strip_prefix("pty ").map(str::trim).map(str::to_string);
     let client = path
-        .clone()
         .context(format!("the board printed {line:?}, not its pseudo-terminal"))
         .and_then(|path| {
             let rt = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
             rt.block_on(async {
                 // Two sessions: the port closed after the first, the cable
                 // then pulled and plugged back in (the board's host does it).
-                let mut seen = Vec::new();
+                let mut last = None;
                 let mut measure = None;
                 for session in 1..=2 {
                     let head = HeadClient::connect(&Port(path.clone()))
@@ -207,10 +206,10 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
                         });
                     }
                     head.close().await;
-                    seen.push((identity, status));
+                    last = Some((identity, status));
                     tokio::time::sleep(std::time::Duration::from_millis(500)).await;
                 }
-                anyhow::Ok((seen.pop().context("no session")?, measure))
+                anyhow::Ok((last.context("no session")?, measure))
             })
         });
     // The board prints its report when told to stop.

@@ -99,6 +99,8 @@ pub enum TermOrder {
 #[derive(Debug, Clone, PartialEq)]
 pub struct Basis {
     pub degree: usize,
+    /// The order its terms are in (what a fitted function records).
+    pub order: TermOrder,
     terms: Vec<[usize; 3]>,
 }
 
@@ -135,7 +137,7 @@ impl Basis {
             }
         }
         terms.truncate(count.max(1));
-        Basis { degree, terms }
+        Basis { degree, order, terms }
     }
 
     /// The total degree of the last of the first `count` terms.

@@ -4,7 +4,7 @@
 //! highest degree the spec and the samples allow; each count is one
 //! programme (`qp`).
 
-use super::basis::{coordinates, Basis, Domain, TermOrder};
+use super::basis::{coordinates, Basis, Domain};
 use super::function::Rational;
 use super::qp::{self, Outcome, Row};
 use super::segments::{sample_text, SegmentSource, Segments};
@@ -165,7 +165,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
                     degree: basis.degree,
                     cosine: spec.cosine,
                     domain,
-                    order: TermOrder::Alta,
+                    order: basis.order,
                     numerator: p.iter().map(|c| c * scale).collect(),
                     denominator: q,
                 };

@@ -58,7 +58,7 @@ fn grid_size(degree: usize) -> usize {
 /// Solves the programme of `basis` for `rows`.
 pub fn solve(basis: &Basis, rows: &[Row]) -> Result<Outcome> {
     let mut c = Constraints::new(basis, rows);
-    let samples = 2 * rows.len();
+    let samples = c.samples;
     let sample_of = |row: usize| (row < samples).then_some(row / 2);
     let steps = STEPS_PER_UNKNOWN * c.n;
     match active_set::solve(&mut c, steps, 1.0 / MIN_MARGIN) {
@@ -170,9 +170,14 @@ impl Constraints {
         }
     }
 
+    /// A point's terms (unit norm).
+    fn terms_of(&self, point: usize) -> &[f64] {
+        &self.terms[point * self.k..(point + 1) * self.k]
+    }
+
     /// A point's terms against the numerator and the denominator.
     fn products(&self, point: usize, x: &[f64]) -> (f64, f64) {
-        let t = &self.terms[point * self.k..(point + 1) * self.k];
+        let t = self.terms_of(point);
         let (p, q) = x.split_at(self.k);
         let tp: f64 = t.iter().zip(p).map(|(t, x)| t * x).sum();
         let tq: f64 = t.iter().zip(q).map(|(t, x)| t * x).sum();
@@ -204,7 +209,7 @@ impl HalfSpaces for Constraints {
 
     fn normal(&self, i: usize, out: &mut [f64]) {
         let (point, [a, b], _) = self.rows[i];
-        let t = &self.terms[point * self.k..(point + 1) * self.k];
+        let t = self.terms_of(point);
         let (p, q) = out.split_at_mut(self.k);
         p.iter_mut().zip(t).for_each(|(o, t)| *o = a * t);
         q.iter_mut().zip(t).for_each(|(o, t)| *o = b * t);

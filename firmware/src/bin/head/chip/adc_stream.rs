@@ -162,10 +162,8 @@ impl AdcStream for TimedAdc {
     /// that no longer comes): the stream stops, chop dark, and this and every
     /// later read until the next `start` fail at once, so the core ends the
     /// measurement and turns the laser off (it reports it as a lost block,
-    /// `Fault::AdcOverrun` on the second). Without it the read waited for
-    /// ever with the laser on: on the virtual board, whose converter had no
-    /// model, a measurement held the laser on until the host gave up (15 s)
-    /// and closed the port.
+    /// `Fault::AdcOverrun` on the second), instead of waiting for ever with
+    /// the laser on.
     async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
         if !self.running {
             return Err(Overrun);

@@ -74,12 +74,11 @@ fn clocks() -> Config {
     config
 }
 
-/// The head lives in a static, built in a function of its own. Built in
-/// `main`, its temporaries made `main`'s poll frame 31 KiB, and every
-/// request is handled on top of that frame: with a measurement's frames
-/// (handle 13 KiB, measure_checked 16 KiB, accumulate 6 KiB) the first
-/// measurement overflowed the 64 KiB stack. The virtual board found it
-/// (`chip-bench`, `usb_session`).
+/// The head lives in a static, built in a function of its own: `main`'s
+/// poll frame, which every request is handled on top of, then holds none
+/// of its temporaries (31 KiB when built in `main`, enough for a
+/// measurement's frames to overflow the 64 KiB stack; `chip-bench`'s
+/// `board.stack_bytes_max` measures the image's deepest stack).
 #[inline(never)]
 fn make_head(hw: Hardware<Stm32Board>, info: HeadInfo) -> &'static mut Head<Stm32Board> {
     static HEAD: StaticCell<Head<Stm32Board>> = StaticCell::new();

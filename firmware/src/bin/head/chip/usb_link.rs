@@ -37,9 +37,8 @@ static TX: Channel<CriticalSectionRawMutex, Frame, 8> = Channel::new();
 /// Sessions started since boot: each start and each end is signalled with
 /// the session's number, so that an end nobody was serving (a bus reset or
 /// suspend while the head waited between sessions) cannot end the next
-/// one. Without the number the virtual board showed it: after the port was
-/// closed and the cable pulled and plugged back, the next session's first
-/// request met that stale end, and the head never answered again.
+/// one: it would meet that session's first request, and the head would
+/// not answer again until the next re-plug.
 static SESSION: AtomicU32 = AtomicU32::new(0);
 static DISCONNECTED: Signal<CriticalSectionRawMutex, u32> = Signal::new();
 static CONNECTED: Signal<CriticalSectionRawMutex, u32> = Signal::new();
