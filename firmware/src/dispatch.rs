@@ -3,7 +3,7 @@
 //! fuzzers hit. Keys are matched at the width the host chose (postcard-rpc
 //! shrinks keys when unambiguous) and replies use the same width.
 
-use gonio_shared::icd::{AbortEndpoint, HomeRequest, MeasureRequest, PauseEndpoint};
+use gonio_shared::icd::{AbortEndpoint, HomeRequest, MeasureRequest, PauseEndpoint, StatusEndpoint};
 use gonio_shared::wire::{check, key_is};
 use gonio_shared::{DetectionSettings, Geometry, LearnRequest, SafetySettings, SanityConfig, ScanSpec, VisitChunk};
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
@@ -24,12 +24,16 @@ pub enum DecodeError {
 /// What a request that arrives in the middle of an operation asks for,
 /// read from its key alone (a frame that fails its check or its header is
 /// [`Midway::Other`] and meets the full decoder later).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy)]
 pub enum Midway {
     /// Stop what runs.
     Abort,
     /// Hold the running scan.
     Pause,
+    /// A status poll, answered at once with this sequence number and key
+    /// width: the host polls to show it is there and expects an answer
+    /// within seconds, and an operation (homing) can last minutes.
+    Status(VarSeq, VarKeyKind),
     Other,
 }
 
@@ -41,6 +45,8 @@ pub fn midway(sealed: &[u8]) -> Midway {
         Midway::Abort
     } else if is::<PauseEndpoint>(&hdr.key) {
         Midway::Pause
+    } else if is::<StatusEndpoint>(&hdr.key) {
+        Midway::Status(hdr.seq_no, hdr.key.kind())
     } else {
         Midway::Other
     }

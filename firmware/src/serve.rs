@@ -7,8 +7,10 @@
 //! a silent host or an open E-STOP ends the race at once; the operation is
 //! dropped where it stands, the laser goes off in the state table's
 //! transition, and the motion decelerates from its current speed
-//! ([`Head::stop`]). Other requests that arrive meanwhile are kept and
-//! answered when the operation ends.
+//! ([`Head::stop`]). A status poll is answered at once, from the head's
+//! state as the operation began (the operation owns the head: its axes are
+//! where it started, its state is the operation's); other requests that
+//! arrive meanwhile are kept and answered when the operation ends.
 
 use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
 use crate::head::Head;
@@ -26,16 +28,16 @@ use gonio_shared::icd::{
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::wire::check;
 use gonio_shared::wire::framing::MAX_FRAME;
-use gonio_shared::{Fault, Reply, ScanEvent, Status, Visit};
+use gonio_shared::{Fault, HeadState, Reply, ScanEvent, Status, Visit};
 use heapless::{Deque, Vec};
-use postcard_rpc::header::VarSeq;
+use postcard_rpc::header::{VarKeyKind, VarSeq};
 use postcard_rpc::standard_icd::{WireError, ERROR_KEY};
 use postcard_rpc::{Endpoint, Key, Topic};
 use serde::Serialize;
 
-/// Requests kept while an operation runs (status polls, mostly); beyond
-/// them a request is dropped (the host's timeout covers it), but the link is
-/// still read, so an abort, a pause or a closed link is seen at once.
+/// Requests kept while an operation runs; beyond them a request is dropped
+/// (the host's timeout covers it), but the link is still read, so an
+/// abort, a pause, a status poll or a closed link is seen at once.
 const HELD: usize = 16;
 
 /// How long the E-STOP input must read closed before continuing re-arms
@@ -82,8 +84,10 @@ enum Trip {
 }
 
 /// Watches the link, the E-STOP input and the host timer while an operation
-/// runs; returns what stops it. Requests other than abort (and pause, when
-/// `pause` trips) are held for later; every frame shows the host is there.
+/// runs; returns what stops it. A status poll is answered with `status`
+/// (its uptime and E-STOP input read now); requests other than abort (and
+/// pause, when `pause` trips) are held for later; every frame shows the
+/// host is there.
 async fn watch<L: Link, S: Sentry>(
     link: &mut L,
     sentry: &mut S,
@@ -91,6 +95,7 @@ async fn watch<L: Link, S: Sentry>(
     heard: &mut u64,
     silence_us: Option<u64>,
     pause: bool,
+    status: &Status,
 ) -> Trip {
     loop {
         sentry.alive();
@@ -108,13 +113,23 @@ async fn watch<L: Link, S: Sentry>(
                 *heard = sentry.now_us();
                 let frame = inbox.frame(n);
                 match midway(&frame) {
-                    kind @ (Midway::Abort | Midway::Pause) if pause || kind == Midway::Abort => {
+                    kind @ (Midway::Abort | Midway::Pause) if pause || matches!(kind, Midway::Abort) => {
                         // Room is made for it: it is answered first.
                         if inbox.held.is_full() {
                             inbox.held.pop_back();
                         }
                         let _ = inbox.held.push_front(frame);
                         return Trip::Request(kind);
+                    }
+                    Midway::Status(seq, kind) => {
+                        let now = Status {
+                            uptime_us: sentry.now_us(),
+                            estop_open: sentry.estop_open(),
+                            ..*status
+                        };
+                        if send_keyed(kind, StatusEndpoint::RESP_KEY, seq, &now, link).await.is_err() {
+                            return Trip::LinkLost;
+                        }
                     }
                     _ => {
                         let _ = inbox.held.push_back(frame);
@@ -226,17 +241,24 @@ impl<B: Board> Head<B> {
 
     /// Runs `op` under watch; `Err` says what stopped it (the operation was
     /// dropped where it stood: [`Head::tripped`] makes the head safe).
+    /// Status polls meanwhile are answered with the state `busy` (the
+    /// operation's; `None`: the head's own, a scan's).
     async fn guarded<T, L: Link, S: Sentry>(
         &mut self,
         link: &mut L,
         sentry: &mut S,
         inbox: &mut Inbox,
         pause: bool,
+        busy: Option<HeadState>,
         op: impl AsyncFnOnce(&mut Self) -> T,
     ) -> Result<T, Trip> {
         let silence = self.host_timeout_us();
         let mut heard = self.last_heard_us;
-        let r = select(op(self), watch(link, sentry, inbox, &mut heard, silence, pause)).await;
+        let mut status = self.status();
+        if let Some(state) = busy {
+            status.state = state;
+        }
+        let r = select(op(self), watch(link, sentry, inbox, &mut heard, silence, pause, &status)).await;
         self.last_heard_us = heard;
         match r {
             Either::First(v) => Ok(v),
@@ -251,7 +273,11 @@ impl<B: Board> Head<B> {
         let (event, fault) = match trip {
             Trip::Request(kind) => {
                 // Only a scan is paused, and only a scan point trips on it.
-                let event = if kind == Midway::Pause { Event::Pause } else { Event::Abort };
+                let event = if matches!(kind, Midway::Pause) {
+                    Event::Pause
+                } else {
+                    Event::Abort
+                };
                 (event, Fault::Aborted)
             }
             Trip::LinkLost => (Event::LinkLost, Fault::LinkLost),
@@ -276,15 +302,17 @@ impl<B: Board> Head<B> {
         }
     }
 
-    /// Runs an operation under watch and turns a stop into its answer.
+    /// Runs an operation (in state `busy`) under watch and turns a stop
+    /// into its answer.
     async fn operate<T, L: Link, S: Sentry>(
         &mut self,
         link: &mut L,
         sentry: &mut S,
         inbox: &mut Inbox,
+        busy: HeadState,
         op: impl AsyncFnOnce(&mut Self) -> Reply<T>,
     ) -> Result<Reply<T>, LinkError> {
-        match self.guarded(link, sentry, inbox, false, op).await {
+        match self.guarded(link, sentry, inbox, false, Some(busy), op).await {
             Ok(r) => Ok(r),
             Err(trip) => Ok(Err(self.tripped(trip).await?)),
         }
@@ -359,18 +387,22 @@ impl<B: Board> Head<B> {
             }};
         }
         macro_rules! under_watch {
-            ($ep:ident, |$h:ident| $op:expr) => {
-                answer!($ep, self.operate(link, sentry, inbox, async |$h: &mut Self| $op.await).await?)
+            ($ep:ident, $busy:expr, |$h:ident| $op:expr) => {
+                answer!(
+                    $ep,
+                    self.operate(link, sentry, inbox, $busy, async |$h: &mut Self| $op.await)
+                        .await?
+                )
             };
         }
         match cmd {
             Command::Identify(()) => answer!(IdentifyEndpoint, self.identity()),
             Command::Status(()) => answer!(StatusEndpoint, self.status()),
             Command::Mechanics(()) => answer!(MechanicsEndpoint, self.cfg.mechanics()),
-            Command::Home(r) => under_watch!(HomeEndpoint, |h| h.home(r)),
-            Command::Move(g) => under_watch!(MoveEndpoint, |h| h.move_to(g)),
-            Command::Measure(r) => under_watch!(MeasureEndpoint, |h| h.measure(r)),
-            Command::Learn(c) => under_watch!(LearnEndpoint, |h| h.learn_reference(c)),
+            Command::Home(r) => under_watch!(HomeEndpoint, HeadState::Homing, |h| h.home(r)),
+            Command::Move(g) => under_watch!(MoveEndpoint, HeadState::Moving, |h| h.move_to(g)),
+            Command::Measure(r) => under_watch!(MeasureEndpoint, HeadState::Measuring, |h| h.measure(r)),
+            Command::Learn(c) => under_watch!(LearnEndpoint, HeadState::Measuring, |h| h.learn_reference(c)),
             Command::Scan(spec) => answer!(ScanEndpoint, self.start_scan(spec)),
             Command::Visits(chunk) => answer!(VisitEndpoint, self.queue_visits(&chunk)),
             Command::Abort(()) => answer!(AbortEndpoint, self.abort().await),
@@ -419,11 +451,11 @@ impl<B: Board> Head<B> {
                         .await
                         .and_then(|s| run.count_suspect(s.signal.flags).map(|()| ScanEvent::Sample(s)))
                 };
-                self.guarded(link, sentry, inbox, true, visit).await
+                self.guarded(link, sentry, inbox, true, None, visit).await
             }
             Visit::Row(row) => {
                 let turn = async |h: &mut Self| h.sweep_turn(&mut run, &row, here).await;
-                match self.guarded(link, sentry, inbox, true, turn).await {
+                match self.guarded(link, sentry, inbox, true, None, turn).await {
                     Ok(Ok(SweepTurn::Begun)) => {
                         self.scan = Some(run);
                         return Ok(());
@@ -492,17 +524,28 @@ impl<B: Board> Head<B> {
     }
 
     async fn send_keyed<T: Serialize + ?Sized, L: Link>(&mut self, key: Key, seq: VarSeq, msg: &T, link: &mut L) -> Result<(), LinkError> {
-        let mut tx = [0u8; MAX_FRAME];
-        let body = MAX_FRAME - check::LEN;
-        let n = match encode(key, self.talk.key_kind, seq, msg, &mut tx[..body]) {
-            Some(n) => n,
-            // Every message fits MAX_FRAME (a test checks the largest);
-            // should one not, the host still learns of it.
-            None => encode(ERROR_KEY, self.talk.key_kind, seq, &WireError::SerFailed, &mut tx[..body]).unwrap_or(0),
-        };
-        match check::seal(&mut tx, n) {
-            Some(n) => link.send(&tx[..n]).await,
-            None => Ok(()),
-        }
+        send_keyed(self.talk.key_kind, key, seq, msg, link).await
+    }
+}
+
+/// Sends `msg` under `key` at the width `kind`, sealed.
+async fn send_keyed<T: Serialize + ?Sized, L: Link>(
+    kind: VarKeyKind,
+    key: Key,
+    seq: VarSeq,
+    msg: &T,
+    link: &mut L,
+) -> Result<(), LinkError> {
+    let mut tx = [0u8; MAX_FRAME];
+    let body = MAX_FRAME - check::LEN;
+    let n = match encode(key, kind, seq, msg, &mut tx[..body]) {
+        Some(n) => n,
+        // Every message fits MAX_FRAME (a test checks the largest);
+        // should one not, the host still learns of it.
+        None => encode(ERROR_KEY, kind, seq, &WireError::SerFailed, &mut tx[..body]).unwrap_or(0),
+    };
+    match check::seal(&mut tx, n) {
+        Some(n) => link.send(&tx[..n]).await,
+        None => Ok(()),
     }
 }

@@ -9,7 +9,10 @@ use gonio_firmware::motion::blocks::{self, profile_blocks};
 use gonio_firmware::motion::executor::Executor;
 use gonio_firmware::{motion, units};
 use gonio_frames::{replies, scan_events, scan_frames, send};
-use gonio_shared::icd::{ContinueEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint, StatusEndpoint};
+use gonio_shared::icd::{
+    ContinueEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, MoveEndpoint, PauseEndpoint, SafetyEndpoint,
+    StatusEndpoint,
+};
 use gonio_shared::{Fault, Geometry, HeadState, SafetySettings, ScanEvent};
 use gonio_sim::{Cue, FrameHead, SimConfig};
 use gonio_tests::stops::{accel_steps, decel_s_max, ready, small_scan, small_sweep_scan, speed_jump, trial, Activity, Trigger};
@@ -512,4 +515,45 @@ fn the_laser_stays_on_for_its_idle_time_after_a_measurement_then_goes_off() {
         .find(|s| replies::<MoveEndpoint>(std::slice::from_ref(s)).len() == 1)
         .unwrap();
     assert!(!moved.laser, "the laser stayed on through a move");
+}
+
+/// Homing from where the stages power up takes minutes on the reference
+/// head, and the host polls the status every few seconds to show it is
+/// there, expecting an answer within 5 s: each poll is answered at once, as
+/// homing, while homing goes on; the homing's own answer comes at its end.
+#[test]
+fn a_status_poll_during_homing_is_answered_at_once() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    let home = HomeRequest {
+        rotation: true,
+        cradle: true,
+        arm: true,
+    };
+    let polls = [5.0, 10.0, 15.0];
+    let cues = std::iter::once((0.0, Cue::Frame(send::<HomeEndpoint>(&home))))
+        .chain(polls.iter().map(|&t| (t, Cue::Frame(send::<StatusEndpoint>(&())))));
+    let sent = head.serve_timed(cues, 600.0);
+    let statuses: Vec<(f64, gonio_shared::Status)> = sent
+        .iter()
+        .filter_map(|s| replies::<StatusEndpoint>(std::slice::from_ref(s)).pop().map(|st| (s.t_s, st)))
+        .collect();
+    let homed_at = sent
+        .iter()
+        .find(|s| !replies::<HomeEndpoint>(std::slice::from_ref(s)).is_empty())
+        .map(|s| s.t_s)
+        .expect("homing answered");
+    assert!(
+        homed_at > polls[polls.len() - 1] + 1.0,
+        "homing took {homed_at} s: too short to poll during it"
+    );
+    assert_eq!(statuses.len(), polls.len(), "{statuses:?}");
+    for ((t, status), asked) in statuses.iter().zip(polls) {
+        assert!(t - asked < 0.01, "the poll at {asked} s was answered at {t} s");
+        assert_eq!(status.state, HeadState::Homing, "at {t} s");
+        assert!(
+            (status.uptime_us as f64 * 1e-6 - t).abs() < 0.01,
+            "uptime {} µs at {t} s",
+            status.uptime_us
+        );
+    }
 }

@@ -8,7 +8,7 @@ use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_shared::icd::{
     Answer, ContinueEndpoint, HeadEndpoint, IdentifyEndpoint, Latency, MechanicsEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
-use gonio_shared::{Identity, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION};
+use gonio_shared::{HeadState, Identity, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION};
 use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
 use postcard_rpc::standard_icd::WireError;
 use postcard_rpc::Endpoint;
@@ -191,12 +191,14 @@ where
 }
 
 /// A request watched for loss. Once it has gone unanswered for
-/// [`PROBE_AFTER`], one status request follows it. The head answers requests
-/// one at a time in the order they arrive (the firmware's serve loop), so
-/// the probe's answer can only come first if the request, or its answer, was
-/// lost on the link: that is reported at once as [`CallError::Lost`] instead
-/// of after the request's full timeout (minutes for homing). A probe that
-/// gets no answer changes nothing: the request's own timeout stands.
+/// [`PROBE_AFTER`], one status request follows it. The head takes requests
+/// one at a time in the order they arrive (the firmware's serve loop) and
+/// answers a status poll at once, also while an operation runs, with that
+/// operation's state; so a probe answered with the head at rest means the
+/// request, or its answer, was lost on the link: that is reported at once
+/// as [`CallError::Lost`] instead of after the request's full timeout
+/// (minutes for homing). A probe answered with the head busy, or not
+/// answered, changes nothing: the request's own timeout stands.
 async fn watched<E: Endpoint>(client: &HostClient<WireError>, req: &E::Request, timeout: Duration) -> Result<E::Response, CallError>
 where
     E::Request: Serialize + Schema,
@@ -217,8 +219,8 @@ where
         biased;
         r = &mut answer => return r,
         p = &mut probe => match p {
-            Ok(_) => return Err(CallError::Lost(E::PATH)),
-            Err(_) => answer,
+            Ok(status) if !busy(&status.state, E::PATH) => return Err(CallError::Lost(E::PATH)),
+            _ => answer,
         },
         () = heartbeats(client) => unreachable!("heartbeats never end"),
     };
@@ -228,8 +230,21 @@ where
     }
 }
 
-/// Sends a status request every [`HEARTBEAT`], answers unread (the head
-/// answers them after the operation), for as long as it is polled.
+/// The head is running an operation, which holds the requests that arrive
+/// meanwhile (the request `path`'s own, answered when it ends), or a scan's
+/// point (a visit chunk is taken when the point is done); a scan's own
+/// request is answered as the scan starts, so a scan found running means
+/// that answer was lost.
+fn busy(state: &HeadState, path: &str) -> bool {
+    match state {
+        HeadState::Homing | HeadState::Moving | HeadState::Measuring | HeadState::Stopping => true,
+        HeadState::Scanning { .. } => path != ScanEndpoint::PATH,
+        _ => false,
+    }
+}
+
+/// Sends a status request every [`HEARTBEAT`], answers unread, for as long
+/// as it is polled.
 async fn heartbeats(client: &HostClient<WireError>) {
     loop {
         tokio::time::sleep(HEARTBEAT).await;
