@@ -168,12 +168,10 @@ impl SimAdc {
         let mut w = self.world.borrow_mut();
         let edges = std::mem::take(&mut w.period_edges);
         let m = out.len();
-        let gain = w.cfg.detector.gains_v_per_a[w.gain_index()] as f64 * w.imperfections.gain_scale[w.gain_index()];
-        let vref = w.cfg.detector.adc_vref as f64;
+        let gain = w.transimpedance();
         let signal = |w: &World, motors: &Motors| {
             if p.laser && !p.dead {
-                (w.photodiode.signal_a(w.target(), &w.cfg, w.load_angles(motors), |d| w.defect(d)) + w.imperfections.stray_a)
-                    * p.laser_factor
+                w.optical_a(motors) * p.laser_factor
             } else {
                 0.0
             }
@@ -182,7 +180,7 @@ impl SimAdc {
         let mut sig_a = signal(&w, &motors);
         let mut next = edges.iter().peekable();
         let alpha = 1.0 - (-p.dt / w.photodiode.tau_s).exp();
-        let full = ((1u32 << <Self as AdcStream>::BITS) - 1) as f64;
+        let full = ((1u32 << <Self as AdcStream>::BITS) - 1) as u16;
         let mut seen = Vec::new();
         for (k, o) in out.iter_mut().enumerate() {
             let t = p.t0 + k as f64 * p.dt;
@@ -200,12 +198,10 @@ impl SimAdc {
             let on = if k < m / 2 { 1.0 } else { 0.0 };
             let target = gain * (sig_a * on + w.photodiode.ambient_a);
             self.amp_v += (target - self.amp_v) * alpha;
-            let World { photodiode, rng, .. } = &mut *w;
-            let v = self.amp_v + photodiode.interference_v(t, rng);
             *o = if p.saturated {
-                full as u16
+                full
             } else {
-                (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16
+                w.code(self.amp_v, t, <Self as AdcStream>::BITS)
             };
         }
         if let Some(log) = w.sample_log.as_mut() {

@@ -12,6 +12,7 @@ mod imperfections;
 #[cfg(feature = "in-process")]
 mod inproc;
 mod optics;
+pub mod plant;
 mod pty;
 mod world;
 

@@ -290,6 +290,31 @@ impl World {
         }
     }
 
+    /// Photocurrent (A) of the laser's light at nominal power with the
+    /// motors at `m`: what the material sends into the detector, and stray light.
+    pub fn optical_a(&self, m: &Motors) -> f64 {
+        self.photodiode
+            .signal_a(self.target(), &self.cfg, self.load_angles(m), |d| self.defect(d))
+            + self.imperfections.stray_a
+    }
+
+    /// The selected range's transimpedance (V/A), as the head truly has it.
+    pub fn transimpedance(&self) -> f64 {
+        let g = self.gain_index();
+        self.cfg.detector.gains_v_per_a[g] as f64 * self.imperfections.gain_scale[g]
+    }
+
+    /// The code of a `bits`-bit conversion at time `t` of the amplifier's
+    /// output `amp_v`: offset, pickup and noise added, quantised, clipped
+    /// to the converter's range.
+    pub fn code(&mut self, amp_v: f64, t: f64, bits: u8) -> u16 {
+        let full = ((1u32 << bits) - 1) as f64;
+        let vref = self.cfg.detector.adc_vref as f64;
+        let World { photodiode, rng, .. } = self;
+        let v = amp_v + photodiode.interference_v(t, rng);
+        (v / vref * (full + 1.0)).round().clamp(0.0, full) as u16
+    }
+
     pub fn gain_index(&self) -> usize {
         self.gain_bits[0] as usize | (self.gain_bits[1] as usize) << 1
     }

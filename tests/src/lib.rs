@@ -16,3 +16,4 @@ pub mod stops;
 pub mod strategies;
 pub mod sweeping;
 pub mod synthetic;
+pub mod virtual_board;

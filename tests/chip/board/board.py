@@ -11,31 +11,44 @@ with its time, and every driven pin's level at the end."""
 
 import argparse
 import json
+import shlex
 import signal
 import tty
 import os
 import sys
 import time
 
+from unicorn import arm_const as arm
+
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from emulate import Elf, Machine, by_function  # noqa: E402
 
+from adc import ADC_BASE, Adc  # noqa: E402
 from bus import Bus, Plain  # noqa: E402
 from clock import HZ, Clock  # noqa: E402
 from core import Core, Fault  # noqa: E402
+from dma import DMA2_BASE, Dma  # noqa: E402
 from gpio import EXTI_BASE, GPIO_BASE, SYSCFG_BASE, Exti, Port, Syscfg  # noqa: E402
 from nvic import Nvic, SystemResetRequest  # noqa: E402
 from otg import OTG_FS_BASE, OtgFs  # noqa: E402
+from plant import Plant  # noqa: E402
 from usb_host import Host  # noqa: E402
 from system import FLASH_BASE, IWDG_BASE, PWR_BASE, RCC_BASE, Iwdg, Rcc  # noqa: E402
 from timer import Timer  # noqa: E402
 
 # The reference board's wiring (firmware/src/bin/head/chip/pins.rs): the
-# E-STOP and the three home switches are normally closed to ground, so the
-# plant holds them low unless a test opens them (`--set PB12=1@T`).
+# E-STOP and the three home switches are normally closed to ground, so they
+# are held low unless a test opens them (`--set PB12=1@T`) or, for the home
+# switches, a plant drives them.
 CLOSED_SWITCHES = ("PB12", "PC3", "PC7", "PC11")
+# The board's pull resistors (pins.rs): they hold the safe state while the
+# pins float, from reset until the image drives them.
+RESISTORS = {"PA6": 0, "PB0": 0, "PC0": 0, "PC4": 0, "PC8": 0, "PC2": 1, "PC6": 1, "PC10": 1}
+# The STEP lines (TIM5's compare interrupt raises them): their edges are
+# counted and timed against the compare, not logged one by one.
+STEP = ("PC0", "PC4", "PC8")
 # The safe state: laser enable and STEP low, the drivers' active-low EN high.
 SAFE = {"PB0": 0, "PC0": 0, "PC4": 0, "PC8": 0, "PC2": 1, "PC6": 1, "PC10": 1}
 IRQ_NAMES = {28: "TIM2", 29: "TIM3", 30: "TIM4", 50: "TIM5", 40: "EXTI15_10", 56: "DMA2_STREAM0", 67: "OTG_FS", 18: "ADC"}
@@ -47,8 +60,9 @@ class WatchdogReset(Exception):
 
 
 class Board:
-    def __init__(self, image):
+    def __init__(self, image, plant=None):
         self.elf = Elf(image)
+        self.plant = None
         self.clock = Clock()
         self.machine = Machine(self.elf, plain=())
         uc = self.uc = self.machine.uc
@@ -56,8 +70,11 @@ class Board:
         uc.mem_map(0x1FFF_0000, 0x1_0000)
         uc.mem_write(UID, bytes(range(0x31, 0x3D)))
         self.nvic = Nvic()
+        self.nvic.clock = self.clock
         self.rcc = Rcc()
-        self.pins = []  # (seconds, pin, level) of every driven change
+        self.pins = []  # (seconds, pin, level) of every driven change but STEP's
+        self.steps = {name: 0 for name in STEP}  # rising STEP edges
+        self.step_lateness = {}  # cycles from TIM5's compare to a rising STEP edge → edges
         bus = self.bus = Bus(uc)
         for i, (name, irq, bits) in enumerate((("TIM2", 28, 32), ("TIM3", 29, 16), ("TIM4", 30, 16), ("TIM5", 50, 32))):
             setattr(self, name.lower(), bus.attach(0x4000_0000 + 0x400 * i, 0x400, Timer(name, irq, bits, self.clock, self.nvic, self.rcc)))
@@ -71,6 +88,15 @@ class Board:
         self.ports = {}
         for i, letter in enumerate("ABCDE"):
             self.ports[letter] = bus.attach(GPIO_BASE + 0x400 * i, 0x400, Port(letter, self))
+        for name, level in RESISTORS.items():
+            port = self.ports[name[1]]
+            port.resistors[int(name[2:])] = level
+            port._settle()
+        # TIM3 CH1 drives PA6 (AF2): the laser's chop.
+        self.tim3.outputs[0] = (self.ports["A"], 6)
+        self.dma = bus.attach(DMA2_BASE, 0x400, Dma(uc, self.nvic, self.clock))
+        self.adc = bus.attach(ADC_BASE, 0x400, Adc(self.clock, self.nvic, self.rcc, self.tim2, self.dma))
+        self.tim2.slaves.append(self.adc)
         bus.attach(RCC_BASE, 0x400, self.rcc)
         bus.attach(FLASH_BASE, 0x400, Plain("FLASH"))
         # The core's registers and its four FIFO windows (0x1000–0x4FFF).
@@ -79,11 +105,33 @@ class Board:
         bus.map([(0x4000_0000, 0x1000_0000), (OTG_FS_BASE, 0x4_0000), (0xE000_0000, 0x10_0000)])
         self.core = Core(self.machine, self.elf, self.nvic, self.clock)
         self.machine.start_profile()
-        for name in CLOSED_SWITCHES:
-            self.set_input(name, 0, 0.0)
         self.host = None
         self.stop_requested = False
+        # The head behind the pins (`board-plant` run as the command
+        # `plant`): it drives the home switches' lines and the photodiode.
+        self.plant = self.adc.plant = Plant(plant) if plant else None
+        if self.plant:
+            for p in self.ports.values():
+                for n in range(16):
+                    self.plant.output(0, f"P{p.letter}{n}", p.level[n])
+            self._switches_from_plant()
+        for name in CLOSED_SWITCHES:
+            if not (self.plant and name in self.plant.switches):
+                self.set_input(name, 0, 0.0)
 
+    def _switches_from_plant(self):
+        for name, level in self.plant.switch_levels(self.clock.now).items():
+            port, pin = self.ports[name[1]], int(name[2:])
+            if port.outside.get(pin) != level:
+                port.set_input(pin, level)
+
+    def reading(self, port):
+        """The image reads `port`'s inputs: the plant's switches as they
+        are now (the conversions up to now first, which the plant answers
+        in time order)."""
+        if self.plant and any(s[1] == port.letter for s in self.plant.switches):
+            self.adc._advance()
+            self._switches_from_plant()
     def plug(self, stream=None, replug=False):
         """A USB host on the bus from now on, bridging `stream` (a file
         descriptor) to the CDC-ACM port while a program holds it open;
@@ -93,11 +141,24 @@ class Board:
 
     def log_pin(self, port, pin, level):
         """A driven pin's level, when it changes or when it starts to be
-        driven."""
-        self.pins.append((self.clock.now / HZ, f"P{port.letter}{pin}", level))
+        driven; a STEP edge counted, with how late it rose after the step
+        timer's compare that was due."""
+        name = f"P{port.letter}{pin}"
+        if name in self.steps:
+            if level:
+                self.steps[name] += 1
+                due = self.tim5.matched[0]
+                if due is not None:
+                    late = int(self.clock.now - due)
+                    self.step_lateness[late] = self.step_lateness.get(late, 0) + 1
+            return
+        self.pins.append((self.clock.now / HZ, name, level))
 
     def edge(self, port, pin, level):
+        """Every change of a pin's level: to the EXTI and the plant."""
         self.exti.edge(port.index, pin, rising=bool(level))
+        if self.plant:
+            self.plant.output(self.clock.now, f"P{port.letter}{pin}", level)
 
     def set_input(self, name, level, at):
         """The plant drives pin `name` (`PB12`) to `level` from `at` seconds."""
@@ -113,12 +174,13 @@ class Board:
     def _watchdog(self):
         raise WatchdogReset()
 
-    def run(self, seconds, paced=False):
-        """Runs to `seconds` of virtual time; `paced`: never ahead of the
-        wall clock (a program on the pseudo-terminal times its requests in
-        real time)."""
+    def run(self, seconds, paced=False, pace=1.0):
+        """Runs to `seconds` of virtual time; `paced`: never more than
+        `pace` times ahead of the wall clock (a program on the
+        pseudo-terminal times its requests in real time)."""
         started = time.monotonic()
         reason = "time"
+        trail = registers = None
         try:
             if paced:
                 step = HZ // 200
@@ -126,7 +188,7 @@ class Board:
                     self.core.run(min(self.clock.now + step, int(seconds * HZ)))
                     # The host reads the terminal at its own steps; a closed
                     # terminal reads as ready at once, so this sleeps.
-                    ahead = self.clock.now / HZ - (time.monotonic() - started)
+                    ahead = self.clock.now / HZ / pace - (time.monotonic() - started)
                     if ahead > 0:
                         time.sleep(ahead)
             else:
@@ -137,6 +199,14 @@ class Board:
             reason = "system reset request"
         except Fault as e:
             reason = f"fault: {e}"
+            registers = {
+                name: f"{self.uc.reg_read(getattr(arm, 'UC_ARM_REG_' + name.upper())):#010x}"
+                for name in ("r0", "r1", "r2", "r3", "r4", "r5", "r6", "r7", "r8", "r12", "sp", "lr", "pc", "xpsr", "control", "primask")
+            }
+            trail = [
+                {"t": c / HZ, "what": w, "irq": IRQ_NAMES.get(i, i), "sp": f"{sp:#010x}" if sp else None, "pc": f"{pc:#010x}" if pc is not None else None}
+                for c, w, i, sp, pc in e.trail
+            ]
         if self.stop_requested and reason == "time":
             reason = "stopped (SIGTERM)"
         reloads = self.iwdg.reloads
@@ -144,10 +214,22 @@ class Board:
         gaps = [b - a for a, b in zip(reloads, reloads[1:])]
         return {
             "stopped": reason,
+            "exceptions_before_fault": trail,
+            "registers_at_fault": registers,
             "virtual_seconds": self.clock.now / HZ,
             "host_seconds": round(time.monotonic() - started, 3),
             "instructions": self.core.instructions,
             "interrupts": {IRQ_NAMES.get(i, str(i)): n for i, n in enumerate(self.nvic.taken) if n},
+            # From an interrupt's pending to its handler's first instruction.
+            "interrupt_latency_cycles_max": {
+                IRQ_NAMES.get(i, str(i)): self.nvic.latency_max[i] for i, n in enumerate(self.nvic.taken) if n
+            },
+            "step_edges": self.steps,
+            # Cycles from the step timer's compare to the STEP edge it raised.
+            "step_edge_lateness_cycles": {
+                "max": max(self.step_lateness, default=None),
+                "histogram": dict(sorted(self.step_lateness.items())),
+            },
             "watchdog": {
                 "running": self.iwdg.running,
                 "reloads": len(reloads),
@@ -192,8 +274,20 @@ def main():
         help="bridge the open port to a pseudo-terminal (its path on stderr first), paced to the wall clock",
     )
     ap.add_argument("--replug", action="store_true", help="after each session, the cable pulled and plugged back")
+    ap.add_argument(
+        "--pace",
+        type=float,
+        default=1.0,
+        help="with --pty: virtual time runs at most this many times faster than the wall clock "
+        "(the host's heartbeat every 5 s must reach the head's 20 s watch: at most 3)",
+    )
+    ap.add_argument(
+        "--plant",
+        metavar="COMMAND",
+        help="the head behind the pins: `board-plant` and its options (`gonio simulate`'s head options), one string",
+    )
     args = ap.parse_args()
-    board = Board(args.image)
+    board = Board(args.image, shlex.split(args.plant) if args.plant else None)
     # SIGTERM ends a paced run where it is, and the report is printed.
     signal.signal(signal.SIGTERM, lambda *_: setattr(board, "stop_requested", True))
     if args.pty:
@@ -210,7 +304,7 @@ def main():
         pin, rest = spec.split("=")
         level, at = rest.split("@")
         board.set_input(pin, int(level), float(at))
-    print(json.dumps(board.run(args.seconds, paced=args.pty)))
+    print(json.dumps(board.run(args.seconds, paced=args.pty, pace=args.pace)))
 
 
 if __name__ == "__main__":

@@ -3,8 +3,16 @@ instructions the core executes (one cycle each) and skipped over while it
 sleeps, with the events the peripherals schedule on it."""
 
 import heapq
+from fractions import Fraction
 
 HZ = 168_000_000
+
+
+def cycles(numerator, denominator):
+    """`numerator / denominator` cycles: an int when it is whole (the usual
+    case, and much faster to compute with), else exact as a Fraction."""
+    whole, rest = divmod(numerator, denominator)
+    return Fraction(numerator, denominator) if rest else whole
 
 
 class Event:
@@ -25,10 +33,17 @@ class Clock:
         self.executed = lambda: 0  # instructions since then (the core's counter)
         self._queue = []
         self._seq = 0
+        self._due = None  # the cycle of the event being handled
 
     @property
     def now(self):
         return self.base + self.executed()
+
+    def instant(self):
+        """When what happens now happened: an event's own cycle while it is
+        handled (the core may have run a few instructions past it, to the
+        end of a block), else now."""
+        return self.now if self._due is None else self._due
 
     def at(self, cycle, action):
         """Calls `action()` once the clock reaches `cycle` (never earlier
@@ -49,4 +64,8 @@ class Clock:
             if n is None or n > self.now:
                 return
             _, _, e = heapq.heappop(self._queue)
-            e.action()
+            self._due = e.cycle
+            try:
+                e.action()
+            finally:
+                self._due = None

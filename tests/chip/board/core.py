@@ -24,16 +24,20 @@ return, B1.5.18 WFE):
 Time: one cycle per instruction, counted per translated block (count.c);
 sleep skips to the next event of the clock."""
 
+import collections
 import struct
 
 from unicorn import UC_HOOK_CODE, UC_HOOK_INTR, UcError
 from unicorn import arm_const as arm
 
 from nvic import EXTERNAL
+from registers import Batch
 
 WFE, WFI, SEV, CPSIE_I = 0xBF20, 0xBF30, 0xBF40, 0xB662
 FRAME = (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2, arm.UC_ARM_REG_R3, arm.UC_ARM_REG_R12, arm.UC_ARM_REG_LR)
-FP_FRAME = [getattr(arm, f"UC_ARM_REG_S{i}") for i in range(16)]
+FP_FRAME = [getattr(arm, f"UC_ARM_REG_S{i}") for i in range(16)] + [arm.UC_ARM_REG_FPSCR]
+# What an exception entry reads first.
+STATE = (arm.UC_ARM_REG_CONTROL, arm.UC_ARM_REG_IPSR, arm.UC_ARM_REG_XPSR, arm.UC_ARM_REG_MSP)
 # unicorn's interrupt number for an exception return (QEMU's EXCP_EXCEPTION_EXIT).
 EXCEPTION_EXIT = 8
 # Cycles a run of the core lasts at most: a pending interrupt masked by
@@ -43,7 +47,12 @@ SLICE = 16_800
 
 
 class Fault(Exception):
-    """The core stopped where real silicon would fault or lock up."""
+    """The core stopped where real silicon would fault or lock up; `trail`:
+    the last exception entries and returns before it."""
+
+    def __init__(self, message, trail=()):
+        super().__init__(message)
+        self.trail = list(trail)
 
 
 class Core:
@@ -56,6 +65,9 @@ class Core:
         self.sleeping = False
         self._running = False  # inside `emu_start`
         self.instructions = 0
+        # (cycle, "enter"/"return"/"chain", IRQ, SP, PC) of the last
+        # exceptions, for the report of a fault.
+        self.trail = collections.deque(maxlen=24)
         self.first_sleep = None  # instructions from reset to the first idle wait
         clock.executed = lambda: self.m.executed - self._run_start
         self._run_start = 0
@@ -74,6 +86,9 @@ class Core:
                 if hook:
                     self.uc.hook_add(UC_HOOK_CODE, hook, begin=base + off, end=base + off)
         self.uc.hook_add(UC_HOOK_INTR, self._on_interrupt)
+        self._state = Batch(self.uc, STATE)
+        self._frame = Batch(self.uc, FRAME)
+        self._fp_frame = Batch(self.uc, FP_FRAME)
         self.pc = machine.reset() | 1
 
     # --- hooks -------------------------------------------------------------
@@ -109,7 +124,7 @@ class Core:
     def _on_interrupt(self, uc, intno, _user):
         if intno != EXCEPTION_EXIT:
             pc = uc.reg_read(arm.UC_ARM_REG_PC)
-            raise Fault(f"exception {intno} at pc {pc:#010x} (a fault on silicon)")
+            raise Fault(f"exception {intno} at pc {pc:#010x} (a fault on silicon)", self.trail)
         self._return(uc.reg_read(arm.UC_ARM_REG_PC) | 1)
 
     def _interrupts_changed(self):
@@ -146,26 +161,24 @@ class Core:
 
     def _enter(self, irq):
         uc = self.uc
-        control = uc.reg_read(arm.UC_ARM_REG_CONTROL)
-        if control & 2 and self._current_exception() == 0:
+        control, ipsr, xpsr, sp = self._state.read()
+        handler = ipsr & 0x1FF != 0
+        if control & 2 and not handler:
             raise Fault("thread mode on the process stack: not modelled (the image uses MSP only)")
-        handler = self._current_exception() != 0
         fp = bool(control & 4)
-        xpsr = uc.reg_read(arm.UC_ARM_REG_XPSR)
-        sp = uc.reg_read(arm.UC_ARM_REG_MSP)
         words = 26 if fp else 8
         pad = (sp - 4 * words) & 4
         sp = sp - 4 * words - pad
-        values = [uc.reg_read(r) for r in FRAME] + [self.pc & ~1, xpsr | (pad and 1 << 9) | 1 << 24]
-        frame = struct.pack("<8I", *[v & 0xFFFF_FFFF for v in values])
+        values = self._frame.read() + [self.pc & ~1, xpsr | (pad and 1 << 9) | 1 << 24]
         if fp:
-            frame += struct.pack("<16I", *[uc.reg_read(r) & 0xFFFF_FFFF for r in FP_FRAME])
-            frame += struct.pack("<2I", uc.reg_read(arm.UC_ARM_REG_FPSCR), 0)
+            values += self._fp_frame.read() + [0]
+        frame = struct.pack(f"<{words}I", *values)
         try:
             uc.mem_write(sp, frame)
         except UcError as e:
             raise Fault(f"stacking at {sp:#010x} failed: {e} (a stack overflow locks up the core)")
         uc.reg_write(arm.UC_ARM_REG_MSP, sp)
+        self.trail.append((self.clock.now, "enter", irq, sp, self.pc & ~1))
         exc_return = 0xFFFF_FFF1 if handler else 0xFFFF_FFF9
         if fp:
             exc_return &= ~0x10
@@ -195,6 +208,7 @@ class Core:
         best = self.nvic.best_pending()
         if best is not None and best[0] < self._execution_priority():
             uc.reg_write(arm.UC_ARM_REG_CONTROL, uc.reg_read(arm.UC_ARM_REG_CONTROL) & ~4)
+            self.trail.append((self.clock.now, "chain", best[1], None, None))
             self._dispatch(best[1], exc_return)
             uc.emu_stop()
             return
@@ -202,13 +216,11 @@ class Core:
         sp = uc.reg_read(arm.UC_ARM_REG_MSP)
         words = 26 if fp else 8
         frame = struct.unpack(f"<{words}I", uc.mem_read(sp, 4 * words))
-        for reg, v in zip(FRAME, frame[:6]):
-            uc.reg_write(reg, v)
+        self._frame.write(frame[:6])
         pc, xpsr = frame[6], frame[7]
+        self.trail.append((self.clock.now, "return", leaving, sp, pc))
         if fp:
-            for reg, v in zip(FP_FRAME, frame[8:24]):
-                uc.reg_write(reg, v)
-            uc.reg_write(arm.UC_ARM_REG_FPSCR, frame[24])
+            self._fp_frame.write(frame[8:25])
         sp += 4 * words + (4 if xpsr >> 9 & 1 else 0)
         uc.reg_write(arm.UC_ARM_REG_MSP, sp)
         uc.reg_write(arm.UC_ARM_REG_XPSR, xpsr & ~(1 << 9))
@@ -244,7 +256,7 @@ class Core:
             except UcError as e:
                 at = self.uc.reg_read(arm.UC_ARM_REG_PC)
                 sp = self.uc.reg_read(arm.UC_ARM_REG_SP)
-                raise Fault(f"{e} at pc {at:#010x}, sp {sp:#010x}")
+                raise Fault(f"{e} at pc {at:#010x}, sp {sp:#010x}", self.trail)
             finally:
                 self._running = False
                 executed = self.m.executed - self._run_start

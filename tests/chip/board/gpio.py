@@ -4,7 +4,9 @@
 A pin's level is what drives it: its output latch when it is an output
 (MODER 01, or an alternate function whose peripheral drives it, reported
 by `drive`), else what the plant drives from outside (`set_input`), else
-its pull (PUPDR), else the last level (a floating input keeps its charge).
+the board's resistor (`resistors`: 10 kΩ, stronger than the internal
+40 kΩ), else its internal pull (PUPDR), else the last level (a floating
+input keeps its charge).
 Every change of an output's level is logged with its time; every change of
 a level reaches the EXTI."""
 
@@ -30,6 +32,7 @@ class Port(Block):
         self.afr = [0, 0]
         self.outside = {}  # pin → level the plant drives
         self.alternate = {}  # pin → level a peripheral drives
+        self.resistors = {}  # pin → level the board's pull resistor gives
         self.level = [0] * 16
 
     def mode(self, pin):
@@ -43,6 +46,8 @@ class Port(Block):
             return self.alternate[pin]
         if pin in self.outside:
             return self.outside[pin]
+        if pin in self.resistors:
+            return self.resistors[pin]
         pull = self.pupdr >> (2 * pin) & 3
         return {1: 1, 2: 0}.get(pull, self.level[pin])
 
@@ -63,11 +68,17 @@ class Port(Block):
         self._settle()
 
     def drive(self, pin, level):
-        """An alternate function's output (a timer's PWM)."""
-        self.alternate[pin] = level
+        """An alternate function's output (a timer's PWM); None: the
+        peripheral does not drive it."""
+        if level is None:
+            self.alternate.pop(pin, None)
+        else:
+            self.alternate[pin] = level
         self._settle()
 
     def read(self, offset):
+        if offset == 0x10:
+            self.board.reading(self)
         return {
             0x00: self.moder,
             0x04: self.otyper,
@@ -134,7 +145,9 @@ class Exti(Block):
         selected = (self.rtsr if rising else self.ftsr) >> pin & 1
         if selected:
             self.pr |= 1 << pin
-        self.edges.append((pin, rising, bool(selected)))
+        # The edges of lines in use (a trigger selected, or unmasked).
+        if (self.rtsr | self.ftsr | self.imr) >> pin & 1:
+            self.edges.append((pin, rising, bool(selected)))
         self._lines()
 
     def _lines(self):

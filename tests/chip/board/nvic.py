@@ -31,10 +31,17 @@ class Nvic(Block):
         self.scb = {}  # other SCB/SCS registers, held as written
         self.on_change = lambda: None  # the core re-checks what it can take
         self.taken = [0] * IRQS  # exceptions entered, per IRQ
+        # When each line last pended, and the longest wait from there to
+        # its handler's entry (cycles): the interrupt's latency.
+        self.clock = None
+        self.pended_at = [0] * IRQS
+        self.latency_max = [0] * IRQS
 
     # --- what peripherals do -------------------------------------------
     def line(self, irq, asserted):
         if asserted and not self.level[irq]:
+            if not self.pending[irq] and self.clock:
+                self.pended_at[irq] = self.clock.instant()
             self.pending[irq] = True
             self.level[irq] = True
             self.on_change()
@@ -49,6 +56,8 @@ class Nvic(Block):
     def best_pending(self):
         """The pending, enabled IRQ to take next: lowest priority value, then
         lowest number; (group priority, irq) or None."""
+        if not any(self.pending):
+            return None
         best = None
         for irq in range(IRQS):
             if self.pending[irq] and self.enabled[irq]:
@@ -60,12 +69,16 @@ class Nvic(Block):
     def running_priority(self, excluding=None):
         """The group priority of the active exceptions (256: none)."""
         p = 256
+        if not any(self.active):
+            return p
         for irq in range(IRQS):
             if self.active[irq] and irq != excluding:
                 p = min(p, self.group(self.priority[irq]))
         return p
 
     def enter(self, irq):
+        if self.clock:
+            self.latency_max[irq] = max(self.latency_max[irq], self.clock.now - self.pended_at[irq])
         self.pending[irq] = False
         self.active[irq] = True
         self.taken[irq] += 1
@@ -74,6 +87,8 @@ class Nvic(Block):
         self.active[irq] = False
         if self.level[irq]:
             self.pending[irq] = True
+            if self.clock:
+                self.pended_at[irq] = self.clock.now
 
     # --- registers (offsets from 0xE000E000) ----------------------------
     def _bits(self, array, offset, base):

@@ -45,11 +45,18 @@ class Rcc(Block):
         self.regs[0x74] = flags
         self.regs[0x70] = bdcr
 
+    def _sysclk(self):
+        return HZ if self.regs.get(0x08, 0) & 3 == 2 else 16_000_000
+
+    def apb2_hz(self):
+        """PCLK2: the ADCs' clock source (RM0090 §6.2)."""
+        ppre2 = self.regs.get(0x08, 0) >> 13 & 7
+        return self._sysclk() if ppre2 < 4 else self._sysclk() // (2 << (ppre2 - 4))
+
     def apb1_timer_hz(self):
         """TIM2–5's clock: PCLK1, doubled when APB1 is divided (RM0090 §6.2)."""
-        cfgr = self.regs.get(0x08, 0)
-        sysclk = HZ if cfgr & 3 == 2 else 16_000_000
-        ppre1 = cfgr >> 10 & 7
+        sysclk = self._sysclk()
+        ppre1 = self.regs.get(0x08, 0) >> 10 & 7
         return sysclk if ppre1 < 4 else 2 * sysclk // (2 << (ppre1 - 4))
 
 

@@ -13,13 +13,20 @@ time between changes, flags are brought up to date whenever the timer is
 touched, and only what the core can observe by itself is scheduled on the
 clock (an overflow or compare whose interrupt is enabled, an update that
 loads a preload). A slave's input edges are its master's update instants,
-computed, not scheduled. Not modelled yet: the compare outputs on the
-pins (PWM), down and centre-aligned counting, input capture."""
+computed, not scheduled.
 
-from fractions import Fraction
+A channel's output (OCx, RM0090 §18.3.9–18.3.11) follows its reference
+OCxREF: forced low or high (OCxM 100, 101), PWM mode 1 (high while
+CNT < CCRx) or 2 (the opposite), set, cleared or toggled at a match
+(001–011), or frozen (000); CCxP inverts it; with CCxE clear the timer
+does not drive the pin (RM0090 Table 100: the pin is then what its GPIO
+settings make it). While a driven output can change, its changes are
+scheduled, so the pin log has every edge at its instant. Not modelled:
+down and centre-aligned counting, input capture, the compare preload
+(OCxPE: CCRx takes effect at once)."""
 
 from bus import Block
-from clock import HZ
+from clock import HZ, cycles
 
 UIE_UIF = 1
 
@@ -38,10 +45,13 @@ class Timer(Block):
         self.arr = self.arr_pre = self.top
         self.ccr = [0, 0, 0, 0]
         self.cnt0 = 0
-        self.t0 = Fraction(0)
+        self.t0 = 0
         self.event = None
         self.triggers = {}  # ITRx → the master timer
-        self.slaves = []
+        self.slaves = []  # what counts this timer's updates: slave timers, an ADC
+        self.outputs = {}  # channel → (port, pin) its output drives
+        self.ref = [0, 0, 0, 0]  # OCxREF
+        self.matched = [None] * 4  # the instant of each channel's last match
 
     # --- the counter's input ----------------------------------------------------
     @property
@@ -56,14 +66,14 @@ class Timer(Block):
         return None
 
     def _tick(self):
-        return Fraction(HZ * (self.psc + 1), self.rcc.apb1_timer_hz())
+        return cycles(HZ * (self.psc + 1), self.rcc.apb1_timer_hz())
 
     def _edges(self, a, b):
         """Counter ticks in (a, b]."""
         master = self._master()
         if self._external():
             return master.updates_in(a, b) // (self.psc + 1) if master else 0
-        return int((b - a) / self._tick())
+        return (b - a) // self._tick()
 
     def _external(self):
         return self.smcr & 7 == 7
@@ -86,24 +96,25 @@ class Timer(Block):
         first, period = self._first_overflow(), (self.arr + 1) * self._tick()
 
         def upto(t):  # overflows at or before t
-            return 0 if t < first else int((t - first) / period) + 1
+            return 0 if t < first else (t - first) // period + 1
 
         return upto(b) - upto(a)
 
     def update_at(self, after, n):
         """The instant of its n-th overflow after `after`."""
         first, period = self._first_overflow(), (self.arr + 1) * self._tick()
-        k = 0 if after < first else int((after - first) / period) + 1
+        k = 0 if after < first else (after - first) // period + 1
         return first + (k + n - 1) * period
 
     # --- time ---------------------------------------------------------------
     def _advance(self):
         """Brings the counter and its flags to now."""
-        now = Fraction(self.clock.now)
+        now = self.clock.now
         if not self.running:
             self.t0 = now
             return
         k = self._edges(self.t0, now)
+        start = self.t0
         if self._external():
             self.t0 = now
         else:
@@ -115,10 +126,46 @@ class Timer(Block):
         for ch in range(4):
             if self.ccr[ch] <= self.arr and (k >= span or (self.ccr[ch] - old - 1) % span < k):
                 self.sr |= 1 << (ch + 1)
+                first = (self.ccr[ch] - old - 1) % span + 1
+                matches = (k - first) // span + 1
+                self._on_match(ch, matches)
+                if not self._external():
+                    self.matched[ch] = start + (first + (matches - 1) * span) * self._tick()
         wrapped = old + k > self.arr
         self.cnt0 = (old + k) % span
         if wrapped:
             self._update_event(hardware=True)
+
+    # --- outputs ----------------------------------------------------------------
+    def _oc_mode(self, ch):
+        return self.ccmr[ch // 2] >> (4 + 8 * (ch % 2)) & 7
+
+    def _on_match(self, ch, matches):
+        mode = self._oc_mode(ch)
+        if mode == 1:
+            self.ref[ch] = 1
+        elif mode == 2:
+            self.ref[ch] = 0
+        elif mode == 3:
+            self.ref[ch] ^= matches & 1
+
+    def _drive_outputs(self):
+        """The outputs' levels at the counter's present value."""
+        for ch, (port, pin) in self.outputs.items():
+            mode = self._oc_mode(ch)
+            if mode in (4, 5):
+                self.ref[ch] = mode - 4
+            elif mode in (6, 7):
+                below = self.cnt0 < self.ccr[ch]
+                self.ref[ch] = int(below) if mode == 6 else int(not below)
+            if self.ccer >> (4 * ch) & 1:
+                port.drive(pin, self.ref[ch] ^ (self.ccer >> (4 * ch + 1) & 1))
+            else:
+                port.drive(pin, None)
+
+    def _output_changes(self):
+        """Whether a driven output changes as the counter runs."""
+        return any(self.ccer >> (4 * ch) & 1 and self._oc_mode(ch) in (1, 2, 3, 6, 7) for ch in self.outputs)
 
     def _schedule(self):
         if self.event:
@@ -129,17 +176,19 @@ class Timer(Block):
         span = self.arr + 1
         ahead = []
         preload_pending = self.psc_pre != self.psc or self.arr_pre != self.arr
-        if self.dier & UIE_UIF or preload_pending:
+        outputs = self._output_changes()
+        if self.dier & UIE_UIF or preload_pending or outputs:
             ahead.append(self.arr - self.cnt0 + 1)
         for ch in range(4):
-            if self.dier >> (ch + 1) & 1 and self.ccr[ch] <= self.arr:
+            watched = self.dier >> (ch + 1) & 1 or (outputs and ch in self.outputs)
+            if watched and self.ccr[ch] <= self.arr:
                 d = (self.ccr[ch] - self.cnt0) % span
                 ahead.append(d or span)
         if not ahead:
             return
         at = self._after(min(ahead))
         if at is not None:
-            self.event = self.clock.at(int(-(-at // 1)), self._due)
+            self.event = self.clock.at(-(-at // 1), self._due)
 
     def _due(self):
         self.event = None
@@ -149,6 +198,7 @@ class Timer(Block):
             s._advance()
         self._advance()
         self._line()
+        self._drive_outputs()
         self._schedule()
         for s in self.slaves:
             s._schedule()
@@ -206,7 +256,7 @@ class Timer(Block):
         elif offset == 0x14:
             if value & 1:  # UG: the counter restarts, the preloads load
                 self.cnt0 = 0
-                self.t0 = Fraction(self.clock.now)
+                self.t0 = self.clock.now
                 self._update_event(hardware=False)
                 for s in self.slaves:
                     s._trigger_edge(self)
@@ -217,7 +267,7 @@ class Timer(Block):
             self.ccer = value
         elif offset == 0x24:
             self.cnt0 = value & self.top
-            self.t0 = Fraction(self.clock.now)
+            self.t0 = self.clock.now
         elif offset == 0x28:
             self.psc_pre = value & 0xFFFF
         elif offset == 0x2C:
@@ -227,6 +277,7 @@ class Timer(Block):
         elif 0x34 <= offset <= 0x40:
             self.ccr[(offset - 0x34) // 4] = value & self.top
         self._line()
+        self._drive_outputs()
         self._schedule()
         for s in self.slaves:
             s._schedule()
@@ -243,4 +294,5 @@ class Timer(Block):
                 self._update_event(hardware=True)
             self.cnt0 = (self.cnt0 + 1) % span
             self._line()
+            self._drive_outputs()
             self._schedule()

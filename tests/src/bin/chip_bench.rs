@@ -56,8 +56,13 @@
 //!   (`board/usb_host.py`: bus reset, descriptors, address, configuration,
 //!   line coding and DTR, then bulk transfers) bridged to a pseudo-terminal,
 //!   where the host crate's own client (`HeadClient` on a `Port`, as `gonio
-//!   scan --port` drives a real head) asks its identity and status. Failing
-//!   to enumerate, to identify or to answer fails the run.
+//!   scan --port` drives a real head) asks its identity and status, and
+//!   three measurements where the stages powered up, with the simulated
+//!   head's world behind the pins (`board-plant`: the photodiode through
+//!   TIM2, ADC1, DMA2 and the chop on TIM3). Failing to enumerate, to
+//!   identify or to answer fails the run, as do measurements that differ
+//!   from each other by more than 4σ, or from the in-process simulated
+//!   head's by more than 0.5 %, or a laser left on.
 //! - `step_rate_hz_3axes_at_50pct_cpu` (≥ 50 000): per-axis step rate that
 //!   three axes sustain on half the CPU, from the mean handler cost.
 //! - `await_free_stack_bytes_max`: the stack the serve loop's deepest poll
@@ -70,6 +75,7 @@ use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
 use gonio_shared::scan::VISIT_CHUNK;
 use gonio_shared::SweepRequest;
 use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
+use gonio_tests::virtual_board::{board_plant, Board};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -91,9 +97,16 @@ fn python(root: &Path, script: &str, args: &[&std::ffi::OsStr]) -> Result<Value>
     serde_json::from_slice(&out.stdout).with_context(|| format!("reading what {script} printed"))
 }
 
-/// The longest the laser may stay on for a measurement whose conversions
-/// never come (s).
-const LASER_STALL_S: f64 = 1.0;
+/// The longest the laser may stay on for one measurement at rest (s): its
+/// ranging, settling and 100 ms integration, with room.
+const LASER_MEASURE_S: f64 = 1.0;
+/// Measurements the image takes over USB, one after the other.
+const MEASUREMENTS: usize = 3;
+/// How far the board's measurement may lie from the in-process simulated
+/// head's, relative: the simulated head samples each chop period as its
+/// convention has it, the board at the instants TIM2 triggers ADC1 with the
+/// amplifier's response between the chop's edges (a few 0.1 %).
+const SIM_AGREEMENT: f64 = 0.005;
 
 /// Virtual seconds the unmodified image runs on the board, and when the
 /// plant opens the E-STOP.
@@ -148,32 +161,35 @@ fn board_run(root: &Path, image: &Path) -> Result<Value> {
 /// The unmodified image on the board with a USB host that opens its port
 /// and bridges it to a pseudo-terminal, driven by the host crate's own
 /// client (`HeadClient` on a `Port`, as `gonio scan --port` drives a real
-/// head): it identifies itself and answers a status request, in a second
-/// session too, after the port was closed and the cable pulled and plugged
-/// back. Returns the client's view of the second and the board's report.
-fn usb_session(root: &Path, image: &Path) -> Result<Value> {
+/// head), and the simulated head's world behind its pins (`board-plant`):
+/// it identifies itself and answers a status request, in a second session
+/// too, after the port was closed and the cable pulled and plugged back; in
+/// the first, it measures where the stages powered up, three times, through
+/// TIM2, ADC1, DMA2 and the chop on TIM3. Returns the client's view and the
+/// board's report.
+fn usb_session(root: &Path, image: &Path, plant: &Path) -> Result<Value> {
     use gonio_acquire::client::HeadClient;
     use gonio_acquire::target::Port;
     use gonio_shared::icd::{MeasureEndpoint, MeasureRequest, StatusEndpoint};
-    use std::io::{BufRead, BufReader};
-    use std::process::Stdio;
 
-    let mut board = Command::new("python3")
-        .arg(root.join("tests/chip/board/board.py"))
-        .arg(image)
-        .args(["--pty", "--replug", "--seconds", "120"])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .context("running python3 tests/chip/board/board.py --pty")?;
-    let mut err = BufReader::new(board.stderr.take().context("the board's stderr")?);
-    let mut line = String::new();
-    err.read_line(&mut line).context("reading the board's pseudo-terminal")?;
-    let path = line.strip_prefix("pty ").map(str::trim).map(str::to_string);
-    let client = path
-        .context(format!("the board printed {line:?}, not its pseudo-terminal"))
-        .and_then(|path| {
-            let rt = tokio::runtime::Builder::new_current_thread().enable_all().build()?;
+    let board = Board::start(
+        root,
+        image,
+        &[
+            "--replug".as_ref(),
+            "--seconds".as_ref(),
+            "120".as_ref(),
+            "--plant".as_ref(),
+            plant.as_os_str(),
+        ],
+    )?;
+    let path = board.pty.clone();
+    // The board is stopped (and its report read) whatever the client met.
+    let client = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .map_err(anyhow::Error::from)
+        .and_then(|rt| {
             rt.block_on(async {
                 // Two sessions: the port closed after the first, the cable
                 // then pulled and plugged back in (the board's host does it).
@@ -189,21 +205,15 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
                         .await
                         .with_context(|| format!("session {session}: status"))?;
                     if session == 1 {
-                        // A measurement with no light on the photodiode's
-                        // converter: the board models no ADC or DMA yet, so
-                        // no conversion ever arrives. The head must give up,
-                        // say so, and turn the laser off.
-                        let sent = std::time::Instant::now();
-                        let r = tokio::time::timeout(
-                            std::time::Duration::from_secs(15),
-                            head.request::<MeasureEndpoint>(&MeasureRequest { at: None }),
-                        )
-                        .await;
-                        measure = Some(match r {
-                            Err(_) => format!("no answer in {:.1} s", sent.elapsed().as_secs_f64()),
-                            Ok(Ok(_)) => "measured".to_string(),
-                            Ok(Err(e)) => format!("refused after {:.1} s: {e:#}", sent.elapsed().as_secs_f64()),
-                        });
+                        let mut taken = Vec::new();
+                        for _ in 0..MEASUREMENTS {
+                            let s = head
+                                .request::<MeasureEndpoint>(&MeasureRequest { at: None })
+                                .await
+                                .context("a measurement")?;
+                            taken.push(s.signal);
+                        }
+                        measure = Some(taken);
                     }
                     head.close().await;
                     last = Some((identity, status));
@@ -212,14 +222,11 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
                 anyhow::Ok((last.context("no session")?, measure))
             })
         });
-    // The board prints its report when told to stop.
-    let _ = Command::new("kill").arg("-TERM").arg(board.id().to_string()).status();
-    let out = board.wait_with_output().context("waiting for the board")?;
-    let mut rest = String::new();
-    let _ = std::io::Read::read_to_string(&mut err, &mut rest);
-    let report: Value = serde_json::from_slice(&out.stdout).with_context(|| format!("the board's report (stderr: {rest})"))?;
+    let report = board.stop()?;
     let ((identity, status), measure) =
         client.with_context(|| format!("the host's client on the board's port; the board: {}", report["usb"]))?;
+    let board_signals = measure.context("no measurement")?;
+    let sim = simulated_measurement()?;
     // The laser enable's high stretches, from the board's pin log (s).
     let mut laser = Vec::new();
     let mut on = None;
@@ -241,23 +248,40 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
     if !report["stopped"].as_str().is_some_and(|s| s.starts_with("stopped")) {
         problems.push(format!("the board stopped: {}", report["stopped"]));
     }
-    if !measure.as_deref().is_some_and(|m| m.starts_with("refused")) {
-        problems.push(format!("a measurement with no conversions: {measure:?} (it must be refused)"));
+    // Each measurement alike (a measurement must not start with the last
+    // one's codes: defect 1), and like the simulated head's.
+    let first = &board_signals[0];
+    for (k, s) in board_signals.iter().enumerate() {
+        let sigma = (s.noise_v.powi(2) + first.noise_v.powi(2)).sqrt();
+        if (s.amplitude_v - first.amplitude_v).abs() > 4.0 * sigma || !s.flags.is_empty() && s.flags != first.flags {
+            problems.push(format!("measurement {k} differs from the first: {s:?} against {first:?}"));
+        }
+        if ((s.amplitude_v - sim.amplitude_v) / sim.amplitude_v).abs() as f64 > SIM_AGREEMENT {
+            problems.push(format!(
+                "measurement {k} is {} V, the simulated head's {} V (bar {SIM_AGREEMENT} relative)",
+                s.amplitude_v, sim.amplitude_v
+            ));
+        }
     }
-    // The laser is on for a measurement only: every stretch ends, within
-    // the second a stalled conversion chain may take to be given up.
+    // The laser is on for a measurement only: every stretch ends within
+    // one measurement's time.
     let longest = laser
         .iter()
         .map(|s| s[1].as_f64().map_or(f64::INFINITY, |off| off - s[0].as_f64().unwrap_or(0.0)))
         .fold(0.0, f64::max);
-    if longest > LASER_STALL_S {
-        problems.push(format!("the laser stayed on {longest} s (bar {LASER_STALL_S} s): {laser:?}"));
+    if longest > LASER_MEASURE_S || laser.len() != MEASUREMENTS {
+        problems.push(format!(
+            "the laser was on {} times, the longest {longest} s (bar: {MEASUREMENTS} times, {LASER_MEASURE_S} s): {laser:?}",
+            laser.len()
+        ));
     }
     if !problems.is_empty() {
         bail!("the image over USB on the virtual board: {}", problems.join("; "));
     }
+    let signal = |s: &gonio_shared::Signal| json!({"amplitude_v": s.amplitude_v, "noise_v": s.noise_v, "phase_deg": s.phase_deg, "gain_index": s.gain_index, "flags": format!("{:?}", s.flags)});
     Ok(json!({
-        "measure_without_conversions": measure,
+        "measurements": board_signals.iter().map(signal).collect::<Vec<_>>(),
+        "simulated_head_measurement": signal(&sim),
         "laser_on_stretches_s": laser,
         "laser_on_longest_s": longest,
         "identity": {
@@ -270,6 +294,19 @@ fn usb_session(root: &Path, image: &Path) -> Result<Value> {
         "status": { "state": format!("{:?}", status.state), "laser_on": status.laser_on, "drivers_enabled": status.drivers_enabled, "estop_open": status.estop_open },
         "board": { "stack_bytes_max": report["stack_bytes_max"], "busiest_functions": report["busiest_functions"], "busiest_registers": report["busiest_registers"], "instructions": report["instructions"], "stopped": report["stopped"], "virtual_seconds": report["virtual_seconds"], "host_seconds": report["host_seconds"], "interrupts": report["interrupts"], "usb": report["usb"], "unsafe": report["unsafe"] },
     }))
+}
+
+/// The in-process simulated head's measurement where its stages powered up
+/// (the board's plant is the same world, with the same default head).
+fn simulated_measurement() -> Result<gonio_shared::Signal> {
+    use gonio_frames::{replies, send};
+    use gonio_shared::icd::{MeasureEndpoint, MeasureRequest};
+    let mut head = gonio_sim::FrameHead::new(&gonio_sim::SimConfig::default());
+    let sent = head.serve([send::<MeasureEndpoint>(&MeasureRequest { at: None })]);
+    let reply = replies::<MeasureEndpoint>(&sent)
+        .pop()
+        .context("the simulated head's measurement")?;
+    Ok(reply.map_err(|f| anyhow::anyhow!("the simulated head refused: {f:?}"))?.signal)
 }
 
 fn main() -> Result<()> {
@@ -299,7 +336,8 @@ fn main() -> Result<()> {
     let run = python(&root, "emulate.py", &["costs".as_ref(), images.join("gonio-cost").as_os_str()])?;
     // The unmodified image on the virtual board, from reset.
     let board = board_run(&root, &images.join("gonio-head"))?;
-    let usb = usb_session(&root, &images.join("gonio-head"))?;
+    let plant = board_plant(&root)?;
+    let usb = usb_session(&root, &images.join("gonio-head"), &plant)?;
     let p = &run["probes"];
     let max = |name: &str| p[name]["max"].as_u64().with_context(|| format!("no figure for {name}"));
     let mean = |name: &str| -> Result<f64> {

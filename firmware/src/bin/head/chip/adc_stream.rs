@@ -73,7 +73,15 @@ impl TimedAdc {
         let buf = DMA_BUF.init([0; 2 * MAX_M]);
         // SAFETY: the DMA reads ADC1's data register, a valid 16-bit
         // peripheral address, into a buffer that lives for the program.
-        let ring = unsafe { ReadableRingBuffer::new(dma, request, r.dr().as_ptr() as *mut u16, buf, TransferOptions::default()) };
+        let mut ring = unsafe { ReadableRingBuffer::new(dma, request, r.dr().as_ptr() as *mut u16, buf, TransferOptions::default()) };
+        // The stream runs from here on, and the conversions alone start and
+        // stop. A stream disabled and enabled again restarts at its base
+        // address with the count it stopped at (RM0090 §10.3.14: to resume,
+        // software must rewrite the addresses and NDTR), while the ring
+        // would resynchronise to where NDTR says it stopped: every
+        // measurement after the first would read the codes of the one
+        // before.
+        ring.start();
 
         let sample_clock = Timer::new(tim2);
         sample_clock.set_master_mode(MasterMode::UPDATE);
@@ -114,6 +122,13 @@ impl AdcStream for TimedAdc {
         self.sample_clock.regs_core().cnt().write(|w| w.set_cnt(0));
         self.chop.set_max_compare_value((m - 1) as u16);
         self.chop.set_compare_value(Channel::Ch1, (m / 2) as u16);
+        // The chop rises as TIM3 starts, one sample period before the
+        // trigger of the block's first sample, and falls at the trigger of
+        // sample M/2 − 1: each edge leads its block's sample by the sample
+        // and hold's delay and the amplifier's lag, so that samples 0 to
+        // M/2 − 1 see the light. Shown on the virtual board: with the edges
+        // on the triggers of samples 0 and M/2 the amplitude reads 6 % low
+        // and the phase 4° late.
         self.chop.regs_core().cnt().write(|w| w.set_cnt(0));
         self.chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::PwmMode1);
         self.chop.enable_channel(Channel::Ch1, true);
@@ -122,7 +137,7 @@ impl AdcStream for TimedAdc {
         // thing the DMA moves when it resumes, and would open this
         // measurement with a code of the last one, one sample out of phase
         // with the chop: read it out, clear the flags, re-arm the ADC's DMA
-        // requests (an overrun stops them), then resynchronise the ring to
+        // requests (an overrun stops them), then move the ring's reader to
         // where the DMA writes next.
         let adc = pac::ADC1;
         let _ = adc.dr().read();
@@ -134,7 +149,6 @@ impl AdcStream for TimedAdc {
         adc.cr2().modify(|w| w.set_dma(false));
         adc.cr2().modify(|w| w.set_dma(true));
         self.ring.clear();
-        self.ring.start();
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::RISING_EDGE));
         self.sample_clock.start();
         self.running = true;
@@ -153,7 +167,6 @@ impl AdcStream for TimedAdc {
         self.chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::ForceInactive);
         self.chop.enable_channel(Channel::Ch1, true);
         self.chop.stop();
-        self.ring.request_pause();
         self.running = false;
     }
 

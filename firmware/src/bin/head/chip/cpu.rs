@@ -8,8 +8,12 @@
 //!   is a lost microstep at speed), the E-STOP comes next, then the
 //!   conversions' DMA and the time driver, and USB last (its host retries).
 //!   Lower numbers pre-empt higher ones; the serve loop runs in thread mode.
-//! - Watchdog under a debugger: the IWDG keeps counting while the core is
-//!   halted at a breakpoint and resets it; DBGMCU freezes it instead.
+//! - Watchdog under a debugger: left counting while the core is halted
+//!   (DBGMCU's freeze bit stays clear). probe-rs halts on a HardFault,
+//!   before the handler can drive the safe state; the watchdog's reset
+//!   then brings the pins back safe within a second. A debugging session
+//!   that needs to hold a breakpoint sets DBGMCU_APB1_FZ.DBG_IWDG_STOP
+//!   itself.
 
 use embassy_stm32::interrupt::{self, InterruptExt, Priority};
 use embassy_stm32::pac;
@@ -33,5 +37,4 @@ pub fn setup() {
     interrupt::EXTI15_10.set_priority(ESTOP);
     interrupt::TIM4.set_priority(TIME_DRIVER);
     interrupt::OTG_FS.set_priority(USB);
-    pac::DBGMCU.apb1fzr().modify(|w| w.set_iwdg(true));
 }

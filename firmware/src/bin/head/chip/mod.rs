@@ -10,6 +10,7 @@ mod usb_link;
 mod watchdog;
 
 use adc_stream::TimedAdc;
+use defmt_rtt as _;
 use embassy_executor::Spawner;
 use embassy_futures::select::{select, Either};
 use embassy_stm32::{bind_interrupts, peripherals, usb, Config};
@@ -19,7 +20,6 @@ use gonio_firmware::hw::{Board, Clock, Hardware};
 use gonio_firmware::Head;
 use static_cell::StaticCell;
 use step_timer::StepTimer5;
-use {defmt_rtt as _, panic_probe as _};
 
 bind_interrupts!(pub struct Irqs {
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;

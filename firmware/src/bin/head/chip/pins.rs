@@ -29,13 +29,18 @@ use embassy_stm32::Peri;
 
 pub const NAME: &str = "gonio head STM32F405RG rev A";
 
-/// Puts the pins of the table above into the safe state (laser off, STEP
-/// low, drivers disabled) by writing the GPIO set/reset registers directly.
+/// Puts the pins of the table above into the safe state (laser enable and
+/// chop low, STEP low, drivers disabled) by writing the GPIO registers
+/// directly.
 /// For the fault handler only: it runs when the owners of the pins can no
 /// longer be trusted, and a BSRR write is atomic whatever they were doing.
 pub fn force_safe_state() {
-    use embassy_stm32::pac::{GPIOB, GPIOC};
+    use embassy_stm32::pac::gpio::vals::Moder;
+    use embassy_stm32::pac::{GPIOA, GPIOB, GPIOC};
     GPIOB.bsrr().write(|w| w.set_br(0, true));
+    // The chop (TIM3's output) taken from the timer: PA6 a plain output, low.
+    GPIOA.bsrr().write(|w| w.set_br(6, true));
+    GPIOA.moder().modify(|w| w.set_moder(6, Moder::OUTPUT));
     GPIOC.bsrr().write(|w| {
         for axis in 0..3 {
             w.set_br(4 * axis, true);
