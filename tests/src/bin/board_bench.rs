@@ -1,0 +1,212 @@
+//! board-bench: the unmodified release image scans on the virtual STM32F405
+//! board (`tests/chip/board/`), driven by `gonio scan --port` over the
+//! board's USB host and pseudo-terminal, with the simulated head's world
+//! behind its pins (`board-plant`). Prints one JSON object:
+//!
+//! - `points_stored` against `points_planned`: the samples the board's scan
+//!   stored, and those the in-process simulated head's scan of the same
+//!   grid stores (the blind zone's points are skipped by both);
+//! - `fits_agree`: retro-phong fitted to each scan, calibrated with the
+//!   simulated head's plate scan (the plant is the simulated head's world:
+//!   same laser, photodiode and gains), every parameter within 2 combined
+//!   standard errors;
+//! - `step_edge_lateness_ticks_max` (bar ≤ 2): the longest a STEP edge rose
+//!   after the step timer's compare that was due, in ticks of its 1 MHz
+//!   clock, from the board's pin log;
+//! - `step_isr_latency_cycles_max`: the longest the step timer's interrupt
+//!   waited from pending to its handler (USB, DMA and the time driver's
+//!   interrupts, and critical sections, in the way);
+//! - `cpu_load`: instructions over cycles for the whole run (one cycle per
+//!   instruction; the core's waits are idle);
+//! - `stack_high_water_bytes` (bar ≤ 48 KiB);
+//! - `emulated_s`, `wall_s`.
+//!
+//! The board runs at most `PACE` times faster than the wall clock: the
+//! host's heartbeat (every 5 s) must reach the head's 20 s watch. The
+//! stages power up a degree from their home switches, so that homing takes
+//! seconds, not the minutes of a full travel.
+
+use anyhow::{bail, Context, Result};
+use gonio_firmware::config::{CPU_HZ, REFERENCE};
+use gonio_tests::chip_costs;
+use gonio_tests::virtual_board::{board_plant, Board};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const TARGET: &str = "thumbv7em-none-eabihf";
+/// A subset of the Belcour grid over its three incidences: 351 points.
+const GRID: [&str; 7] = [
+    "--theta-i",
+    "15,30,60",
+    "--theta-o",
+    "0:80:10",
+    "--dphi",
+    "-180:180:30",
+    "--no-patterns",
+];
+const MATERIAL: [&str; 4] = ["--material", "retro-phong", "--seed", "1"];
+const PACE: &str = "3";
+const STACK_BAR_BYTES: u64 = 48 * 1024;
+const LATENESS_BAR_TICKS: f64 = 2.0;
+/// The step timer's tick (cycles of the 168 MHz core).
+const TICK_CYCLES: f64 = CPU_HZ / 1e6;
+
+fn cargo(root: &Path, args: &[&str]) -> Result<()> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut c = Command::new(cargo);
+    c.args(args).current_dir(root);
+    if !cfg!(debug_assertions) && !args.contains(&"--target") {
+        c.arg("--release");
+    }
+    if !c.status().with_context(|| format!("cargo {args:?}"))?.success() {
+        bail!("cargo {args:?} failed");
+    }
+    Ok(())
+}
+
+/// Runs `gonio ARGS` and reads the JSON object it prints.
+fn gonio(bin: &Path, args: &[&str]) -> Result<Value> {
+    let out = Command::new(bin).args(args).output().with_context(|| format!("gonio {args:?}"))?;
+    let v: Value = serde_json::from_slice(&out.stdout)
+        .with_context(|| format!("gonio {args:?} printed no JSON: {}", String::from_utf8_lossy(&out.stderr)))?;
+    if !out.status.success() {
+        bail!("gonio {args:?}: {v}");
+    }
+    Ok(v)
+}
+
+/// Calibrates the scan in `dir` with the plate scan `reference` and fits
+/// retro-phong to it: (parameters, standard errors).
+fn fit(bin: &Path, dir: &Path, reference: &Path) -> Result<Value> {
+    let d = dir.to_str().context("a UTF-8 path")?;
+    gonio(
+        bin,
+        &["calibrate", d, "--reference", reference.to_str().context("a UTF-8 path")?, "--json"],
+    )?;
+    gonio(bin, &["fit", &format!("{d}/calibrated.csv"), "--model", "retro-phong", "--json"])
+}
+
+fn stored(dir: &Path) -> Result<usize> {
+    let text = std::fs::read_to_string(dir.join("samples.csv")).with_context(|| format!("{}/samples.csv", dir.display()))?;
+    Ok(text.lines().count().saturating_sub(1))
+}
+
+fn main() -> Result<()> {
+    let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
+    cargo(
+        &root,
+        &[
+            "build",
+            "--locked",
+            "-p",
+            "gonio-firmware",
+            "--bin",
+            "gonio-head",
+            "--target",
+            TARGET,
+            "--release",
+        ],
+    )?;
+    cargo(&root, &["build", "--locked", "-p", "gonio", "--bin", "gonio"])?;
+    let plant = board_plant(&root)?;
+    let gonio_bin = plant.with_file_name("gonio");
+    let image = chip_costs::target_dir().join(TARGET).join("release").join("gonio-head");
+    let work = tempfile::tempdir()?;
+    let (sim_dir, board_dir) = (work.path().join("sim"), work.path().join("board"));
+
+    // The in-process simulated head: the plan and the fit to agree with.
+    let mut args = vec![
+        "scan",
+        "--sim",
+        "--reference-plate",
+        "--json",
+        "--out",
+        sim_dir.to_str().context("path")?,
+    ];
+    args.extend(GRID);
+    args.extend(MATERIAL);
+    gonio(&gonio_bin, &args)?;
+    let planned = stored(&sim_dir)?;
+    let reference = sim_dir.join("reference.csv");
+    let sim_fit = fit(&gonio_bin, &sim_dir, &reference)?;
+
+    // The board, its stages a degree above their home switches.
+    let power_up = REFERENCE.axes.map(|a| format!("{}", a.home_deg + 1.0)).join(",");
+    let plant_cmd = format!("{} {} --power-up={power_up}", plant.display(), MATERIAL.join(" "));
+    let started = std::time::Instant::now();
+    let board = Board::start(
+        &root,
+        &image,
+        &[
+            "--pace".as_ref(),
+            PACE.as_ref(),
+            "--seconds".as_ref(),
+            "7200".as_ref(),
+            "--plant".as_ref(),
+            plant_cmd.as_ref(),
+        ],
+    )?;
+    let mut args = vec!["scan", "--port", &board.pty, "--json", "--out", board_dir.to_str().context("path")?];
+    args.extend(GRID);
+    let scan = gonio(&gonio_bin, &args);
+    let report = board.stop()?;
+    let wall_s = started.elapsed().as_secs_f64();
+    let scan = scan.with_context(|| format!("the scan on the board; the board: {}", report["stopped"]))?;
+    let points = stored(&board_dir)?;
+    let board_fit = fit(&gonio_bin, &board_dir, &reference)?;
+
+    let mut agree = serde_json::Map::new();
+    let mut fits_agree = true;
+    for (name, a) in sim_fit["params"].as_object().context("the simulated scan's fit")? {
+        let (a, b) = (
+            a.as_f64().unwrap_or(f64::NAN),
+            board_fit["params"][name].as_f64().unwrap_or(f64::NAN),
+        );
+        let (sa, sb) = (
+            sim_fit["stderr"][name].as_f64().unwrap_or(f64::NAN),
+            board_fit["stderr"][name].as_f64().unwrap_or(f64::NAN),
+        );
+        let z = (a - b).abs() / (sa * sa + sb * sb).sqrt();
+        fits_agree &= z <= 2.0;
+        agree.insert(name.clone(), json!({"simulated": a, "board": b, "combined_sigmas": z}));
+    }
+    let lateness_ticks = report["step_edge_lateness_cycles"]["max"].as_f64().map(|c| c / TICK_CYCLES);
+    let stack = report["stack_bytes_max"].as_u64().context("the board's stack")?;
+    let emulated_s = report["virtual_seconds"].as_f64().context("the board's time")?;
+    let instructions = report["instructions"].as_f64().context("the board's instructions")?;
+    let figures = json!({
+        "grid": GRID.join(" "),
+        "material": MATERIAL.join(" "),
+        "points_planned": planned,
+        "points_stored": points,
+        "scan": scan,
+        "fits": agree,
+        "fits_agree": fits_agree,
+        "step_edges": report["step_edges"],
+        "step_edge_lateness_ticks_max": lateness_ticks,
+        "step_edge_lateness_cycles": report["step_edge_lateness_cycles"],
+        "step_isr_latency_cycles_max": report["interrupt_latency_cycles_max"]["TIM5"],
+        "interrupt_latency_cycles_max": report["interrupt_latency_cycles_max"],
+        "interrupts": report["interrupts"],
+        "cpu_load": instructions / (emulated_s * CPU_HZ),
+        "stack_high_water_bytes": stack,
+        "board_stopped": report["stopped"],
+        "unsafe_at_end": !report["safe_at_end"].as_bool().unwrap_or(false),
+        "emulated_s": emulated_s,
+        "wall_s": wall_s,
+        "bars": {
+            "points_stored": planned,
+            "step_edge_lateness_ticks_max": LATENESS_BAR_TICKS,
+            "stack_high_water_bytes": STACK_BAR_BYTES,
+        },
+        "bars_met": {
+            "points_stored": points == planned,
+            "fits_agree": fits_agree,
+            "step_edge_lateness_ticks_max": lateness_ticks.is_some_and(|t| t <= LATENESS_BAR_TICKS),
+            "stack_high_water_bytes": stack <= STACK_BAR_BYTES,
+        },
+    });
+    println!("{figures}");
+    Ok(())
+}
