@@ -87,8 +87,12 @@ fn fit(bin: &Path, dir: &Path, reference: &Path) -> Result<Value> {
     gonio(bin, &["fit", &format!("{d}/calibrated.csv"), "--model", "retro-phong", "--json"])
 }
 
+/// Samples stored in `dir`: its samples file, or the one an interrupted
+/// scan left.
 fn stored(dir: &Path) -> Result<usize> {
-    let text = std::fs::read_to_string(dir.join("samples.csv")).with_context(|| format!("{}/samples.csv", dir.display()))?;
+    let whole = dir.join("samples.csv");
+    let file = if whole.exists() { whole } else { dir.join("samples.csv.part") };
+    let text = std::fs::read_to_string(&file).with_context(|| format!("{}", file.display()))?;
     Ok(text.lines().count().saturating_sub(1))
 }
 
@@ -152,12 +156,16 @@ fn main() -> Result<()> {
     let scan = gonio(&gonio_bin, &args);
     let report = board.stop()?;
     let wall_s = started.elapsed().as_secs_f64();
-    let scan = scan.with_context(|| format!("the scan on the board; the board: {}", report["stopped"]))?;
+    // An interrupted scan is reported too, with what the board saw.
+    let scan = scan.map_err(|e| format!("{e:#}"));
     let points = stored(&board_dir)?;
-    let board_fit = fit(&gonio_bin, &board_dir, &reference)?;
+    let board_fit = match &scan {
+        Ok(_) => fit(&gonio_bin, &board_dir, &reference)?,
+        Err(_) => Value::Null,
+    };
 
     let mut agree = serde_json::Map::new();
-    let mut fits_agree = true;
+    let mut fits_agree = scan.is_ok();
     for (name, a) in sim_fit["params"].as_object().context("the simulated scan's fit")? {
         let (a, b) = (
             a.as_f64().unwrap_or(f64::NAN),
@@ -180,7 +188,8 @@ fn main() -> Result<()> {
         "material": MATERIAL.join(" "),
         "points_planned": planned,
         "points_stored": points,
-        "scan": scan,
+        "scan": scan.as_ref().ok(),
+        "scan_error": scan.as_ref().err(),
         "fits": agree,
         "fits_agree": fits_agree,
         "step_edges": report["step_edges"],
@@ -208,5 +217,8 @@ fn main() -> Result<()> {
         },
     });
     println!("{figures}");
+    if let Err(e) = scan {
+        bail!("the scan on the board did not complete: {e}");
+    }
     Ok(())
 }
