@@ -119,11 +119,6 @@ impl Plant {
         }
     }
 
-    /// True stage angles (degrees) as the plant holds them now.
-    pub fn angles(&self) -> [f64; 3] {
-        self.world.angles()
-    }
-
     /// Applies the changes up to `t`, the amplifier following the light
     /// between them.
     fn run_to(&mut self, t: f64) {

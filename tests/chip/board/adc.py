@@ -48,7 +48,7 @@ class Adc(Block):
         self.seen = 0  # triggers up to here are collected
         self.waiting = []  # trigger instants whose conversions have not ended
         self.event = None
-        self.conversions = 0
+        self.conversions = 0  # ended, for the board's report
         self.lost = 0  # results overwritten or dropped by an overrun
         dma.before_access = self._advance
         dma.after_write = self._after_dma_write
@@ -71,17 +71,14 @@ class Adc(Block):
     def _conversion_cycles(self):
         return self._sample_cycles() + 12 * self._adcclk_cycles()
 
+    def _listening(self):
+        """Whether the ADC is on and takes TIM2's TRGO as its trigger."""
+        return self.cr2 & 1 and self.cr2 >> 28 & 3 and self.cr2 >> 24 & 0xF == EXTSEL_TIM2_TRGO
+
     def _triggered(self):
         """Whether TIM2's updates start conversions now."""
         t = self.timer
-        return (
-            self.cr2 & 1
-            and self.cr2 >> 28 & 3
-            and self.cr2 >> 24 & 0xF == EXTSEL_TIM2_TRGO
-            and t.cr2 >> 4 & 7 == 0b010
-            and t.running
-            and not t._external()
-        )
+        return self._listening() and t.cr2 >> 4 & 7 == 0b010 and t.running and not t._external()
 
     # --- the chain, brought up to now ---------------------------------------------
     def _advance(self):
@@ -146,7 +143,7 @@ class Adc(Block):
     def _trigger_edge(self, master):
         """A software update of TIM2 (EGR.UG) is a TRGO edge too when its
         master mode is reset or update."""
-        if self.cr2 & 1 and self.cr2 >> 28 & 3 and self.cr2 >> 24 & 0xF == EXTSEL_TIM2_TRGO and master.cr2 >> 4 & 7 in (0, 2):
+        if self._listening() and master.cr2 >> 4 & 7 in (0, 2):
             if not self.sr & OVR:
                 self.waiting.append(self.clock.now)
                 self._schedule()

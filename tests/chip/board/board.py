@@ -258,6 +258,12 @@ class Board:
                 "device_descriptor": self.host.descriptor.hex() if self.host.descriptor else None,
                 "configuration_bytes": len(self.host.configuration or b""),
             },
+            "conversions": {
+                "ended": self.adc.conversions,
+                "lost": self.adc.lost,
+                "moved_by_dma": self.dma.moved,
+                "forbidden_dma_writes": [{"t": c / HZ, "register": r, "value": f"{v:#x}"} for c, r, v in self.dma.forbidden],
+            },
             "exti_edges": [{"line": n, "rising": r, "latched": l} for n, r, l in self.exti.edges],
         }
 

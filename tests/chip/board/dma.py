@@ -60,7 +60,7 @@ class Dma(Block):
         self.before_access = lambda: None
         self.after_write = lambda: None
         self.forbidden = []  # (seconds, register, value): writes the manual forbids
-        self.moved = 0  # items moved in all
+        self.moved = 0  # items moved in all, for the board's report
 
     # --- what the requester does -----------------------------------------
     def accepts(self, source):

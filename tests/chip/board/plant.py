@@ -22,14 +22,12 @@ class Plant:
         self.outputs = set(header["outputs"])
         self.switches = header["switches"]
         self.photodiode = header["photodiode"]
-        self.questions = 0
 
     def output(self, cycle, pin, level):
         if pin in self.outputs:
             self.proc.stdin.write(f"p {cycle} {pin} {level}\n")
 
     def _ask(self, line):
-        self.questions += 1
         self.proc.stdin.write(line + "\n")
         self.proc.stdin.flush()
         answer = self.proc.stdout.readline()
@@ -46,9 +44,6 @@ class Plant:
         at `start + k·step` cycles."""
         return bytes.fromhex(self._ask(f"c {n} {start!r} {step!r}"))
 
-    def angles(self):
-        """The stages' true angles (degrees)."""
-        return [float(a) for a in self._ask("a").split()]
 
     def close(self):
         self.proc.stdin.close()

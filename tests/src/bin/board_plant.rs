@@ -7,7 +7,6 @@
 //! - `s CYCLE`: the switches' levels, `0`/`1` separated by spaces;
 //! - `c N T0 DT`: N conversions sampled at T0 + k·DT cycles, answered as the
 //!   hex of their little-endian 16-bit codes (the bytes the DMA writes);
-//! - `a`: the true stage angles (degrees), separated by spaces.
 //!
 //! Times are cycles of the board's 168 MHz clock. The head is described by
 //! the options `gonio simulate` takes (`--material`, `--seed`, ...), so that
@@ -91,10 +90,6 @@ fn main() -> Result<()> {
                     write!(hex, "{lo:02x}{hi:02x}")?;
                 }
                 writeln!(out, "{hex}")?;
-                out.flush()?;
-            }
-            Some(b'a') => {
-                writeln!(out, "{}", plant.angles().map(|a| a.to_string()).join(" "))?;
                 out.flush()?;
             }
             _ => bail!("{line:?}: not a plant command"),
