@@ -236,6 +236,7 @@ impl<B: Board> Head<B> {
             sanity_loaded: self.sanity.is_some(),
             last_fault: self.last_fault,
             uptime_us: self.hw.clock.now_us(),
+            requests_held: 0,
         }
     }
 

@@ -125,6 +125,7 @@ async fn watch<L: Link, S: Sentry>(
                         let now = Status {
                             uptime_us: sentry.now_us(),
                             estop_open: sentry.estop_open(),
+                            requests_held: inbox.held.len() as u8,
                             ..*status
                         };
                         if send_keyed(kind, StatusEndpoint::RESP_KEY, seq, &now, link).await.is_err() {
@@ -397,7 +398,13 @@ impl<B: Board> Head<B> {
         }
         match cmd {
             Command::Identify(()) => answer!(IdentifyEndpoint, self.identity()),
-            Command::Status(()) => answer!(StatusEndpoint, self.status()),
+            Command::Status(()) => answer!(
+                StatusEndpoint,
+                Status {
+                    requests_held: inbox.held.len() as u8,
+                    ..self.status()
+                }
+            ),
             Command::Mechanics(()) => answer!(MechanicsEndpoint, self.cfg.mechanics()),
             Command::Home(r) => under_watch!(HomeEndpoint, HeadState::Homing, |h| h.home(r)),
             Command::Move(g) => under_watch!(MoveEndpoint, HeadState::Moving, |h| h.move_to(g)),

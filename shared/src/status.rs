@@ -50,4 +50,9 @@ pub struct Status {
     pub sanity_loaded: bool,
     pub last_fault: Option<Fault>,
     pub uptime_us: u64,
+    /// Requests received and kept unanswered while an operation or a scan
+    /// point runs (answered when it ends). With none kept, a request the
+    /// host sent before this poll that is not the running operation's own
+    /// was lost on the link.
+    pub requests_held: u8,
 }

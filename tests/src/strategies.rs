@@ -215,13 +215,14 @@ pub fn status() -> impl Strategy<Value = Status> {
             any::<bool>(),
             proptest::option::of(fault()),
             any::<u64>(),
+            any::<u8>(),
         ),
     )
         .prop_map(
             |(
                 state,
                 (homed, laser_on, axes, detection, drivers_enabled, estop_open),
-                (sent, flagged, remeasured, sanity_loaded, last_fault, up),
+                (sent, flagged, remeasured, sanity_loaded, last_fault, up, held),
             )| Status {
                 state,
                 homed,
@@ -236,6 +237,7 @@ pub fn status() -> impl Strategy<Value = Status> {
                 sanity_loaded,
                 last_fault,
                 uptime_us: up,
+                requests_held: held,
             },
         )
 }

@@ -284,8 +284,10 @@ async fn lost_answers_and_requests_over_a_port_are_recovered_by_reconnecting() {
     let cfg = SimConfig {
         // Requests 1–7 identify the head, ask its mechanics and prepare it, 8
         // starts the scan (its answer, frame 8, is lost); the probe is status
-        // traffic, not counted; 9–15 do the same with the head found again
-        // and 16, its scan request, is lost.
+        // traffic, not counted. The head found again may already hold that
+        // scan (it saw the port close), and is then continued, 16 being one of
+        // its visit chunks; or not yet: then 9–15 prepare it again and 16
+        // starts the scan. Either way request 16 is lost, and found lost.
         faults: gonio_sim::faults::Faults::parse("drop@8,req-drop@16").unwrap(),
         ..SimConfig::default()
     };

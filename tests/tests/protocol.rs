@@ -238,6 +238,7 @@ fn largest_messages_fit_the_frame_buffer() {
         sanity_loaded: true,
         last_fault: Some(Fault::HomeSwitchNotFound(Axis::Arm)),
         uptime_us: u64::MAX,
+        requests_held: u8::MAX,
     };
     assert!(encode(StatusEndpoint::RESP_KEY, VarKeyKind::Key8, seq, &st, &mut buf).is_some());
     // And the largest request the host can send.

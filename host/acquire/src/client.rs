@@ -6,7 +6,8 @@ use crate::target::{Opened, Target};
 use anyhow::{anyhow, bail, Context, Result};
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_shared::icd::{
-    Answer, ContinueEndpoint, HeadEndpoint, IdentifyEndpoint, Latency, MechanicsEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
+    Answer, ContinueEndpoint, HeadEndpoint, HomeEndpoint, IdentifyEndpoint, Latency, LearnEndpoint, MeasureEndpoint, MechanicsEndpoint,
+    MoveEndpoint, ScanEndpoint, ScanEventTopic, StatusEndpoint,
 };
 use gonio_shared::{HeadState, Identity, ScanAccepted, ScanEvent, ScanSpec, Status, PROTOCOL_VERSION};
 use postcard_rpc::host_client::{HostClient, HostErr, Subscription};
@@ -191,14 +192,16 @@ where
 }
 
 /// A request watched for loss. Once it has gone unanswered for
-/// [`PROBE_AFTER`], one status request follows it. The head takes requests
-/// one at a time in the order they arrive (the firmware's serve loop) and
-/// answers a status poll at once, also while an operation runs, with that
-/// operation's state; so a probe answered with the head at rest means the
-/// request, or its answer, was lost on the link: that is reported at once
-/// as [`CallError::Lost`] instead of after the request's full timeout
-/// (minutes for homing). A probe answered with the head busy, or not
-/// answered, changes nothing: the request's own timeout stands.
+/// [`PROBE_AFTER`], one status request follows it. The head reads frames in
+/// the order they arrive and answers a status poll at once, also while an
+/// operation or a scan point runs, with that operation's state and the
+/// number of requests it keeps for when it ends; so a probe answered with
+/// no request kept and no operation of this request's kind running means
+/// the request, or its answer, was lost on the link: that is reported at
+/// once as [`CallError::Lost`] instead of after the request's full timeout
+/// (minutes for homing). A probe that finds the request possibly kept or
+/// running, or is not answered, changes nothing: the request's own timeout
+/// stands.
 async fn watched<E: Endpoint>(client: &HostClient<WireError>, req: &E::Request, timeout: Duration) -> Result<E::Response, CallError>
 where
     E::Request: Serialize + Schema,
@@ -219,7 +222,7 @@ where
         biased;
         r = &mut answer => return r,
         p = &mut probe => match p {
-            Ok(status) if !busy(&status.state, E::PATH) => return Err(CallError::Lost(E::PATH)),
+            Ok(status) if !may_hold(&status, E::PATH) => return Err(CallError::Lost(E::PATH)),
             _ => answer,
         },
         () = heartbeats(client) => unreachable!("heartbeats never end"),
@@ -230,17 +233,21 @@ where
     }
 }
 
-/// The head is running an operation, which holds the requests that arrive
-/// meanwhile (the request `path`'s own, answered when it ends), or a scan's
-/// point (a visit chunk is taken when the point is done); a scan's own
-/// request is answered as the scan starts, so a scan found running means
-/// that answer was lost.
-fn busy(state: &HeadState, path: &str) -> bool {
-    match state {
-        HeadState::Homing | HeadState::Moving | HeadState::Measuring | HeadState::Stopping => true,
-        HeadState::Scanning { .. } => path != ScanEndpoint::PATH,
+/// Whether the head, as `status` shows it, may still answer the request
+/// `path`: it keeps requests for when its operation ends, or it is running
+/// this request's own operation (answered when it ends). A scan's own
+/// request is answered as the scan starts, and a visit chunk is kept or
+/// answered between points, so a scan found running with nothing kept
+/// means the request was lost.
+fn may_hold(status: &Status, path: &str) -> bool {
+    let running = match status.state {
+        HeadState::Homing => path == HomeEndpoint::PATH,
+        HeadState::Moving => path == MoveEndpoint::PATH,
+        HeadState::Measuring => path == MeasureEndpoint::PATH || path == LearnEndpoint::PATH,
+        HeadState::Stopping => true,
         _ => false,
-    }
+    };
+    running || status.requests_held > 0
 }
 
 /// Sends a status request every [`HEARTBEAT`], answers unread, for as long
