@@ -22,6 +22,7 @@ that count. Execution is in order and without exceptions, so a block always
 runs to its end.
 """
 
+import bisect
 import ctypes
 import json
 import os
@@ -85,6 +86,14 @@ class Elf:
                 self.symbols[name] = value
                 if info & 0xF == 2 and size:  # STT_FUNC
                     self.functions.append((value & ~1, size, name))
+        self.functions.sort()
+        self._starts = [f[0] for f in self.functions]
+
+    def function_at(self, addr):
+        """The name of the function holding `addr`, or the address."""
+        i = bisect.bisect_right(self._starts, addr) - 1
+        f = self.functions[i] if i >= 0 else None
+        return f[2] if f and addr < f[0] + f[1] else f"{addr:#x}"
 
 
 class Counter(ctypes.Structure):
@@ -193,14 +202,9 @@ class Machine:
 
 def by_function(elf, profile, top=40):
     """The functions a profile's instructions ran in, largest first."""
-    funcs = sorted(elf.functions)
-    starts = [f[0] for f in funcs]
-    import bisect
-
     totals = {}
     for addr, n in profile.items():
-        i = bisect.bisect_right(starts, addr) - 1
-        name = funcs[i][2] if i >= 0 and addr < funcs[i][0] + funcs[i][1] else f"{addr:#x}"
+        name = elf.function_at(addr)
         totals[name] = totals.get(name, 0) + n
     return sorted(totals.items(), key=lambda kv: -kv[1])[:top]
 

@@ -171,6 +171,20 @@ class Board:
             f"P{p.letter}{n}": p.level[n] for p in self.ports.values() for n in range(16) if p.mode(n) in (1, 2)
         }
 
+    def _wait(self, cycles, why, taken_at):
+        """An interrupt's wait, in the report: where it pended and what
+        masked it, where it was taken."""
+        blocked = None
+        if why is not None:
+            pc, primask, basepri, exception = why
+            blocked = {
+                "in": self.elf.function_at(pc),
+                "primask": primask,
+                "basepri": basepri,
+                "exception": IRQ_NAMES.get(exception - 16, exception) if exception else None,
+            }
+        return {"cycles": cycles, "masked": blocked, "taken_in": self.elf.function_at(taken_at)}
+
     def _watchdog(self):
         raise WatchdogReset()
 
@@ -221,9 +235,9 @@ class Board:
             "instructions": self.core.instructions,
             "interrupts": {IRQ_NAMES.get(i, str(i)): n for i, n in enumerate(self.nvic.taken) if n},
             # From an interrupt's pending to its handler's first instruction.
-            "interrupt_latency_cycles_max": {
-                IRQ_NAMES.get(i, str(i)): self.nvic.latency_max[i] for i, n in enumerate(self.nvic.taken) if n
-            },
+            "interrupt_latency_cycles_max": {IRQ_NAMES.get(i, str(i)): w[0] for i, w in self.core.worst_wait.items()},
+            # The longest of those waits, and what the core was doing.
+            "interrupt_worst_wait": {IRQ_NAMES.get(i, str(i)): self._wait(*w) for i, w in self.core.worst_wait.items()},
             "step_edges": self.steps,
             # Cycles from the step timer's compare to the STEP edge it raised.
             "step_edge_lateness_cycles": {

@@ -34,6 +34,11 @@ class Clock:
         self._queue = []
         self._seq = 0
         self._due = None  # the cycle of the event being handled
+        # Where the core's current run ends, and how to end it sooner: an
+        # event scheduled during a run (a compare the image arms) may fall
+        # due before that end, and must not wait for it.
+        self.run_end = 0
+        self.shorten_run = lambda: None
 
     @property
     def now(self):
@@ -51,6 +56,8 @@ class Clock:
         e = Event(max(cycle, self.now), action)
         self._seq += 1
         heapq.heappush(self._queue, (e.cycle, self._seq, e))
+        if e.cycle < self.run_end:
+            self.shorten_run()
         return e
 
     def next(self):

@@ -68,8 +68,15 @@ class Core:
         # (cycle, "enter"/"return"/"chain", IRQ, SP, PC) of the last
         # exceptions, for the report of a fault.
         self.trail = collections.deque(maxlen=24)
+        # Per IRQ, what kept it waiting when it could not be taken at once
+        # (where the core was, PRIMASK, BASEPRI, the running exception),
+        # until it is taken; and its longest wait: (cycles, that, where it
+        # was taken).
+        self.blocked = {}
+        self.worst_wait = {}
         self.first_sleep = None  # instructions from reset to the first idle wait
         clock.executed = lambda: self.m.executed - self._run_start
+        clock.shorten_run = self._shorten_run
         self._run_start = 0
         nvic.on_change = self._interrupts_changed
         text = [(a, b) for a, b in elf.segments if 0x0800_0000 <= a < 0x0810_0000]
@@ -127,6 +134,12 @@ class Core:
             raise Fault(f"exception {intno} at pc {pc:#010x} (a fault on silicon)", self.trail)
         self._return(uc.reg_read(arm.UC_ARM_REG_PC) | 1)
 
+    def _shorten_run(self):
+        """An event now falls due before the current run's end: the run
+        ends here, and the next one ends at the event."""
+        if self._running:
+            self.uc.emu_stop()
+
     def _interrupts_changed(self):
         """A peripheral or a register write changed what may be taken: end
         the current run so that it is taken at this instruction."""
@@ -156,8 +169,18 @@ class Core:
     def take_pending(self):
         """Takes the pending exception that may preempt now, if any."""
         best = self.nvic.best_pending()
-        if best is not None and best[0] < self._execution_priority():
+        if best is None:
+            return
+        if best[0] < self._execution_priority():
             self._enter(best[1])
+        elif best[1] not in self.blocked:
+            uc = self.uc
+            self.blocked[best[1]] = (
+                self.pc & ~1,
+                uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1,
+                uc.reg_read(arm.UC_ARM_REG_BASEPRI) & 0xFF,
+                self._current_exception(),
+            )
 
     def _enter(self, irq):
         uc = self.uc
@@ -187,6 +210,10 @@ class Core:
 
     def _dispatch(self, irq, exc_return):
         uc = self.uc
+        waited = self.clock.now - self.nvic.pended_at[irq]
+        why = self.blocked.pop(irq, None)
+        if waited > self.worst_wait.get(irq, (-1,))[0]:
+            self.worst_wait[irq] = (waited, why, self.pc & ~1)
         uc.reg_write(arm.UC_ARM_REG_IPSR, irq + EXTERNAL)
         uc.reg_write(arm.UC_ARM_REG_LR, exc_return)
         self.nvic.enter(irq)
@@ -251,6 +278,7 @@ class Core:
             budget = min(until, nxt if nxt is not None else until, clock.now + SLICE) - clock.now
             self._run_start = self.m.executed
             self._running = True
+            clock.run_end = clock.now + budget
             try:
                 self.uc.emu_start(self.pc, 0xFFFF_FFFF, count=max(budget, 1))
             except UcError as e:
@@ -259,6 +287,7 @@ class Core:
                 raise Fault(f"{e} at pc {at:#010x}, sp {sp:#010x}", self.trail)
             finally:
                 self._running = False
+                clock.run_end = 0
                 executed = self.m.executed - self._run_start
                 self._run_start = self.m.executed
                 clock.base += max(executed, 1)

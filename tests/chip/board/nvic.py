@@ -31,11 +31,10 @@ class Nvic(Block):
         self.scb = {}  # other SCB/SCS registers, held as written
         self.on_change = lambda: None  # the core re-checks what it can take
         self.taken = [0] * IRQS  # exceptions entered, per IRQ
-        # When each line last pended, and the longest wait from there to
-        # its handler's entry (cycles): the interrupt's latency.
+        # When each line last pended (the core times the wait to its
+        # handler's entry from there: the interrupt's latency).
         self.clock = None
         self.pended_at = [0] * IRQS
-        self.latency_max = [0] * IRQS
 
     # --- what peripherals do -------------------------------------------
     def line(self, irq, asserted):
@@ -77,8 +76,6 @@ class Nvic(Block):
         return p
 
     def enter(self, irq):
-        if self.clock:
-            self.latency_max[irq] = max(self.latency_max[irq], self.clock.now - self.pended_at[irq])
         self.pending[irq] = False
         self.active[irq] = True
         self.taken[irq] += 1
