@@ -60,6 +60,11 @@ impl Inbox {
         }
     }
 
+    /// The requests kept, as a status reports them ([`HELD`] fits a byte).
+    fn held_count(&self) -> u8 {
+        self.held.len() as u8
+    }
+
     fn frame(&self, n: usize) -> Frame {
         Vec::from_slice(&self.rx[..n.min(MAX_FRAME)]).unwrap_or_default()
     }
@@ -125,7 +130,7 @@ async fn watch<L: Link, S: Sentry>(
                         let now = Status {
                             uptime_us: sentry.now_us(),
                             estop_open: sentry.estop_open(),
-                            requests_held: inbox.held.len() as u8,
+                            requests_held: inbox.held_count(),
                             ..*status
                         };
                         if send_keyed(kind, StatusEndpoint::RESP_KEY, seq, &now, link).await.is_err() {
@@ -401,7 +406,7 @@ impl<B: Board> Head<B> {
             Command::Status(()) => answer!(
                 StatusEndpoint,
                 Status {
-                    requests_held: inbox.held.len() as u8,
+                    requests_held: inbox.held_count(),
                     ..self.status()
                 }
             ),

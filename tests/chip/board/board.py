@@ -234,9 +234,9 @@ class Board:
             "host_seconds": round(time.monotonic() - started, 3),
             "instructions": self.core.instructions,
             "interrupts": {IRQ_NAMES.get(i, str(i)): n for i, n in enumerate(self.nvic.taken) if n},
-            # From an interrupt's pending to its handler's first instruction.
-            "interrupt_latency_cycles_max": {IRQ_NAMES.get(i, str(i)): w[0] for i, w in self.core.worst_wait.items()},
-            # The longest of those waits, and what the core was doing.
+            # The longest wait of each interrupt from its pending to its
+            # handler's first instruction (its latency), and what the core
+            # was doing meanwhile.
             "interrupt_worst_wait": {IRQ_NAMES.get(i, str(i)): self._wait(*w) for i, w in self.core.worst_wait.items()},
             "step_edges": self.steps,
             # Cycles from the step timer's compare to the STEP edge it raised.
