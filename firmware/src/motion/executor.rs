@@ -105,11 +105,6 @@ struct Track {
     add: i64,
     left: u32,
     emitted: u32,
-    /// The steps of the queued blocks: a brake, in the step timer's
-    /// critical section, reads it instead of summing up to [`QUEUE`]
-    /// blocks per axis (8 000 cycles with full queues, measured on the
-    /// virtual board: every STEP edge due meanwhile waited for it).
-    queued: u64,
     /// Set while the axis decelerates to a stop instead of following its queue.
     braking: Option<Braking>,
     queue: Deque<StepBlock, QUEUE>,
@@ -119,7 +114,6 @@ impl Track {
     const fn new() -> Self {
         Track {
             queue: Deque::new(),
-            queued: 0,
             left: 0,
             interval: 0,
             add: 0,
@@ -140,7 +134,6 @@ impl Track {
         self.braking = None;
         match self.queue.pop_front() {
             Some(b) => {
-                self.queued -= b.count as u64;
                 self.left = b.count;
                 self.interval = b.interval as i64;
                 self.add = b.add;
@@ -156,7 +149,7 @@ impl Track {
 
     /// Steps still to come: the current block's and the queued ones.
     fn remaining(&self) -> u64 {
-        self.left as u64 + self.queued
+        self.left as u64 + self.queue.iter().map(|b| b.count as u64).sum::<u64>()
     }
 
     /// Replaces what is left by a deceleration at `c = sqrt(2/a)` ticks from
@@ -172,7 +165,6 @@ impl Track {
             return;
         }
         self.queue.clear();
-        self.queued = 0;
         self.left = steps as u32;
         self.braking = Some(b);
     }
@@ -264,17 +256,13 @@ impl<P: OutputPin> Executor<P> {
         if b.count == 0 {
             return Ok(());
         }
-        let t = &mut self.tracks[axis.index()];
-        t.queue.push_back(at_least_one(b)).map_err(|_| QueueFull)?;
-        t.queued += b.count as u64;
-        Ok(())
+        self.tracks[axis.index()].queue.push_back(at_least_one(b)).map_err(|_| QueueFull)
     }
 
     /// Drops everything queued and in progress; STEP pins low.
     pub fn clear(&mut self) {
         for (t, p) in self.tracks.iter_mut().zip(self.pins.iter_mut()) {
             t.queue.clear();
-            t.queued = 0;
             t.left = 0;
             t.due = NEVER;
             if t.high_until != NEVER {
