@@ -53,7 +53,7 @@ fn the_executor_emits_exactly_the_queued_steps_on_each_pin() {
     assert_eq!(exec.emitted(), [3, 0, 2]);
     // Last step of the rotation at tick 30, its pulse ends 3 ticks later.
     assert_eq!(now, 33);
-    assert_eq!(exec.collisions, 0);
+    assert_eq!(exec.collisions(), 0);
     let mut exec = exec;
     exec.clear();
     // The pins are inside the executor: check them through a fresh start.

@@ -140,7 +140,7 @@ fn rate_trial(rate: f64, isr_ticks: u64, pulse: u64) -> (f64, u32, u64, f64) {
             delay = delay.max(*tick as f64 - w);
         }
     }
-    (delay, exec.collisions, fires, ns_per_fire)
+    (delay, exec.collisions(), fires, ns_per_fire)
 }
 
 fn main() {
