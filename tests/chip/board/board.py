@@ -2,12 +2,19 @@
 peripheral models wired together, running an unmodified image from reset.
 
     python3 tests/chip/board/board.py IMAGE [--seconds S] [--set PB12=1@0.5 ...]
+        [--fault KIND@WHEN]
 
 runs IMAGE for S seconds of virtual time (default 2), the plant driving
 each `--set` input pin to its level at its time, and prints one JSON
 object: where it stopped and why, the instructions executed, the
 interrupts taken, the watchdog's reloads, every change of a driven pin
-with its time, and every driven pin's level at the end."""
+with its time, and every driven pin's level at the end.
+
+`--fault` injects a fault (`--help` lists them) at WHEN: virtual seconds,
+or `laser+S`, S seconds after the laser enable first rises; the report's
+`fault` then says when the laser enable went low and the drivers' enables
+high after it. A watchdog reset ends the run, the pins let go as a reset
+lets them go (the board's resistors then hold them)."""
 
 import argparse
 import json
@@ -18,6 +25,7 @@ import os
 import sys
 import time
 
+from unicorn import UC_HOOK_MEM_WRITE
 from unicorn import arm_const as arm
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -53,6 +61,19 @@ STEP = ("PC0", "PC4", "PC8")
 SAFE = {"PB0": 0, "PC0": 0, "PC4": 0, "PC8": 0, "PC2": 1, "PC6": 1, "PC10": 1}
 IRQ_NAMES = {28: "TIM2", 29: "TIM3", 30: "TIM4", 50: "TIM5", 40: "EXTI15_10", 56: "DMA2_STREAM0", 67: "OTG_FS", 18: "ADC"}
 UID = 0x1FFF_7A10
+# The stack is the 64 KiB of CCM RAM below 0x1001_0000 (memory.x).
+CCM_BASE, CCM_END = 0x1000_0000, 0x1001_0000
+# What a stack overflow leaves of the stack below SP (bytes).
+STACK_LEFT = 64
+# Faults a test injects: what each does to the board.
+FAULTS = {
+    "hardfault": "a bus error at the instruction the core is at (a peripheral's, a wild pointer's)",
+    "stack-overflow": f"the stack runs out: from then on the stack's memory ends {STACK_LEFT} bytes below where SP "
+    "is, so the image's next deeper push, or an exception's stacking there, faults as an access outside the "
+    "memory map does",
+    "estop-pulse": "the E-STOP opened for 200 µs, shorter than a turn of the serve loop",
+}
+ESTOP_PULSE_S = 200e-6
 
 
 class WatchdogReset(Exception):
@@ -104,9 +125,15 @@ class Board:
         bus.attach(0xE000_E000, 0x1000, self.nvic)
         bus.map([(0x4000_0000, 0x1000_0000), (OTG_FS_BASE, 0x4_0000), (0xE000_0000, 0x10_0000)])
         self.core = Core(self.machine, self.elf, self.nvic, self.clock)
+        self.core.stop_run = bus.stop
         self.machine.start_profile()
         self.host = None
         self.stop_requested = False
+        # An injected fault: (kind, WHEN) until it is scheduled, then the
+        # cycle it struck at.
+        self.fault_plan = None
+        self.fault_at = None
+        self.reset_at = None
         # The head behind the pins (`board-plant` run as the command
         # `plant`): it drives the home switches' lines and the photodiode.
         self.plant = self.adc.plant = Plant(plant) if plant else None
@@ -144,6 +171,8 @@ class Board:
         driven; a STEP edge counted, with how late it rose after the step
         timer's compare that was due."""
         name = f"P{port.letter}{pin}"
+        if name == "PB0" and level and self.fault_plan and self.fault_plan[1].startswith("laser+"):
+            self._schedule_fault(self.clock.now + int(float(self.fault_plan[1][6:]) * HZ))
         if name in self.steps:
             if level:
                 self.steps[name] += 1
@@ -164,6 +193,67 @@ class Board:
         """The plant drives pin `name` (`PB12`) to `level` from `at` seconds."""
         port, pin = self.ports[name[1]], int(name[2:])
         self.clock.at(int(at * HZ), lambda: port.set_input(pin, level))
+
+    def inject(self, kind, when):
+        """Injects fault `kind` (FAULTS) at `when` (`laser+S` or seconds)."""
+        if kind not in FAULTS:
+            raise ValueError(f"unknown fault {kind!r}: one of {', '.join(FAULTS)}")
+        self.fault_plan = (kind, when)
+        if not when.startswith("laser+"):
+            self._schedule_fault(int(float(when) * HZ))
+
+    def _schedule_fault(self, cycle):
+        kind = self.fault_plan[0]
+        self.fault_plan = (kind, "scheduled")
+        self.clock.at(cycle, lambda: self._strike(kind))
+
+    def _strike(self, kind):
+        self.fault_at = self.clock.now
+        if kind == "hardfault":
+            self.core.request_fault("injected bus error")
+        elif kind == "stack-overflow":
+            floor = (self.uc.reg_read(arm.UC_ARM_REG_SP) - STACK_LEFT) & ~7
+            self.core.stack_floor = floor
+            self.uc.hook_add(UC_HOOK_MEM_WRITE, self._below_stack, begin=CCM_BASE, end=floor - 1)
+        elif kind == "estop-pulse":
+            self.set_input("PB12", 1, self.clock.now / HZ)
+            self.set_input("PB12", 0, self.clock.now / HZ + ESTOP_PULSE_S)
+
+    def _below_stack(self, uc, access, address, size, value, _user):
+        self.core.request_fault(f"a write at {address:#010x}, below the stack's memory")
+
+    def _fault_report(self):
+        """When the laser enable went low and every driver's enable high
+        after the fault (None: not by the end): after the core faulted, for
+        a fault that makes it fault (a stack overflow does when the stack
+        next grows into the missing memory), else after the fault struck."""
+        if self.fault_at is None:
+            return None if self.fault_plan is None else {"kind": self.fault_plan[0], "struck": False}
+        faulted = [c for c, *_ in self.core.faults if c >= self.fault_at]
+        at = (faulted[0] if faulted else self.fault_at) / HZ
+        level = {}
+        for t, pin, v in self.pins:
+            if t > at:
+                break
+            level[pin] = v
+        safe_at = {}
+        for pin in ("PB0", "PC2", "PC6", "PC10"):
+            want = SAFE[pin]
+            if level.get(pin, want) == want:
+                safe_at[pin] = at
+            else:
+                safe_at[pin] = next((t for t, p, v in self.pins if t > at and p == pin and v == want), None)
+        after = {p: None if t is None else round(t - at, 9) for p, t in safe_at.items()}
+        drivers = [after[p] for p in ("PC2", "PC6", "PC10")]
+        return {
+            "kind": self.fault_plan[0],
+            "struck": True,
+            "struck_s": round(self.fault_at / HZ, 9),
+            "faulted_s": round(faulted[0] / HZ, 9) if faulted else None,
+            "laser_off_after_s": after["PB0"],
+            "drivers_off_after_s": None if None in drivers else max(drivers),
+            "reset_after_s": None if self.reset_at is None else round(self.reset_at / HZ - at, 9),
+        }
 
     def driven_pins(self):
         """Every pin driven at the end (output or alternate function), its level."""
@@ -186,7 +276,15 @@ class Board:
         return {"cycles": cycles, "masked": blocked, "taken_in": self.elf.function_at(taken_at)}
 
     def _watchdog(self):
+        self._reset()
         raise WatchdogReset()
+
+    def _reset(self):
+        """A system reset: every pin lets go (the image does not run again
+        here)."""
+        self.reset_at = self.clock.now
+        for p in self.ports.values():
+            p.reset()
 
     def run(self, seconds, paced=False, pace=1.0):
         """Runs to `seconds` of virtual time; `paced`: never more than
@@ -210,6 +308,7 @@ class Board:
         except WatchdogReset:
             reason = "watchdog reset"
         except SystemResetRequest:
+            self._reset()
             reason = "system reset request"
         except Fault as e:
             reason = f"fault: {e}"
@@ -253,10 +352,16 @@ class Board:
             "pins": [{"t": round(t, 9), "pin": p, "level": v} for t, p, v in self.pins],
             "driven_at_end": driven,
             "unsafe": [{"t": round(t, 9), "pin": p, "level": v} for t, p, v in self.pins if SAFE.get(p, v) != v],
-            "safe_at_end": all(driven.get(p) == v for p, v in SAFE.items()),
+            "safe_at_end": all(self.ports[p[1]].level[int(p[2:])] == v for p, v in SAFE.items()),
+            "faults_taken": [
+                {"t": c / HZ, "why": w, "in": self.elf.function_at(pc), "pc": f"{pc:#010x}", "stacked": st}
+                for c, w, pc, st in self.core.faults
+            ],
+            "locked_up": self.core.locked,
+            "fault": self._fault_report(),
             "first_sleep_instructions": self.core.first_sleep,
             # The stack is the 64 KiB of CCM RAM below 0x1001_0000 (memory.x).
-            "stack_bytes_max": 0x1001_0000 - self.machine.counter.lowest_sp,
+            "stack_bytes_max": CCM_END - self.machine.counter.lowest_sp,
             "busiest_functions": dict(by_function(self.elf, self.machine.profile(), top=8)),
             "busiest_registers": {
                 f"{a:#010x}": n for a, n in sorted(self.bus.accesses.items(), key=lambda kv: -kv[1])[:8]
@@ -293,6 +398,12 @@ def main():
         action="store_true",
         help="bridge the open port to a pseudo-terminal (its path on stderr first), paced to the wall clock",
     )
+    ap.add_argument(
+        "--fault",
+        metavar="KIND@WHEN",
+        help="inject a fault at WHEN (seconds, or laser+S: S seconds after the laser enable first rises); KIND: "
+        + "; ".join(f"{k}: {v}" for k, v in FAULTS.items()),
+    )
     ap.add_argument("--replug", action="store_true", help="after each session, the cable pulled and plugged back")
     ap.add_argument(
         "--pace",
@@ -320,6 +431,9 @@ def main():
         board.plug(master, replug=args.replug)
     elif args.usb:
         board.plug()
+    if args.fault:
+        kind, when = args.fault.split("@")
+        board.inject(kind, when)
     for spec in args.set:
         pin, rest = spec.split("=")
         level, at = rest.split("@")

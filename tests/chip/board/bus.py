@@ -3,10 +3,22 @@ register blocks. unicorn maps MMIO by 4 KiB pages, and one page can hold
 several peripherals (TIM2–TIM5, GPIOA–GPIOD, RCC and FLASH), so a page
 dispatches each access to the block at its address; an address no block
 models reads back what was written there, as a register without side
-effects would."""
+effects would.
 
+A run of the core may have to end in the middle of an access (it made an
+interrupt pend that must be taken at this instruction, or an event due
+sooner). unicorn then executes the accessing instruction again when the
+core resumes: a load's result is dropped and a store has already reached
+the block. So that the block sees each access once, as on silicon, that
+access is recorded and replayed when the instruction comes again: the
+value first read, or nothing for a store.
+"""
+
+from unicorn import arm_const as arm
 
 PAGE = 0x1000
+# A store replayed: nothing to do.
+STORED = object()
 
 
 class Block:
@@ -43,6 +55,22 @@ class Bus:
         self.blocks = []  # (base, size, block)
         self.pages = {}
         self.accesses = {}  # address → reads and writes: where the image polls
+        self._accessing = False
+        self._stopped = False  # the run was ended during the access in progress
+        self._replay = {}  # (PC, address) → what the access gave the first time
+
+    def stop(self):
+        """Ends the core's current run (at this access, if one is in progress)."""
+        self.uc.emu_stop()
+        if self._accessing:
+            self._stopped = True
+
+    def _replayed(self, address):
+        key = (self.uc.reg_read(arm.UC_ARM_REG_PC), address)
+        return self._replay.pop(key, None)
+
+    def _record(self, address, what):
+        self._replay[(self.uc.reg_read(arm.UC_ARM_REG_PC), address)] = what
 
     def attach(self, base, size, block):
         self.blocks.append((base, size, block))
@@ -76,15 +104,40 @@ class Bus:
 
     def _read(self, uc, offset, size, page):
         address = page + offset
+        if self._replay:
+            value = self._replayed(address)
+            if value is not None:
+                return value
         self.accesses[address] = self.accesses.get(address, 0) + 1
-        blk, off = self._find(address)
-        word = blk.read(off & ~3)
-        shift = 8 * (off & 3)
-        return (word >> shift) & ((1 << (8 * size)) - 1)
+        self._accessing = True
+        try:
+            blk, off = self._find(address)
+            word = blk.read(off & ~3)
+            shift = 8 * (off & 3)
+            value = (word >> shift) & ((1 << (8 * size)) - 1)
+        finally:
+            self._accessing = False
+        if self._stopped:
+            self._stopped = False
+            self._record(address, value)
+        return value
 
     def _write(self, uc, offset, size, value, page):
-        self.accesses[page + offset] = self.accesses.get(page + offset, 0) + 1
-        blk, off = self._find(page + offset)
+        address = page + offset
+        if self._replay and self._replayed(address) is STORED:
+            return
+        self.accesses[address] = self.accesses.get(address, 0) + 1
+        self._accessing = True
+        try:
+            self._store(address, size, value)
+        finally:
+            self._accessing = False
+        if self._stopped:
+            self._stopped = False
+            self._record(address, STORED)
+
+    def _store(self, address, size, value):
+        blk, off = self._find(address)
         if size < 4:
             # A narrower write: the block's own handling if it has one (byte
             # registers), else merged into the word it is part of.

@@ -19,7 +19,14 @@ return, B1.5.18 WFE):
 - WFE clears the event register if set, else sleeps until an exception is
   taken; SEV and every exception return set it;
 - a pending interrupt masked by PRIMASK is taken right after the `cpsie i`
-  or `msr PRIMASK` that unmasks it.
+  or `msr PRIMASK` that unmasks it;
+- a fault (an access outside the memory map, an undefined instruction)
+  enters HardFault at priority −1, the configurable faults being disabled
+  (B1.5.8 escalation); a stacking that fails sets CFSR.STKERR and
+  HFSR.FORCED, leaves SP where the frame would have gone and enters the
+  handler all the same (B1.5.6, "derived exceptions on exception entry");
+  a fault in the HardFault handler locks the core up (B1.5.15): it executes
+  nothing more, every pin as it was, until a reset.
 
 Time: one cycle per instruction, counted per translated block (count.c);
 sleep skips to the next event of the clock."""
@@ -40,6 +47,10 @@ FP_FRAME = [getattr(arm, f"UC_ARM_REG_S{i}") for i in range(16)] + [arm.UC_ARM_R
 STATE = (arm.UC_ARM_REG_CONTROL, arm.UC_ARM_REG_IPSR, arm.UC_ARM_REG_XPSR, arm.UC_ARM_REG_MSP)
 # unicorn's interrupt number for an exception return (QEMU's EXCP_EXCEPTION_EXIT).
 EXCEPTION_EXIT = 8
+HARDFAULT = 3
+# The SCB's fault status registers (PM0214 §4.4.14, §4.4.16).
+CFSR, HFSR = 0xD28, 0xD2C
+STKERR, FORCED = 1 << 12, 1 << 30
 # Cycles a run of the core lasts at most: a pending interrupt masked by
 # PRIMASK is taken at the `cpsie` that unmasks it, by BASEPRI at the end of
 # a run at the latest.
@@ -75,8 +86,19 @@ class Core:
         self.blocked = {}
         self.worst_wait = {}
         self.first_sleep = None  # instructions from reset to the first idle wait
+        # HardFault active; the core locked up; a fault to take at the next
+        # instruction (a test's); the faults taken: (cycle, why, PC, stacked).
+        self.in_hardfault = False
+        self.locked = False
+        self.fault_request = None
+        self.faults = []
+        # Where the stack's memory ends (a test moves it up: an overflow).
+        self.stack_floor = 0
         clock.executed = lambda: self.m.executed - self._run_start
         clock.shorten_run = self._shorten_run
+        # Ends the current run from a peripheral's access (the board's bus,
+        # which replays the access unicorn will execute again).
+        self.stop_run = self.uc.emu_stop
         self._run_start = 0
         nvic.on_change = self._interrupts_changed
         text = [(a, b) for a, b in elf.segments if 0x0800_0000 <= a < 0x0810_0000]
@@ -130,27 +152,43 @@ class Core:
 
     def _on_interrupt(self, uc, intno, _user):
         if intno != EXCEPTION_EXIT:
-            pc = uc.reg_read(arm.UC_ARM_REG_PC)
-            raise Fault(f"exception {intno} at pc {pc:#010x} (a fault on silicon)", self.trail)
+            # QEMU's EXCP_UDEF (1), EXCP_SWI (2), ...: a usage fault, escalated.
+            self.pc = uc.reg_read(arm.UC_ARM_REG_PC) | 1
+            self.fault(f"exception {intno} (undefined instruction: 1)")
+            uc.emu_stop()
+            return
         self._return(uc.reg_read(arm.UC_ARM_REG_PC) | 1)
+
+    def request_fault(self, why):
+        """A fault at the instruction the core is at (a test injects a bus
+        error): taken before the next one."""
+        self.fault_request = why
+        if self._running:
+            self.uc.emu_stop()
 
     def _shorten_run(self):
         """An event now falls due before the current run's end: the run
         ends here, and the next one ends at the event."""
         if self._running:
-            self.uc.emu_stop()
+            self.stop_run()
 
     def _interrupts_changed(self):
         """A peripheral or a register write changed what may be taken: end
-        the current run so that it is taken at this instruction."""
-        if self.nvic.best_pending() is not None and self._running:
-            self.uc.emu_stop()
+        the current run so that what may preempt now is taken at this
+        instruction (what PRIMASK masks is taken where it is unmasked, what
+        BASEPRI masks at the end of the run)."""
+        if self._running:
+            best = self.nvic.best_pending()
+            if best is not None and best[0] < self._execution_priority():
+                self.stop_run()
 
     # --- exceptions ----------------------------------------------------------
     def _current_exception(self):
         return self.uc.reg_read(arm.UC_ARM_REG_IPSR) & 0x1FF
 
     def _execution_priority(self, active_excluding=None):
+        if self.in_hardfault:
+            return -1
         p = self.nvic.running_priority(active_excluding)
         if self.uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1:
             p = min(p, 0)
@@ -182,7 +220,9 @@ class Core:
                 self._current_exception(),
             )
 
-    def _enter(self, irq):
+    def _stack(self):
+        """Exception entry's stacking; returns EXC_RETURN and whether the
+        frame was written (a stack overflow: it was not, SP moved all the same)."""
         uc = self.uc
         control, ipsr, xpsr, sp = self._state.read()
         handler = ipsr & 0x1FF != 0
@@ -196,17 +236,50 @@ class Core:
         if fp:
             values += self._fp_frame.read() + [0]
         frame = struct.pack(f"<{words}I", *values)
+        stacked = sp >= self.stack_floor
         try:
-            uc.mem_write(sp, frame)
-        except UcError as e:
-            raise Fault(f"stacking at {sp:#010x} failed: {e} (a stack overflow locks up the core)")
+            if stacked:
+                uc.mem_write(sp, frame)
+        except UcError:
+            stacked = False
         uc.reg_write(arm.UC_ARM_REG_MSP, sp)
-        self.trail.append((self.clock.now, "enter", irq, sp, self.pc & ~1))
         exc_return = 0xFFFF_FFF1 if handler else 0xFFFF_FFF9
         if fp:
             exc_return &= ~0x10
         uc.reg_write(arm.UC_ARM_REG_CONTROL, control & ~4)
+        return sp, exc_return, stacked
+
+    def _enter(self, irq):
+        entry = sp, exc_return, stacked = self._stack()
+        if not stacked:
+            # A derived fault of the entry: HardFault instead, which preempts.
+            self.fault(f"stacking for IRQ {irq} at {sp:#010x}", entry)
+            return
+        self.trail.append((self.clock.now, "enter", irq, sp, self.pc & ~1))
         self._dispatch(irq, exc_return)
+
+    def fault(self, why, entry=None):
+        """A fault at `self.pc`: HardFault entered (`entry`: the stacking
+        an interrupt's entry already did), or the core locked up if it
+        faulted in HardFault."""
+        uc = self.uc
+        if self.in_hardfault or self.locked:
+            self.faults.append((self.clock.now, f"lockup: {why}", self.pc & ~1, None))
+            self.locked = True
+            return
+        sp, exc_return, stacked = entry or self._stack()
+        self.faults.append((self.clock.now, why, self.pc & ~1, stacked))
+        scb = self.nvic.scb
+        scb[HFSR] = scb.get(HFSR, 0) | FORCED
+        if not stacked:
+            scb[CFSR] = scb.get(CFSR, 0) | STKERR
+        self.trail.append((self.clock.now, "fault", -1, sp, self.pc & ~1))
+        self.in_hardfault = True
+        uc.reg_write(arm.UC_ARM_REG_IPSR, HARDFAULT)
+        uc.reg_write(arm.UC_ARM_REG_LR, exc_return)
+        self.pc = self._vector(HARDFAULT) | 1
+        uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+        self.sleeping = False
 
     def _dispatch(self, irq, exc_return):
         uc = self.uc
@@ -266,8 +339,12 @@ class Core:
         clock = self.clock
         while clock.now < until:
             clock.fire_due()
-            self.take_pending()
-            if self.sleeping:
+            if self.fault_request is not None and not self.locked:
+                why, self.fault_request = self.fault_request, None
+                self.fault(why)
+            if not self.locked:
+                self.take_pending()
+            if self.sleeping or self.locked:
                 nxt = clock.next()
                 if nxt is None or nxt >= until:
                     clock.base = until
@@ -282,9 +359,11 @@ class Core:
             try:
                 self.uc.emu_start(self.pc, 0xFFFF_FFFF, count=max(budget, 1))
             except UcError as e:
-                at = self.uc.reg_read(arm.UC_ARM_REG_PC)
-                sp = self.uc.reg_read(arm.UC_ARM_REG_SP)
-                raise Fault(f"{e} at pc {at:#010x}, sp {sp:#010x}", self.trail)
+                # A bus or usage fault on silicon (this image enables none of
+                # the configurable faults): HardFault at the faulting instruction.
+                self.pc = self.uc.reg_read(arm.UC_ARM_REG_PC) | 1
+                self.fault(str(e))
+                continue
             finally:
                 self._running = False
                 clock.run_end = 0

@@ -7,8 +7,9 @@ by `drive`), else what the plant drives from outside (`set_input`), else
 the board's resistor (`resistors`: 10 kΩ, stronger than the internal
 40 kΩ), else its internal pull (PUPDR), else the last level (a floating
 input keeps its charge).
-Every change of an output's level is logged with its time; every change of
-a level reaches the EXTI."""
+Every change of an output's level is logged with its time, and so is the
+level a pin takes when it stops being driven (a reset); every change of a
+level reaches the EXTI."""
 
 from bus import Block
 
@@ -16,6 +17,10 @@ GPIO_BASE = 0x4002_0000
 SYSCFG_BASE, EXTI_BASE = 0x4001_3800, 0x4001_3C00
 # EXTI lines' IRQs: 0–4 one each, 5–9 and 10–15 shared (RM0090 Table 61).
 EXTI_IRQ = [6, 7, 8, 9, 10] + [23] * 5 + [40] * 6
+# Reset values (RM0090 §8.4): PA13–15 and PB3–4 are the debug port's
+# alternate functions, with their pulls.
+MODER_RESET = {"A": 0xA800_0000, "B": 0x0000_0280}
+PUPDR_RESET = {"A": 0x6400_0000, "B": 0x0000_0100}
 
 
 class Port(Block):
@@ -24,16 +29,26 @@ class Port(Block):
         self.letter = letter
         self.index = ord(letter) - ord("A")
         self.board = board
-        self.moder = 0
-        self.otyper = 0
-        self.ospeedr = 0
-        self.pupdr = 0
-        self.odr = 0
-        self.afr = [0, 0]
         self.outside = {}  # pin → level the plant drives
-        self.alternate = {}  # pin → level a peripheral drives
         self.resistors = {}  # pin → level the board's pull resistor gives
         self.level = [0] * 16
+        self._registers_reset()
+
+    def _registers_reset(self):
+        self.moder = MODER_RESET.get(self.letter, 0)
+        self.otyper = 0
+        self.ospeedr = 0
+        self.pupdr = PUPDR_RESET.get(self.letter, 0)
+        self.odr = 0
+        self.afr = [0, 0]
+        self.alternate = {}  # pin → level a peripheral drives
+
+    def reset(self):
+        """A system reset: the registers to their reset values, the pins
+        let go."""
+        before = self.moder
+        self._registers_reset()
+        self._settle(before)
 
     def mode(self, pin):
         return self.moder >> (2 * pin) & 3
@@ -54,11 +69,11 @@ class Port(Block):
     def _settle(self, modes_before=None):
         for pin in range(16):
             driven = self.mode(pin) in (1, 2)
-            became_driven = modes_before is not None and driven and modes_before >> (2 * pin) & 3 not in (1, 2)
+            was_driven = modes_before is not None and modes_before >> (2 * pin) & 3 in (1, 2)
             new = self._resolve(pin)
             changed = new != self.level[pin]
             self.level[pin] = new
-            if became_driven or (changed and driven):
+            if modes_before is not None and driven != was_driven or (changed and driven):
                 self.board.log_pin(self, pin, new)
             if changed:
                 self.board.edge(self, pin, new)
