@@ -104,13 +104,20 @@ pub enum Wake {
 /// [`crate::Head::serve`] beside the link, so that they are watched while an
 /// operation owns the hardware.
 pub trait Sentry {
-    /// Whether the E-STOP input reads open now.
+    /// Whether the E-STOP input reads open now, or opened since the last
+    /// opening [`Sentry::until`] reported.
     fn estop_open(&mut self) -> bool;
     /// The head's clock (µs since boot), as [`Clock::now_us`].
     fn now_us(&self) -> u64;
     /// Resolves when the E-STOP input opens (when `estop`; at once if it is
-    /// open), or at `deadline_us` on the head's clock (when given).
+    /// open or opened since the last opening reported, which is then
+    /// reported), or at `deadline_us` on the head's clock (when given).
     async fn until(&mut self, deadline_us: Option<u64>, estop: bool) -> Wake;
+    /// Forgets the openings of the E-STOP seen so far: the head re-arms
+    /// after one, and the bounces of its release must not trip it again.
+    /// A sentry that latches openings (the chip's) keeps them until
+    /// [`Sentry::until`] reports one or this is called.
+    fn rearm(&mut self) {}
     /// The serve loop is alive: called on every turn and from every wait, at
     /// least every [`ALIVE_EVERY_US`]. The chip feeds its
     /// watchdog only while these keep coming, so a serve loop stuck in a

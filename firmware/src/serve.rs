@@ -338,6 +338,7 @@ impl<B: Board> Head<B> {
     /// E-STOP once the input has read closed for [`ESTOP_DEBOUNCE_US`].
     async fn continue_scan<S: Sentry>(&mut self, sentry: &mut S) -> Reply<Status> {
         if self.mode == Mode::Faulted {
+            sentry.rearm();
             // Closed now, and still closed the debounce time later.
             let bounced = sentry.estop_open()
                 || matches!(

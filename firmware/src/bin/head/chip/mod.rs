@@ -24,7 +24,7 @@ use step_timer::StepTimer5;
 bind_interrupts!(pub struct Irqs {
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
     TIM5 => step_timer::StepInterrupt;
-    EXTI15_10 => embassy_stm32::exti::InterruptHandler<embassy_stm32::interrupt::typelevel::EXTI15_10>;
+    EXTI15_10 => sentry::EstopInterrupt;
 });
 
 /// The chip's types for the core.
@@ -111,9 +111,7 @@ async fn main(spawner: Spawner) {
         clock: UptimeClock,
     };
     let mut link = usb_link::start(&spawner, p.USB_OTG_FS, p.PA12, p.PA11);
-    let mut sentry = sentry::ChipSentry {
-        estop: embassy_stm32::exti::ExtiInput::new(p.PB12, p.EXTI12, embassy_stm32::gpio::Pull::Up, Irqs),
-    };
+    let mut sentry = sentry::ChipSentry::new(p.PB12);
     let info = HeadInfo {
         board: pins::NAME,
         serial: heapless::String::try_from(embassy_stm32::uid::uid_hex()).unwrap_or_default(),

@@ -1,15 +1,30 @@
 //! The E-STOP input and the head's timer, for the core's serve loop.
 //!
 //! The E-STOP is a normally-closed switch from PB12 to ground with the
-//! internal pull-up: pressed, or its wire cut, the input reads high. EXTI12
-//! wakes the serve loop on the rising edge, so the trip is not debounced at
-//! all (the first edge stops the head); re-arming is: the core asks for the
-//! input to read closed for 20 ms of the embassy timer (TIM4, 1 MHz) before
-//! a continue is accepted (`serve::ESTOP_DEBOUNCE_US`).
+//! internal pull-up: pressed, or its wire cut, the input reads high. Its
+//! rising edge is latched in hardware terms: EXTI12 pends on the edge
+//! whatever the firmware is doing, and its interrupt (priority just below
+//! the step timer's, cpu.rs) drives the laser enable low at once and counts
+//! the opening. The serve loop trips on an opening it has not handled yet
+//! at every wait ([`Sentry::until`]), so an opening shorter than a turn of
+//! the loop, or one that comes while no wait is armed (a sweep's blocked
+//! publish), still stops the head. The trip is not debounced (the first
+//! edge stops the head); re-arming is: the core asks for the input to read
+//! closed for 20 ms of the embassy timer (TIM4, 1 MHz) before a continue is
+//! accepted (`serve::ESTOP_DEBOUNCE_US`), forgetting the bounces of the
+//! release ([`Sentry::rearm`]).
+//!
+//! The E-STOP chain should also cut the laser's and the drivers' enables in
+//! series, in hardware (docs/architecture.md): this is the firmware's half.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 use embassy_futures::select::{select, Either};
-use embassy_stm32::exti::ExtiInput;
+use embassy_stm32::gpio::{Input, Pull};
+use embassy_stm32::interrupt::typelevel::{Handler, Interrupt, EXTI15_10};
+use embassy_stm32::pac;
+use embassy_stm32::peripherals::PB12;
+use embassy_stm32::Peri;
+use embassy_sync::waitqueue::AtomicWaker;
 use embassy_time::{Instant, Timer};
 use gonio_firmware::hw::{Sentry, Wake};
 
@@ -22,13 +37,60 @@ pub fn alive() {
     ALIVE_MS.store(Instant::now().as_millis() as u32, Ordering::Relaxed);
 }
 
+/// E-STOP openings (rising edges of PB12) since boot, wrapping.
+static OPENINGS: AtomicU32 = AtomicU32::new(0);
+static OPENED: AtomicWaker = AtomicWaker::new();
+
+/// EXTI line of PB12, and SYSCFG's port code for port B (RM0090 §9.2.6).
+const LINE: usize = 12;
+const PORT_B: u8 = 1;
+
+/// EXTI lines 10–15: the E-STOP's opening.
+pub struct EstopInterrupt;
+
+impl Handler<EXTI15_10> for EstopInterrupt {
+    unsafe fn on_interrupt() {
+        if pac::EXTI.pr(0).read().line(LINE) {
+            pac::EXTI.pr(0).write(|w| w.set_line(LINE, true));
+            // Laser enable (PB0) low: a single BSRR store, whoever owns the pin.
+            pac::GPIOB.bsrr().write(|w| w.set_br(0, true));
+            OPENINGS.fetch_add(1, Ordering::Release);
+            OPENED.wake();
+        }
+    }
+}
+
 pub struct ChipSentry {
-    pub estop: ExtiInput<'static>,
+    input: Input<'static>,
+    /// The openings the serve loop has handled.
+    handled: u32,
+}
+
+impl ChipSentry {
+    /// Takes PB12 as the E-STOP input and latches its rising edge.
+    pub fn new(pin: Peri<'static, PB12>) -> Self {
+        let input = Input::new(pin, Pull::Up);
+        // Nothing else writes SYSCFG or the EXTI (no embassy EXTI driver).
+        pac::SYSCFG.exticr(LINE / 4).modify(|w| w.set_exti(LINE % 4, PORT_B));
+        pac::EXTI.rtsr(0).modify(|w| w.set_line(LINE, true));
+        pac::EXTI.ftsr(0).modify(|w| w.set_line(LINE, false));
+        pac::EXTI.pr(0).write(|w| w.set_line(LINE, true));
+        pac::EXTI.imr(0).modify(|w| w.set_line(LINE, true));
+        EXTI15_10::unpend();
+        // SAFETY: the handler is bound in `Irqs` and shares only atomics.
+        unsafe { EXTI15_10::enable() };
+        let handled = OPENINGS.load(Ordering::Acquire);
+        ChipSentry { input, handled }
+    }
 }
 
 impl Sentry for ChipSentry {
     fn estop_open(&mut self) -> bool {
-        self.estop.is_high()
+        self.input.is_high() || OPENINGS.load(Ordering::Acquire) != self.handled
+    }
+
+    fn rearm(&mut self) {
+        self.handled = OPENINGS.load(Ordering::Acquire);
     }
 
     fn now_us(&self) -> u64 {
@@ -46,13 +108,21 @@ impl Sentry for ChipSentry {
                 None => core::future::pending().await,
             }
         };
-        let open = async {
-            if estop {
-                self.estop.wait_for_high().await
-            } else {
-                core::future::pending().await
+        let input = &self.input;
+        let handled = &mut self.handled;
+        let open = core::future::poll_fn(|cx| {
+            if !estop {
+                return core::task::Poll::Pending;
             }
-        };
+            OPENED.register(cx.waker());
+            let now = OPENINGS.load(Ordering::Acquire);
+            if now != *handled || input.is_high() {
+                *handled = now;
+                core::task::Poll::Ready(())
+            } else {
+                core::task::Poll::Pending
+            }
+        });
         match select(open, deadline).await {
             Either::First(()) => Wake::EStop,
             Either::Second(()) => Wake::Deadline,
