@@ -29,6 +29,33 @@ pub fn board_plant(root: &Path) -> Result<PathBuf> {
         .join("board-plant"))
 }
 
+/// The chip the image is built for.
+pub const TARGET: &str = "thumbv7em-none-eabihf";
+
+/// The release `gonio-head` image, built: its path.
+pub fn head_image(root: &Path) -> Result<PathBuf> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let built = Command::new(cargo)
+        .args([
+            "build",
+            "--release",
+            "--locked",
+            "-p",
+            "gonio-firmware",
+            "--bin",
+            "gonio-head",
+            "--target",
+            TARGET,
+        ])
+        .current_dir(root)
+        .status()
+        .context("building gonio-head")?;
+    if !built.success() {
+        bail!("gonio-head did not build for {TARGET}");
+    }
+    Ok(chip_costs::target_dir().join(TARGET).join("release").join("gonio-head"))
+}
+
 /// A board running `image` with its port on a pseudo-terminal.
 pub struct Board {
     child: Child,

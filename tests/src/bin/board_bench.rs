@@ -28,13 +28,11 @@
 
 use anyhow::{bail, Context, Result};
 use gonio_firmware::config::{CPU_HZ, REFERENCE};
-use gonio_tests::chip_costs;
-use gonio_tests::virtual_board::{board_plant, Board};
+use gonio_tests::virtual_board::{board_plant, head_image, Board};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const TARGET: &str = "thumbv7em-none-eabihf";
 /// A subset of the Belcour grid over its three incidences: 351 points.
 const GRID: [&str; 7] = [
     "--theta-i",
@@ -56,7 +54,7 @@ fn cargo(root: &Path, args: &[&str]) -> Result<()> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut c = Command::new(cargo);
     c.args(args).current_dir(root);
-    if !cfg!(debug_assertions) && !args.contains(&"--target") {
+    if !cfg!(debug_assertions) {
         c.arg("--release");
     }
     if !c.status().with_context(|| format!("cargo {args:?}"))?.success() {
@@ -98,24 +96,10 @@ fn stored(dir: &Path) -> Result<usize> {
 
 fn main() -> Result<()> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    cargo(
-        &root,
-        &[
-            "build",
-            "--locked",
-            "-p",
-            "gonio-firmware",
-            "--bin",
-            "gonio-head",
-            "--target",
-            TARGET,
-            "--release",
-        ],
-    )?;
+    let image = head_image(&root)?;
     cargo(&root, &["build", "--locked", "-p", "gonio", "--bin", "gonio"])?;
     let plant = board_plant(&root)?;
     let gonio_bin = plant.with_file_name("gonio");
-    let image = chip_costs::target_dir().join(TARGET).join("release").join("gonio-head");
     let work = tempfile::tempdir()?;
     let (sim_dir, board_dir) = (work.path().join("sim"), work.path().join("board"));
 
