@@ -48,7 +48,9 @@ pub struct Detector {
 
 impl Detector {
     /// Starts with `settings`; a matched reference there falls back to the
-    /// square until the waveform has been learned.
+    /// square until the waveform has been learned. The designs are factored
+    /// by [`Detector::factor_designs`] once the head is in its place
+    /// ([`crate::Head::prepare`]).
     pub fn new<A: AdcStream>(settings: DetectionSettings) -> Self {
         let timing = units::chop_timing(&settings, A::TIMER_HZ);
         let chop_hz = units::chop_hz_actual(timing, A::TIMER_HZ) as f64;
@@ -57,13 +59,20 @@ impl Detector {
             timing,
             chop_hz,
             reference: Reference::new(settings.reference, settings.samples_per_period as usize, None),
-            design: Design::new(settings.periods as u32, chop_hz),
-            swept: Design::new(SweepRequest::PERIODS_MAX as u32, chop_hz),
+            design: Design::unfactored(settings.periods as u32, chop_hz),
+            swept: Design::unfactored(SweepRequest::PERIODS_MAX as u32, chop_hz),
             learned: None,
             gain: 0,
             resettle: false,
             running: false,
         }
+    }
+
+    /// Factors the designs [`Detector::new`] left unfactored (a no-op once
+    /// done).
+    pub fn factor_designs(&mut self) {
+        self.design.precompute();
+        self.swept.precompute();
     }
 
     pub fn settings(&self) -> &DetectionSettings {
@@ -208,7 +217,7 @@ impl Detector {
         let buf = &mut buf[..self.samples_per_period()];
         self.prepare(hw, cfg, buf, &mut flags).await?;
         let it = self.accumulate(hw, buf, &mut flags, &self.design, None).await;
-        Ok(self.conclude::<B>(cfg, it, flags).await.0)
+        Ok(self.conclude::<B>(cfg, &it, flags).await.0)
     }
 
     /// Computes the regression's design of a sweep's samples (`periods`
@@ -257,7 +266,7 @@ impl Detector {
         let buf = &mut buf[..self.samples_per_period()];
         let it = self.accumulate(hw, buf, &mut flags, &self.swept, Some(moving)).await;
         let (emitted, at_us) = (hw.steps.emitted(), hw.clock.now_us());
-        let (signal, (min, max)) = self.conclude::<B>(cfg, it, flags).await;
+        let (signal, (min, max)) = self.conclude::<B>(cfg, &it, flags).await;
         if let Some(g) = self.next_gain::<B>(cfg, min, max).filter(|_| self.settings.auto_range) {
             self.set_gain(hw, g)?;
             self.resettle = true;
@@ -313,8 +322,11 @@ impl Detector {
     }
 
     /// The estimate of an integration, flagged, as a signal, and the
-    /// lowest and highest codes it saw.
-    async fn conclude<B: Board>(&self, cfg: &HeadConfig, it: Integrator<'_>, mut flags: SampleFlags) -> (Signal, (u16, u16)) {
+    /// lowest and highest codes it saw. The integration by reference: moved
+    /// in, it would be held twice across the await (as the argument and as
+    /// the local the body moves it to), 5 KiB more in every future that
+    /// awaits a measurement.
+    async fn conclude<B: Board>(&self, cfg: &HeadConfig, it: &Integrator<'_>, mut flags: SampleFlags) -> (Signal, (u16, u16)) {
         // The two fits of the estimate are the longest computations of a
         // measurement on the chip: the executor runs between them.
         let drift = it.drift();

@@ -66,6 +66,7 @@ pub struct Head<B: Board> {
 }
 
 impl<B: Board> Head<B> {
+    /// A head in its safe state; [`Head::prepare`] it once it is in place.
     pub fn new(cfg: HeadConfig, hw: Hardware<B>, info: HeadInfo) -> Self {
         let mut head = Self {
             cfg,
@@ -91,6 +92,17 @@ impl<B: Board> Head<B> {
         };
         head.safe_state();
         head
+    }
+
+    /// Finishes what [`Head::new`] leaves for once the head is in its
+    /// place: the detector's regression designs factored (about a million
+    /// instructions, once). Apart from `new`: on the chip the head is built
+    /// in a frame of its own on its way to a static, and the factors'
+    /// temporaries there would sit below the whole head (`chip-bench`'s
+    /// `board.stack_bytes_max`). Until then a measurement accumulates its
+    /// own Gram matrices: the same estimate, at a higher cost per period.
+    pub fn prepare(&mut self) {
+        self.detector.factor_designs();
     }
 
     /// Reports why the head last restarted (a watchdog reset), in the status.

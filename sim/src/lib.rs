@@ -121,5 +121,7 @@ pub fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World>>) {
         simulated: true,
         protocol_version: cfg.protocol_version,
     };
-    (Head::new(cfg.machine, hw, info), world)
+    let mut head = Head::new(cfg.machine, hw, info);
+    head.prepare();
+    (head, world)
 }

@@ -80,10 +80,19 @@ pub struct Design {
 const PRECOMPUTE_MAX_PERIODS: u32 = 256;
 
 impl Design {
-    /// For `planned` periods at `chop_hz`. Tones that alias to (nearly) DC or
-    /// Nyquist, or onto another tone, are skipped, as are all tones when the
-    /// integration is too short to fit them.
+    /// For `planned` periods at `chop_hz`, factored ([`Design::precompute`]).
     pub fn new(planned: u32, chop_hz: f64) -> Self {
+        let mut d = Self::unfactored(planned, chop_hz);
+        d.precompute();
+        d
+    }
+
+    /// For `planned` periods at `chop_hz`, its factors still to compute: an
+    /// integration on it accumulates its own Gram matrix meanwhile. Tones
+    /// that alias to (nearly) DC or Nyquist, or onto another tone, are
+    /// skipped, as are all tones when the integration is too short to fit
+    /// them.
+    pub fn unfactored(planned: u32, chop_hz: f64) -> Self {
         let k = planned.max(1) as f64;
         let half_bin = chop_hz / (2.0 * k);
         let mut freqs = [0.0f64; MAX_TONES];
@@ -103,7 +112,7 @@ impl Design {
             let w = 2.0 * core::f64::consts::PI * f / chop_hz;
             *s = (libm::cos(w), libm::sin(w));
         }
-        let mut d = Design {
+        Design {
             n: 2 + 2 * tones,
             tones,
             planned: planned.max(1),
@@ -111,14 +120,21 @@ impl Design {
             full: None,
             amp: None,
             factored: false,
-        };
-        if d.planned <= PRECOMPUTE_MAX_PERIODS {
-            let gram = d.gram(d.planned);
-            d.full = factor(&gram, Columns::all(d.n).as_slice());
-            d.amp = (d.n > 2).then(|| factor(&gram, Columns::without_ramp(d.n).as_slice())).flatten();
-            d.factored = true;
         }
-        d
+    }
+
+    /// Factors the Gram matrices of the planned periods, in place, unless
+    /// they are already or the integration is too long to factor up front.
+    pub fn precompute(&mut self) {
+        if self.factored || self.planned > PRECOMPUTE_MAX_PERIODS {
+            return;
+        }
+        let gram = self.gram(self.planned);
+        self.full = factor(&gram, Columns::all(self.n).as_slice());
+        self.amp = (self.n > 2)
+            .then(|| factor(&gram, Columns::without_ramp(self.n).as_slice()))
+            .flatten();
+        self.factored = true;
     }
 
     /// Periods the design is for.

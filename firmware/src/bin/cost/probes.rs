@@ -523,6 +523,7 @@ fn scan_and_resume() {
         protocol_version: gonio_shared::PROTOCOL_VERSION,
     };
     let head = probe_head(info);
+    head.prepare();
     let sanity = SanityConfig {
         model: abc_retro(true),
         current_a_per_sr_inv: 1.0e-7,

@@ -119,6 +119,7 @@ async fn main(spawner: Spawner) {
         protocol_version: gonio_shared::PROTOCOL_VERSION,
     };
     let head = make_head(hw, info);
+    head.prepare();
     if restarted_by_watchdog {
         head.restarted_by(gonio_shared::Fault::WatchdogReset);
     }
