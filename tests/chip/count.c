@@ -20,6 +20,8 @@ struct counter {
     uint64_t executed;        /* instructions run so far */
     uint32_t lowest_sp;       /* the deepest the stack went, whole run */
     uint32_t stretch_lowest;  /* the same within the innermost open stretch */
+    uint32_t lowest_at;       /* the block that first ran at `lowest_sp` */
+    uint32_t pad;
     reg_read_fn reg_read;
     mem_read_fn mem_read;
     int32_t sp_reg;
@@ -85,6 +87,9 @@ void count_block(uc_engine *uc, uint64_t address, uint32_t size, void *user) {
     if (c->profiling && cache[slot].instructions) profile_add(address, cache[slot].instructions);
     uint32_t sp = 0;
     c->reg_read(uc, c->sp_reg, &sp);
-    if (sp < c->lowest_sp) c->lowest_sp = sp;
+    if (sp < c->lowest_sp) {
+        c->lowest_sp = sp;
+        c->lowest_at = (uint32_t)address;
+    }
     if (sp < c->stretch_lowest) c->stretch_lowest = sp;
 }

@@ -127,6 +127,14 @@ class Adc(Block):
             self.sr |= EOC
         self._line()
 
+    def overrun(self):
+        """A result the DMA did not take in time (a test's fault): lost, and
+        OVR set."""
+        self.sr |= OVR
+        self.lost += 1
+        self._line()
+        self._schedule()
+
     def _requests(self):
         """Whether a result goes to the DMA (DMA bit set, no overrun, the
         stream taking this ADC's requests)."""

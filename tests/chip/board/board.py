@@ -72,7 +72,16 @@ FAULTS = {
     "is, so the image's next deeper push, or an exception's stacking there, faults as an access outside the "
     "memory map does",
     "estop-pulse": "the E-STOP opened for 200 µs, shorter than a turn of the serve loop",
+    "dma-freeze": "DMA2 stream 0 stops serving the ADC's requests, NDTR frozen, EN still set, until software "
+    "disables and enables it again",
+    "adc-overrun": "ADC1 loses a result (a DMA request served too late): OVR set, later triggers ignored until "
+    "software clears it",
+    "serve-hang": "the thread (the executor, the serve loop) stuck in a loop that never yields, interrupts "
+    "still served",
 }
+# An instruction that branches to itself, put at the top of SRAM (above the
+# image's statics) for `serve-hang`.
+HANG_AT = 0x2001_FFF0
 ESTOP_PULSE_S = 200e-6
 
 
@@ -218,6 +227,15 @@ class Board:
         elif kind == "estop-pulse":
             self.set_input("PB12", 1, self.clock.now / HZ)
             self.set_input("PB12", 0, self.clock.now / HZ + ESTOP_PULSE_S)
+        elif kind == "dma-freeze":
+            self.adc._advance()
+            self.dma.frozen = True
+        elif kind == "adc-overrun":
+            self.adc._advance()
+            self.adc.overrun()
+        elif kind == "serve-hang":
+            self.uc.mem_write(HANG_AT, b"\xfe\xe7")  # b .
+            self.core.request_hang(HANG_AT)
 
     def _below_stack(self, uc, access, address, size, value, _user):
         self.core.request_fault(f"a write at {address:#010x}, below the stack's memory")
@@ -362,6 +380,7 @@ class Board:
             "first_sleep_instructions": self.core.first_sleep,
             # The stack is the 64 KiB of CCM RAM below 0x1001_0000 (memory.x).
             "stack_bytes_max": CCM_END - self.machine.counter.lowest_sp,
+            "stack_deepest_in": self.elf.function_at(self.machine.counter.lowest_at),
             "busiest_functions": dict(by_function(self.elf, self.machine.profile(), top=8)),
             "busiest_registers": {
                 f"{a:#010x}": n for a, n in sorted(self.bus.accesses.items(), key=lambda kv: -kv[1])[:8]

@@ -92,6 +92,8 @@ class Core:
         self.locked = False
         self.fault_request = None
         self.faults = []
+        # Where the thread is sent to loop for ever (a test's stuck serve loop).
+        self.hang_at = None
         # Where the stack's memory ends (a test moves it up: an overflow).
         self.stack_floor = 0
         clock.executed = lambda: self.m.executed - self._run_start
@@ -158,6 +160,13 @@ class Core:
             uc.emu_stop()
             return
         self._return(uc.reg_read(arm.UC_ARM_REG_PC) | 1)
+
+    def request_hang(self, address):
+        """The thread continues at `address` (a loop) the next time the core
+        is in thread mode."""
+        self.hang_at = address
+        if self._running:
+            self.stop_run()
 
     def request_fault(self, why):
         """A fault at the instruction the core is at (a test injects a bus
@@ -342,6 +351,10 @@ class Core:
             if self.fault_request is not None and not self.locked:
                 why, self.fault_request = self.fault_request, None
                 self.fault(why)
+            if self.hang_at is not None and self._current_exception() == 0:
+                self.pc, self.hang_at = self.hang_at | 1, None
+                self.uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+                self.sleeping = False
             if not self.locked:
                 self.take_pending()
             if self.sleeping or self.locked:

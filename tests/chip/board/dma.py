@@ -61,6 +61,9 @@ class Dma(Block):
         self.after_write = lambda: None
         self.forbidden = []  # (seconds, register, value): writes the manual forbids
         self.moved = 0  # items moved in all, for the board's report
+        # A test's fault: the stream stops serving requests (NDTR frozen)
+        # until software disables and enables it again.
+        self.frozen = False
 
     # --- what the requester does -----------------------------------------
     def accepts(self, source):
@@ -76,7 +79,7 @@ class Dma(Block):
             raise NotImplementedError(f"DMA2 stream 0: only 16-bit, memory-incremented transfers (CR {self.cr:#x})")
         items = len(data) // 2
         taken = 0
-        while taken < items and self.cr & EN:
+        while taken < items and self.cr & EN and not self.frozen:
             if self.ndtr == 0:
                 break
             n = min(items - taken, self.ndtr)
@@ -102,7 +105,7 @@ class Dma(Block):
     def until_flag(self):
         """Items until an enabled half or complete flag is next set (None:
         none will be)."""
-        if not self.cr & EN:
+        if not self.cr & EN or self.frozen:
             return None
         done = self.programmed - self.ndtr
         half = self.programmed - self.programmed // 2
@@ -144,6 +147,7 @@ class Dma(Block):
                 self.lisr |= TCIF  # the stream stops: "end of transfer"
             if not running and value & EN:
                 self.pointer = 0  # the pointer starts at the base address
+                self.frozen = False
             self.cr = value
         elif offset in (0x14, 0x18, 0x1C, 0x20) and running:
             self.forbidden.append((self.clock.now, {0x14: "S0NDTR", 0x18: "S0PAR", 0x1C: "S0M0AR", 0x20: "S0M1AR"}[offset], value))
