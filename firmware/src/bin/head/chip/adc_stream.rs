@@ -2,13 +2,23 @@
 //! update event (TRGO) both triggers ADC1 and clocks TIM3, whose period is M
 //! TIM2 events and whose channel 1 is the 50 % chop output. Every chop period
 //! therefore holds exactly M samples, and sample 0 of each block falls on the
-//! chop's rising edge. DMA2 stream 0 moves the codes into a circular buffer;
-//! the ring buffer reports an overrun when the core falls behind, and the core
-//! flags the sample.
+//! chop's rising edge. DMA2 stream 0 moves the codes into a circular buffer
+//! of two periods, programmed afresh for each measurement; the ring buffer
+//! reports an overrun when the core falls behind, and the core flags the
+//! sample.
+//!
+//! Two periods, not two of the longest (2 × 512 codes): the DMA wakes the
+//! reader at half and full of the ring only, so a period is handed over as
+//! soon as its last code lands (a swept sample's step count and time are
+//! read then, not up to 511 codes later), and a chain that stops is found
+//! within three periods. Programming the stream afresh (a new ring: its
+//! address and count written, RM0090 §10.3.14) is also what restarts a
+//! stream that stopped, and it starts each measurement at the ring's base
+//! with nothing of the last one in it.
 
 use embassy_futures::select::{select, Either};
 use embassy_stm32::adc::{Adc, RxDma, SampleTime};
-use embassy_stm32::dma::{ReadableRingBuffer, TransferOptions};
+use embassy_stm32::dma::{ReadableRingBuffer, Request, TransferOptions};
 use embassy_stm32::gpio::{Flex, OutputType};
 use embassy_stm32::pac;
 use embassy_stm32::peripherals::{ADC1, DMA2_CH0, PA1, PA6, TIM2, TIM3};
@@ -32,7 +42,12 @@ const CHANNEL: usize = 1;
 static DMA_BUF: StaticCell<[u16; 2 * MAX_M]> = StaticCell::new();
 
 pub struct TimedAdc {
-    ring: ReadableRingBuffer<'static, u16>,
+    /// The stream, lent to each measurement's ring.
+    dma: Peri<'static, DMA2_CH0>,
+    request: Request,
+    /// `DMA_BUF`, lent to each measurement's ring.
+    buf: *mut u16,
+    ring: Option<ReadableRingBuffer<'static, u16>>,
     sample_clock: Timer<'static, TIM2>,
     chop: Timer<'static, TIM3>,
     running: bool,
@@ -70,18 +85,7 @@ impl TimedAdc {
             w.set_adon(true);
         });
         let request = <DMA2_CH0 as RxDma<ADC1>>::request(&dma);
-        let buf = DMA_BUF.init([0; 2 * MAX_M]);
-        // SAFETY: the DMA reads ADC1's data register, a valid 16-bit
-        // peripheral address, into a buffer that lives for the program.
-        let mut ring = unsafe { ReadableRingBuffer::new(dma, request, r.dr().as_ptr() as *mut u16, buf, TransferOptions::default()) };
-        // The stream runs from here on, and the conversions alone start and
-        // stop. A stream disabled and enabled again restarts at its base
-        // address with the count it stopped at (RM0090 §10.3.14: to resume,
-        // software must rewrite the addresses and NDTR), while the ring
-        // would resynchronise to where NDTR says it stopped: every
-        // measurement after the first would read the codes of the one
-        // before.
-        ring.start();
+        let buf = DMA_BUF.init([0; 2 * MAX_M]).as_mut_ptr();
 
         let sample_clock = Timer::new(tim2);
         sample_clock.set_master_mode(MasterMode::UPDATE);
@@ -93,7 +97,10 @@ impl TimedAdc {
         chop.enable_channel(Channel::Ch1, true);
         let chop_pin = PwmPin::new(chop_pin, OutputType::PushPull);
         TimedAdc {
-            ring,
+            dma,
+            request,
+            buf,
+            ring: None,
             sample_clock,
             chop,
             running: false,
@@ -105,6 +112,32 @@ impl TimedAdc {
     }
 }
 
+impl TimedAdc {
+    /// A ring of two periods of `m` codes, the stream programmed for it and
+    /// running; the previous ring dropped first (its stream disabled).
+    fn arm(&mut self, m: usize) -> &mut ReadableRingBuffer<'static, u16> {
+        self.ring = None;
+        let len = (2 * m).min(2 * MAX_M);
+        // SAFETY: the buffer's only other user, the previous ring, is gone
+        // (dropped above, its stream disabled); `len` is within DMA_BUF.
+        let buf = unsafe { core::slice::from_raw_parts_mut(self.buf, len) };
+        // SAFETY: one ring at a time holds the stream (the last is dropped).
+        let dma = unsafe { self.dma.clone_unchecked() };
+        // SAFETY: the DMA reads ADC1's data register, a valid 16-bit
+        // peripheral address, into a buffer that lives for the program.
+        let ring = unsafe {
+            ReadableRingBuffer::new(
+                dma,
+                self.request,
+                pac::ADC1.dr().as_ptr() as *mut u16,
+                buf,
+                TransferOptions::default(),
+            )
+        };
+        self.ring.insert(ring)
+    }
+}
+
 impl AdcStream for TimedAdc {
     /// APB1 timer clock with the reference clock tree (168 MHz / 4 × 2).
     const TIMER_HZ: u32 = 84_000_000;
@@ -113,9 +146,9 @@ impl AdcStream for TimedAdc {
     fn start(&mut self, t: ChopTiming) {
         self.stop();
         let m = t.samples_per_period.max(2) as u32;
-        // The ring's length plus one period, in µs of the timer clock, and
-        // a millisecond for the DMA's interrupt and the executor.
-        let samples = (2 * MAX_M) as u64 + m as u64;
+        // The ring's two periods plus one, in µs of the timer clock, and a
+        // millisecond for the DMA's interrupt and the executor.
+        let samples = 3 * m as u64;
         self.stall_us = samples * t.ticks_per_sample.max(2) as u64 * 1_000_000 / Self::TIMER_HZ as u64 + 1_000;
         self.sample_clock.regs_core().psc().write_value(0);
         self.sample_clock.set_max_compare_value(t.ticks_per_sample.max(2) - 1);
@@ -137,8 +170,7 @@ impl AdcStream for TimedAdc {
         // thing the DMA moves when it resumes, and would open this
         // measurement with a code of the last one, one sample out of phase
         // with the chop: read it out, clear the flags, re-arm the ADC's DMA
-        // requests (an overrun stops them), then move the ring's reader to
-        // where the DMA writes next.
+        // requests (an overrun stops them), then program the stream afresh.
         let adc = pac::ADC1;
         let _ = adc.dr().read();
         adc.sr().modify(|w| {
@@ -148,7 +180,7 @@ impl AdcStream for TimedAdc {
         });
         adc.cr2().modify(|w| w.set_dma(false));
         adc.cr2().modify(|w| w.set_dma(true));
-        self.ring.clear();
+        self.arm(m as usize).start();
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::RISING_EDGE));
         self.sample_clock.start();
         self.running = true;
@@ -170,18 +202,18 @@ impl AdcStream for TimedAdc {
         self.running = false;
     }
 
-    /// A period that has not arrived when the whole ring could have filled
-    /// once more means the chain stopped (a trigger, conversion or transfer
+    /// A period that has not arrived when the ring could have filled once
+    /// more means the chain stopped (a trigger, conversion or transfer
     /// that no longer comes): the stream stops, chop dark, and this and every
     /// later read until the next `start` fail at once, so the core ends the
     /// measurement and turns the laser off (it reports it as a lost block,
     /// `Fault::AdcOverrun` on the second), instead of waiting for ever with
     /// the laser on.
     async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
-        if !self.running {
+        let (true, Some(ring)) = (self.running, self.ring.as_mut()) else {
             return Err(Overrun);
-        }
-        match select(self.ring.read_exact(out), embassy_time::Timer::after_micros(self.stall_us)).await {
+        };
+        match select(ring.read_exact(out), embassy_time::Timer::after_micros(self.stall_us)).await {
             Either::First(r) => r.map(|_| ()).map_err(|_| Overrun),
             Either::Second(()) => {
                 self.stop();
