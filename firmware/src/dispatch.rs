@@ -52,6 +52,13 @@ pub fn midway(sealed: &[u8]) -> Midway {
     }
 }
 
+/// The sequence number and key width of a request, to answer it without
+/// decoding it (`None`: no valid header).
+pub fn request_id(sealed: &[u8]) -> Option<(VarSeq, VarKeyKind)> {
+    let (hdr, _) = check::open(sealed).and_then(VarHeader::take_from_slice)?;
+    Some((hdr.seq_no, hdr.key.kind()))
+}
+
 fn is<E: Endpoint>(key: &VarKey) -> bool {
     key_is(E::REQ_KEY, key)
 }

@@ -12,7 +12,7 @@
 //! where it started, its state is the operation's); other requests that
 //! arrive meanwhile are kept and answered when the operation ends.
 
-use crate::dispatch::{decode, encode, midway, Command, DecodeError, Midway};
+use crate::dispatch::{decode, encode, midway, request_id, Command, DecodeError, Midway};
 use crate::head::Head;
 use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
@@ -35,9 +35,11 @@ use postcard_rpc::standard_icd::{WireError, ERROR_KEY};
 use postcard_rpc::{Endpoint, Key, Topic};
 use serde::Serialize;
 
-/// Requests kept while an operation runs; beyond them a request is dropped
-/// (the host's timeout covers it), but the link is still read, so an
-/// abort, a pause, a status poll or a closed link is seen at once.
+/// Requests kept while an operation runs; beyond them a request is refused
+/// at once with postcard-rpc's `WireError::FailedToSpawn` (no room to
+/// handle it), as the last one kept is when an abort or a pause takes its
+/// place. The link is still read, so an abort, a pause, a status poll or a
+/// closed link is seen at once.
 const HELD: usize = 16;
 
 /// How long the E-STOP input must read closed before continuing re-arms
@@ -121,7 +123,11 @@ async fn watch<L: Link, S: Sentry>(
                     kind @ (Midway::Abort | Midway::Pause) if pause || matches!(kind, Midway::Abort) => {
                         // Room is made for it: it is answered first.
                         if inbox.held.is_full() {
-                            inbox.held.pop_back();
+                            if let Some(last) = inbox.held.pop_back() {
+                                if refuse_unheld(&last, link).await.is_err() {
+                                    return Trip::LinkLost;
+                                }
+                            }
                         }
                         let _ = inbox.held.push_front(frame);
                         return Trip::Request(kind);
@@ -138,7 +144,11 @@ async fn watch<L: Link, S: Sentry>(
                         }
                     }
                     _ => {
-                        let _ = inbox.held.push_back(frame);
+                        if let Err(frame) = inbox.held.push_back(frame) {
+                            if refuse_unheld(&frame, link).await.is_err() {
+                                return Trip::LinkLost;
+                            }
+                        }
                     }
                 }
             }
@@ -538,6 +548,15 @@ impl<B: Board> Head<B> {
 
     async fn send_keyed<T: Serialize + ?Sized, L: Link>(&mut self, key: Key, seq: VarSeq, msg: &T, link: &mut L) -> Result<(), LinkError> {
         send_keyed(self.talk.key_kind, key, seq, msg, link).await
+    }
+}
+
+/// Refuses a request there is no room to keep (see [`HELD`]); a frame
+/// without a valid header gets nothing (the host's own checks find it).
+async fn refuse_unheld<L: Link>(frame: &[u8], link: &mut L) -> Result<(), LinkError> {
+    match request_id(frame) {
+        Some((seq, kind)) => send_keyed(kind, ERROR_KEY, seq, &WireError::FailedToSpawn, link).await,
+        None => Ok(()),
     }
 }
 

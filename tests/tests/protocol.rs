@@ -1,6 +1,7 @@
 //! The protocol: every message round-trips through postcard; the head's frame
 //! decoder refuses random, truncated and unknown frames without panicking; the
-//! largest messages fit the head's frame buffer.
+//! largest messages fit the head's frame buffer; requests the head has no
+//! room to keep during an operation are refused at once.
 
 use gonio_firmware::dispatch::{decode, encode, Command, DecodeError};
 use gonio_shared::icd::*;
@@ -254,4 +255,32 @@ fn largest_messages_fit_the_frame_buffer() {
         }),
     });
     assert!(encode(ScanEndpoint::REQ_KEY, VarKeyKind::Key8, seq, &spec, &mut buf).is_some());
+}
+
+/// During an operation the head keeps 16 requests for when it ends; one
+/// more is refused at once with `FailedToSpawn`, not dropped, so the host
+/// learns of it without waiting for its timeout. Homing from power-up takes
+/// seconds; the identity requests come behind it.
+#[test]
+fn requests_beyond_those_kept_during_an_operation_are_refused_at_once() {
+    use gonio_frames::{replies, send, wire_errors};
+    let mut head = gonio_sim::FrameHead::new(&gonio_sim::SimConfig::default());
+    let extra = 4;
+    let frames = std::iter::once(send::<HomeEndpoint>(&HomeRequest::ALL))
+        .chain((0..16 + extra).map(|_| send::<IdentifyEndpoint>(&())))
+        .collect::<Vec<_>>();
+    let sent = head.serve(frames);
+    let refused = wire_errors(&sent);
+    assert_eq!(refused.len(), extra, "{refused:?}");
+    assert!(refused.iter().all(|e| matches!(e, WireError::FailedToSpawn)), "{refused:?}");
+    assert_eq!(replies::<IdentifyEndpoint>(&sent).len(), 16);
+    // Refused while homing: before the homing's reply.
+    let homed = sent
+        .iter()
+        .position(|s| !replies::<HomeEndpoint>(std::slice::from_ref(s)).is_empty());
+    let last_refusal = sent.iter().rposition(|s| !wire_errors(std::slice::from_ref(s)).is_empty());
+    assert!(
+        last_refusal < homed && homed.is_some(),
+        "refused at {last_refusal:?}, homed at {homed:?}"
+    );
 }

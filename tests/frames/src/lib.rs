@@ -14,6 +14,7 @@ use gonio_shared::wire::{check, framing};
 use gonio_shared::{ScanEvent, ScanSpec, VisitChunk, VISIT_CHUNK, VISIT_QUEUE};
 use gonio_sim::Sent;
 use postcard_rpc::header::{VarHeader, VarKey, VarKeyKind, VarSeq};
+use postcard_rpc::standard_icd::{WireError, ERROR_KEY};
 use postcard_rpc::{Endpoint, Key, Topic};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -82,6 +83,12 @@ where
     E::Response: DeserializeOwned,
 {
     sent.iter().filter_map(|s| body(&s.frame, E::RESP_KEY)).collect()
+}
+
+/// The wire errors among the frames the head sent (postcard-rpc's standard
+/// error key: a request it could not decode, or had no room to keep).
+pub fn wire_errors(sent: &[Sent]) -> Vec<WireError> {
+    sent.iter().filter_map(|s| body(&s.frame, ERROR_KEY)).collect()
 }
 
 /// The fault of a refused command's reply (`Reply<T>` is `Err(Fault)`),
