@@ -78,7 +78,10 @@ FAULTS = {
     "software clears it",
     "serve-hang": "the thread (the executor, the serve loop) stuck in a loop that never yields, interrupts "
     "still served",
+    "usb-suspend": "the host suspends the bus for 50 ms, then resumes it without a reset",
+    "usb-in-nak": "the host keeps the port open but stops reading: every IN transaction NAKed from then on",
 }
+USB_SUSPEND_S = 0.05
 # An instruction that branches to itself, put at the top of SRAM (above the
 # image's statics) for `serve-hang`.
 HANG_AT = 0x2001_FFF0
@@ -233,6 +236,12 @@ class Board:
         elif kind == "adc-overrun":
             self.adc._advance()
             self.adc.overrun()
+        elif kind == "usb-suspend":
+            # The fault is the suspend itself, at the host's next turn.
+            self.host.suspend_for = int(USB_SUSPEND_S * HZ)
+            self.host.on_suspend = lambda: setattr(self, "fault_at", self.clock.now)
+        elif kind == "usb-in-nak":
+            self.host.reading = False
         elif kind == "serve-hang":
             self.uc.mem_write(HANG_AT, b"\xfe\xe7")  # b .
             self.core.request_hang(HANG_AT)

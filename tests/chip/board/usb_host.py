@@ -42,6 +42,14 @@ class Host:
         self.sessions = 0
         # After each session, unplug the cable and plug it back in.
         self.replug = replug
+        # A test's fault: the host suspends the bus for this long (cycles)
+        # in the middle of a session, then resumes it without a reset; told
+        # when it suspends.
+        self.suspend_for = None
+        self.on_suspend = lambda: None
+        # A test's fault: the host keeps the port open but stops reading
+        # (every IN NAKed from then on).
+        self.reading = True
 
     def start(self):
         self.proc = self._run()
@@ -185,7 +193,7 @@ class Host:
                     busy = True
                 elif status == "STALL":
                     raise HostError("bulk OUT stalled")
-            status, data = self.otg.in_(CDC_IN)
+            status, data = self.otg.in_(CDC_IN) if self.reading else ("NAK", b"")
             if status == "ACK":
                 busy = True
                 # Without a stream, what the device sends is dropped.
@@ -197,4 +205,14 @@ class Host:
             elif status == "STALL":
                 raise HostError("bulk IN stalled")
             self.otg.start_of_frame()
+            if self.suspend_for is not None:
+                # The bus idles (no SOF, no transactions): the device
+                # suspends; then the host signals resume, with no reset.
+                idle, self.suspend_for = self.suspend_for, None
+                self._note("bus suspended")
+                self.on_suspend()
+                self.otg.suspend()
+                yield idle
+                self._note("bus resumed")
+                self.otg.resume()
             yield PACKET_TIME if busy else MS

@@ -17,7 +17,10 @@
 //! - `adc-overrun`: ADC1 loses a result and sets OVR, ignoring triggers
 //!   until the firmware clears it;
 //! - `serve-hang`: the serve loop stuck in a loop that never yields, the
-//!   interrupts still served (the watchdog starved).
+//!   interrupts still served (the watchdog starved);
+//! - `usb-suspend`: the host suspends the bus for 50 ms and resumes it
+//!   without a reset;
+//! - `usb-in-nak`: the host keeps the port open but stops reading.
 //!
 //! Survived means: the laser enable low, and the drivers' enables high,
 //! within the fault's bound (`laser_off_us`, from the board's pin log, in
@@ -28,7 +31,11 @@
 //! E-STOP the measurement is refused as an E-STOP, the head re-arms on a
 //! continue once the input has stayed closed, and measures again; after a
 //! stalled conversion chain the measurement is refused and the next one
-//! succeeds.
+//! succeeds; after a suspended bus the session ends as a lost link does
+//! (the measurement is lost to the host) and, resumed, the head serves the
+//! next one; with a host that stops reading, the measurement ends (its
+//! reply waits in the USB queue) and the head stays alive, the watchdog
+//! fed.
 //!
 //! The bounds: 1 ms where the firmware sees the fault at once (a fault, the
 //! E-STOP's interrupt); five chop periods and a millisecond where a missing
@@ -61,6 +68,10 @@ const STALL_BAR_S: f64 = 0.023;
 /// reports the one the image programmed, and that is checked too.
 const WATCHDOG_BAR_S: f64 = 1.0;
 
+/// The longest a measurement with the default settings keeps the laser on
+/// (chip-bench's bar for the same measurement).
+const MEASUREMENT_S: f64 = 1.0;
+
 /// What the head does after a fault, as the host and the pins see it.
 #[derive(Clone, Copy, PartialEq)]
 enum After {
@@ -70,21 +81,26 @@ enum After {
     EStop,
     /// The operation refused; the next one succeeds.
     Recovers,
+    /// The session ends as a lost link does; the next request is served.
+    LinkLost,
+    /// No answer reaches the host; the head lives on.
+    Unheard,
 }
 
 /// A fault, what follows, and how soon the laser enable must be low and
-/// the drivers disabled (s). For the E-STOP the drivers go once the serve
-/// loop has stopped the operation (the motion braked, then the enables
-/// dropped), within a turn of it.
+/// the drivers disabled (s; `None`: they stay as the operation leaves them,
+/// a measurement that ends normally). For the E-STOP the drivers go once
+/// the serve loop has stopped the operation (the motion braked, then the
+/// enables dropped), within a turn of it.
 struct Trial {
     kind: &'static str,
     after: After,
     laser_off_bar_s: f64,
-    drivers_off_bar_s: f64,
+    drivers_off_bar_s: Option<f64>,
 }
 
 impl Trial {
-    const fn new(kind: &'static str, after: After, laser_off_bar_s: f64, drivers_off_bar_s: f64) -> Self {
+    const fn new(kind: &'static str, after: After, laser_off_bar_s: f64, drivers_off_bar_s: Option<f64>) -> Self {
         Trial {
             kind,
             after,
@@ -94,13 +110,15 @@ impl Trial {
     }
 }
 
-const TRIALS: [Trial; 6] = [
-    Trial::new("hardfault", After::Reset, LASER_OFF_BAR_S, LASER_OFF_BAR_S),
-    Trial::new("stack-overflow", After::Reset, LASER_OFF_BAR_S, LASER_OFF_BAR_S),
-    Trial::new("estop-pulse", After::EStop, LASER_OFF_BAR_S, 0.1),
-    Trial::new("dma-freeze", After::Recovers, STALL_BAR_S, STALL_BAR_S),
-    Trial::new("adc-overrun", After::Recovers, STALL_BAR_S, STALL_BAR_S),
-    Trial::new("serve-hang", After::Reset, WATCHDOG_BAR_S, WATCHDOG_BAR_S),
+const TRIALS: [Trial; 8] = [
+    Trial::new("hardfault", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
+    Trial::new("stack-overflow", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
+    Trial::new("estop-pulse", After::EStop, LASER_OFF_BAR_S, Some(0.1)),
+    Trial::new("dma-freeze", After::Recovers, STALL_BAR_S, Some(STALL_BAR_S)),
+    Trial::new("adc-overrun", After::Recovers, STALL_BAR_S, Some(STALL_BAR_S)),
+    Trial::new("serve-hang", After::Reset, WATCHDOG_BAR_S, Some(WATCHDOG_BAR_S)),
+    Trial::new("usb-suspend", After::LinkLost, LASER_OFF_BAR_S, Some(0.1)),
+    Trial::new("usb-in-nak", After::Unheard, MEASUREMENT_S, None),
 ];
 
 /// A step's outcome as text.
@@ -116,10 +134,16 @@ async fn host_side(pty: &str, after: After) -> Vec<(String, Result<String, Strin
     };
     let volts = |s: gonio_shared::Sample| format!("{} V", s.signal.amplitude_v);
     let measure = MeasureRequest { at: None };
-    let mut steps = vec![(
-        "measure".to_string(),
-        outcome(head.request::<MeasureEndpoint>(&measure).await, volts),
-    )];
+    let first = head.request::<MeasureEndpoint>(&measure);
+    let measured = if after == After::Unheard {
+        // No answer can come: waited for as long as the measurement takes.
+        tokio::time::timeout(std::time::Duration::from_secs(3), first)
+            .await
+            .unwrap_or_else(|_| Err(anyhow::anyhow!("no answer within 3 s")))
+    } else {
+        first.await
+    };
+    let mut steps = vec![("measure".to_string(), outcome(measured, volts))];
     if after == After::EStop {
         let status = head.request::<StatusEndpoint>(&()).await;
         steps.push((
@@ -129,7 +153,7 @@ async fn host_side(pty: &str, after: After) -> Vec<(String, Result<String, Strin
         let resumed = head.request::<ContinueEndpoint>(&()).await;
         steps.push(("continue".into(), outcome(resumed, |s| format!("{:?}", s.state))));
     }
-    if after != After::Reset {
+    if matches!(after, After::EStop | After::Recovers | After::LinkLost) {
         let again = head.request::<MeasureEndpoint>(&measure).await;
         steps.push(("measure again".into(), outcome(again, volts)));
     }
@@ -171,11 +195,10 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
             t.laser_off_bar_s
         ));
     }
-    if !drivers_off.is_some_and(|s| s <= t.drivers_off_bar_s) {
-        problems.push(format!(
-            "drivers disabled {drivers_off:?} s after the fault (bar {} s)",
-            t.drivers_off_bar_s
-        ));
+    if let Some(bar) = t.drivers_off_bar_s {
+        if !drivers_off.is_some_and(|s| s <= bar) {
+            problems.push(format!("drivers disabled {drivers_off:?} s after the fault (bar {bar} s)"));
+        }
     }
     let step = |name: &str| host.iter().find(|(n, _)| n == name).map(|(_, r)| r.clone());
     if t.after == After::Reset {
@@ -213,9 +236,21 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
                 problems.push(format!("{name}: {:?}", step(name)));
             }
         }
+    } else if t.after == After::Unheard {
+        if !matches!(step("measure"), Some(Err(_))) {
+            problems.push(format!("an answer reached a host that does not read: {:?}", step("measure")));
+        }
+        if report["watchdog"]["longest_gap_s"].as_f64().is_none_or(|g| g > 0.5) {
+            problems.push(format!("the watchdog went unfed: {}", report["watchdog"]));
+        }
     } else {
-        if !matches!(step("measure"), Some(Err(e)) if e.contains("head refused")) {
-            problems.push(format!("the measurement was not refused: {:?}", step("measure")));
+        // Refused by the head, or lost with the session.
+        let refused = |e: &String| e.contains("head refused") != (t.after == After::LinkLost);
+        if !matches!(step("measure"), Some(Err(e)) if refused(&e)) {
+            problems.push(format!(
+                "the measurement was not refused or lost as expected: {:?}",
+                step("measure")
+            ));
         }
         if !matches!(step("measure again"), Some(Ok(_))) {
             problems.push(format!("measure again: {:?}", step("measure again")));

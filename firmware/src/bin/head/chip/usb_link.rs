@@ -13,7 +13,7 @@ use embassy_futures::select::{select, Either};
 use embassy_stm32::peripherals::{PA11, PA12, USB_OTG_FS};
 use embassy_stm32::usb::Driver;
 use embassy_stm32::Peri;
-use embassy_sync::blocking_mutex::raw::CriticalSectionRawMutex;
+use embassy_sync::blocking_mutex::raw::ThreadModeRawMutex;
 use embassy_sync::channel::Channel;
 use embassy_sync::signal::Signal;
 use embassy_time::Timer;
@@ -28,20 +28,31 @@ type UsbDriver = Driver<'static, USB_OTG_FS>;
 type Frame = heapless::Vec<u8, MAX_FRAME>;
 
 const PACKET: u16 = 64;
+/// Frames one packet can end: the shortest (a header of a 1-byte key and
+/// sequence number, no body, the 4-byte check, COBS's code byte and
+/// delimiter) takes 9 bytes, so 64 end at most 8 (the first begun in the
+/// packet before).
+const FRAMES_PER_PACKET: usize = 8;
 /// How long a frame may wait for room in the transmit queue (ms): eight
 /// frames ahead of it at 64 bytes a millisecond take far less.
 const SEND_TIMEOUT_MS: u64 = 500;
 
-static RX: Channel<CriticalSectionRawMutex, Frame, 4> = Channel::new();
-static TX: Channel<CriticalSectionRawMutex, Frame, 8> = Channel::new();
+/// The queues and signals are shared by thread-mode tasks only (the core's
+/// and the two USB tasks; the OTG interrupt only wakes them), so their
+/// mutex is the thread-mode one: a critical section around a 256-byte
+/// frame's copy held the step timer's interrupt off for 330 cycles on the
+/// virtual board (`board-bench`'s `interrupt_worst_wait`), a STEP edge
+/// 2.9 ticks late.
+static RX: Channel<ThreadModeRawMutex, Frame, 4> = Channel::new();
+static TX: Channel<ThreadModeRawMutex, Frame, 8> = Channel::new();
 /// Sessions started since boot: each start and each end is signalled with
 /// the session's number, so that an end nobody was serving (a bus reset or
 /// suspend while the head waited between sessions) cannot end the next
 /// one: it would meet that session's first request, and the head would
 /// not answer again until the next re-plug.
 static SESSION: AtomicU32 = AtomicU32::new(0);
-static DISCONNECTED: Signal<CriticalSectionRawMutex, u32> = Signal::new();
-static CONNECTED: Signal<CriticalSectionRawMutex, u32> = Signal::new();
+static DISCONNECTED: Signal<ThreadModeRawMutex, u32> = Signal::new();
+static CONNECTED: Signal<ThreadModeRawMutex, u32> = Signal::new();
 
 fn start_session() {
     CONNECTED.signal(SESSION.fetch_add(1, Ordering::Relaxed).wrapping_add(1));
@@ -166,15 +177,28 @@ async fn rx_task(mut rx: Receiver<'static, UsbDriver>, control: ControlChanged<'
         RX.clear();
         TX.clear();
         start_session();
-        loop {
+        'session: loop {
             match select(rx.read_packet(&mut pkt), control.control_changed()).await {
-                Either::First(Ok(n)) => dec.feed(&pkt[..n], |f| {
-                    // A full queue drops the frame; the host's request times
-                    // out and is retried.
-                    if let Ok(f) = Frame::from_slice(f) {
-                        let _ = RX.try_send(f);
+                Either::First(Ok(n)) => {
+                    let mut frames = heapless::Vec::<Frame, FRAMES_PER_PACKET>::new();
+                    dec.feed(&pkt[..n], |f| {
+                        if let Ok(f) = Frame::from_slice(f) {
+                            let _ = frames.push(f);
+                        }
+                    });
+                    // A full queue holds the reader back: the endpoint NAKs
+                    // the host's next packets until the core has taken a
+                    // frame, and nothing is dropped.
+                    for f in frames {
+                        loop {
+                            match select(RX.send(f.clone()), control.control_changed()).await {
+                                Either::First(()) => break,
+                                Either::Second(()) if !rx.dtr() => break 'session,
+                                Either::Second(()) => {}
+                            }
+                        }
                     }
-                }),
+                }
                 Either::First(Err(_)) => break,
                 Either::Second(()) if !rx.dtr() => break,
                 Either::Second(()) => {}
