@@ -32,28 +32,24 @@ pub fn board_plant(root: &Path) -> Result<PathBuf> {
 /// The chip the image is built for.
 pub const TARGET: &str = "thumbv7em-none-eabihf";
 
+/// The firmware's binaries `bins`, built in release for the chip: the
+/// folder they are in.
+pub fn chip_images(root: &Path, bins: &[&str]) -> Result<PathBuf> {
+    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
+    let mut build = Command::new(cargo);
+    build.args(["build", "--release", "--locked", "-p", "gonio-firmware", "--target", TARGET]);
+    for bin in bins {
+        build.args(["--bin", bin]);
+    }
+    if !build.current_dir(root).status().context("building the firmware")?.success() {
+        bail!("{bins:?} did not build for {TARGET}");
+    }
+    Ok(chip_costs::target_dir().join(TARGET).join("release"))
+}
+
 /// The release `gonio-head` image, built: its path.
 pub fn head_image(root: &Path) -> Result<PathBuf> {
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let built = Command::new(cargo)
-        .args([
-            "build",
-            "--release",
-            "--locked",
-            "-p",
-            "gonio-firmware",
-            "--bin",
-            "gonio-head",
-            "--target",
-            TARGET,
-        ])
-        .current_dir(root)
-        .status()
-        .context("building gonio-head")?;
-    if !built.success() {
-        bail!("gonio-head did not build for {TARGET}");
-    }
-    Ok(chip_costs::target_dir().join(TARGET).join("release").join("gonio-head"))
+    Ok(chip_images(root, &["gonio-head"])?.join("gonio-head"))
 }
 
 /// A board running `image` with its port on a pseudo-terminal.

@@ -355,26 +355,30 @@ impl<P: OutputPin> Executor<P> {
     }
 }
 
+/// A STEP pin that is always ready, for the unit tests of the executor
+/// and of its interrupt (`step_irq`).
+#[cfg(test)]
+pub(super) struct ReadyPin;
+
+#[cfg(test)]
+impl embedded_hal::digital::ErrorType for ReadyPin {
+    type Error = core::convert::Infallible;
+}
+
+#[cfg(test)]
+impl OutputPin for ReadyPin {
+    fn set_low(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+    fn set_high(&mut self) -> Result<(), Self::Error> {
+        Ok(())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
     use proptest::prelude::*;
-
-    /// A STEP pin that is always ready.
-    struct Pin;
-
-    impl embedded_hal::digital::ErrorType for Pin {
-        type Error = core::convert::Infallible;
-    }
-
-    impl OutputPin for Pin {
-        fn set_low(&mut self) -> Result<(), Self::Error> {
-            Ok(())
-        }
-        fn set_high(&mut self) -> Result<(), Self::Error> {
-            Ok(())
-        }
-    }
 
     proptest! {
         /// Whatever a planner queues, every interval the interrupt will add
@@ -405,7 +409,7 @@ mod tests {
             pulse in 1u64..6,
             fires in proptest::collection::vec(0usize..200, 1..4),
         ) {
-            let mut exec = Executor::new([Pin, Pin, Pin], pulse);
+            let mut exec = Executor::new([ReadyPin, ReadyPin, ReadyPin], pulse);
             for (n, &cut) in fires.iter().enumerate() {
                 for &(count, ticks) in &blocks {
                     let b = StepBlock { interval: ticks << 32, count, add: 0 };

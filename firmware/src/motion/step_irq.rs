@@ -67,6 +67,7 @@ pub fn on_compare<P: OutputPin, T: CompareTimer>(exec: &mut Executor<P>, timer: 
 
 #[cfg(test)]
 mod tests {
+    use super::super::executor::ReadyPin;
     use super::*;
     use crate::hw::StepBlock;
     use gonio_shared::Axis;
@@ -116,21 +117,8 @@ mod tests {
         }
     }
 
-    struct Pin;
-    impl embedded_hal::digital::ErrorType for Pin {
-        type Error = core::convert::Infallible;
-    }
-    impl OutputPin for Pin {
-        fn set_high(&mut self) -> Result<(), Self::Error> {
-            Ok(())
-        }
-        fn set_low(&mut self) -> Result<(), Self::Error> {
-            Ok(())
-        }
-    }
-
-    fn executor(steps: u32, interval_ticks: u64) -> Executor<Pin> {
-        let mut e = Executor::new([Pin, Pin, Pin], 3);
+    fn executor(steps: u32, interval_ticks: u64) -> Executor<ReadyPin> {
+        let mut e = Executor::new([ReadyPin, ReadyPin, ReadyPin], 3);
         let b = StepBlock {
             interval: interval_ticks << 32,
             count: steps,
@@ -142,7 +130,7 @@ mod tests {
 
     /// Runs a move on `timer` as the interrupt would: the handler runs when
     /// the counter reaches an armed compare, never otherwise.
-    fn run(exec: &mut Executor<Pin>, timer: &mut Counter, origin: u32) -> Option<[u32; 3]> {
+    fn run(exec: &mut Executor<ReadyPin>, timer: &mut Counter, origin: u32) -> Option<[u32; 3]> {
         let first = exec.start();
         if let Some(done) = schedule(exec, timer, origin, first) {
             return Some(done);

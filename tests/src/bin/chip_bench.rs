@@ -75,12 +75,11 @@ use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
 use gonio_shared::scan::VISIT_CHUNK;
 use gonio_shared::SweepRequest;
 use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
-use gonio_tests::virtual_board::{board_plant, Board};
+use gonio_tests::virtual_board::{board_plant, chip_images, Board};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-const TARGET: &str = "thumbv7em-none-eabihf";
 /// The serve loop's budget between two polls (instructions).
 const AWAIT_FREE_BAR: u64 = 100_000;
 
@@ -311,28 +310,7 @@ fn simulated_measurement() -> Result<gonio_shared::Signal> {
 
 fn main() -> Result<()> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
-    let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
-    let built = Command::new(cargo)
-        .args([
-            "build",
-            "--release",
-            "--locked",
-            "-p",
-            "gonio-firmware",
-            "--bin",
-            "gonio-cost",
-            "--bin",
-            "gonio-head",
-            "--target",
-            TARGET,
-        ])
-        .current_dir(&root)
-        .status()
-        .context("building gonio-cost and gonio-head")?;
-    if !built.success() {
-        bail!("gonio-cost and gonio-head did not build for {TARGET}");
-    }
-    let images = chip_costs::target_dir().join(TARGET).join("release");
+    let images = chip_images(&root, &["gonio-cost", "gonio-head"])?;
     let run = python(&root, "emulate.py", &["costs".as_ref(), images.join("gonio-cost").as_os_str()])?;
     // The unmodified image on the virtual board, from reset.
     let board = board_run(&root, &images.join("gonio-head"))?;
