@@ -11,13 +11,15 @@ interrupts taken, the watchdog's reloads, every change of a driven pin
 with its time, and every driven pin's level at the end.
 
 `--fault` injects a fault (`--help` lists them) at WHEN: virtual seconds,
-or `laser+S`, S seconds after the laser enable first rises; the report's
+or `laser+S`, S seconds after the laser enable first rises (`laserN+S`:
+its N-th rise; `dmaN+S`: DMA2 stream 0's N-th enable); the report's
 `fault` then says when the laser enable went low and the drivers' enables
 high after it. A watchdog reset ends the run, the pins let go as a reset
 lets them go (the board's resistors then hold them)."""
 
 import argparse
 import json
+import re
 import shlex
 import signal
 import tty
@@ -59,7 +61,18 @@ RESISTORS = {"PA6": 0, "PB0": 0, "PC0": 0, "PC4": 0, "PC8": 0, "PC2": 1, "PC6": 
 STEP = ("PC0", "PC4", "PC8")
 # The safe state: laser enable and STEP low, the drivers' active-low EN high.
 SAFE = {"PB0": 0, "PC0": 0, "PC4": 0, "PC8": 0, "PC2": 1, "PC6": 1, "PC10": 1}
-IRQ_NAMES = {28: "TIM2", 29: "TIM3", 30: "TIM4", 50: "TIM5", 40: "EXTI15_10", 56: "DMA2_STREAM0", 67: "OTG_FS", 18: "ADC"}
+IRQ_NAMES = {
+    28: "TIM2",
+    29: "TIM3",
+    30: "TIM4",
+    50: "TIM5",
+    55: "TIM7",
+    40: "EXTI15_10",
+    56: "DMA2_STREAM0",
+    67: "OTG_FS",
+    18: "ADC",
+}
+TIM7_BASE = 0x4000_1400
 UID = 0x1FFF_7A10
 # The stack is the 64 KiB of CCM RAM below 0x1001_0000 (memory.x).
 CCM_BASE, CCM_END = 0x1000_0000, 0x1001_0000
@@ -80,8 +93,11 @@ FAULTS = {
     "still served",
     "usb-suspend": "the host suspends the bus for 50 ms, then resumes it without a reset",
     "usb-in-nak": "the host keeps the port open but stops reading: every IN transaction NAKed from then on",
+    "usb-replug": "the cable pulled for 100 ms and plugged back: the bus reset, the device enumerated again, the "
+    "port reopened by the program that held it, the bytes on their way lost",
 }
 USB_SUSPEND_S = 0.05
+USB_UNPLUGGED_S = 0.1
 # An instruction that branches to itself, put at the top of SRAM (above the
 # image's statics) for `serve-hang`.
 HANG_AT = 0x2001_FFF0
@@ -106,11 +122,18 @@ class Board:
         self.nvic.clock = self.clock
         self.rcc = Rcc()
         self.pins = []  # (seconds, pin, level) of every driven change but STEP's
+        # The laser enable's level, and when it last fell from high.
+        self.laser_high = False
+        self.laser_fell_at = 0
+        # Rises of the laser enable and enables of DMA2 stream 0, counted.
+        self.rises = {"laser": 0, "dma": 0}
         self.steps = {name: 0 for name in STEP}  # rising STEP edges
         self.step_lateness = {}  # cycles from TIM5's compare to a rising STEP edge → edges
         bus = self.bus = Bus(uc)
         for i, (name, irq, bits) in enumerate((("TIM2", 28, 32), ("TIM3", 29, 16), ("TIM4", 30, 16), ("TIM5", 50, 32))):
             setattr(self, name.lower(), bus.attach(0x4000_0000 + 0x400 * i, 0x400, Timer(name, irq, bits, self.clock, self.nvic, self.rcc)))
+        # TIM7, a basic timer: the registers it has are the general ones'.
+        self.tim7 = bus.attach(TIM7_BASE, 0x400, Timer("TIM7", 55, 16, self.clock, self.nvic, self.rcc))
         # TIM3's internal trigger 1 is TIM2 (RM0090 Table 93).
         self.tim3.triggers[1] = self.tim2
         self.tim2.slaves.append(self.tim3)
@@ -128,6 +151,7 @@ class Board:
         # TIM3 CH1 drives PA6 (AF2): the laser's chop.
         self.tim3.outputs[0] = (self.ports["A"], 6)
         self.dma = bus.attach(DMA2_BASE, 0x400, Dma(uc, self.nvic, self.clock))
+        self.dma.on_enable = lambda: self._rise("dma")
         self.adc = bus.attach(ADC_BASE, 0x400, Adc(self.clock, self.nvic, self.rcc, self.tim2, self.dma))
         self.tim2.slaves.append(self.adc)
         bus.attach(RCC_BASE, 0x400, self.rcc)
@@ -138,12 +162,18 @@ class Board:
         bus.map([(0x4000_0000, 0x1000_0000), (OTG_FS_BASE, 0x4_0000), (0xE000_0000, 0x10_0000)])
         self.core = Core(self.machine, self.elf, self.nvic, self.clock)
         self.core.stop_run = bus.stop
+        # The thread's longest stretch awake without a turn of its loop,
+        # over all and with the laser enable high at some time in it.
+        self.core.on_thread_turn = self._thread_turn
+        self.turn_longest = self.turn_longest_laser_on = 0
         self.machine.start_profile()
         self.host = None
         self.stop_requested = False
-        # An injected fault: (kind, WHEN) until it is scheduled, then the
-        # cycle it struck at.
+        # An injected fault: its kind; the laser enable's rise and the
+        # seconds after it it strikes at, until it is scheduled; the cycle
+        # it struck at.
         self.fault_plan = None
+        self.fault_on_rise = None
         self.fault_at = None
         self.reset_at = None
         # The head behind the pins (`board-plant` run as the command
@@ -183,8 +213,12 @@ class Board:
         driven; a STEP edge counted, with how late it rose after the step
         timer's compare that was due."""
         name = f"P{port.letter}{pin}"
-        if name == "PB0" and level and self.fault_plan and self.fault_plan[1].startswith("laser+"):
-            self._schedule_fault(self.clock.now + int(float(self.fault_plan[1][6:]) * HZ))
+        if name == "PB0":
+            if self.laser_high and not level:
+                self.laser_fell_at = self.clock.now
+            if level and not self.laser_high:
+                self._rise("laser")
+            self.laser_high = bool(level)
         if name in self.steps:
             if level:
                 self.steps[name] += 1
@@ -194,6 +228,11 @@ class Board:
                     self.step_lateness[late] = self.step_lateness.get(late, 0) + 1
             return
         self.pins.append((self.clock.now / HZ, name, level))
+
+    def _thread_turn(self, since, now):
+        self.turn_longest = max(self.turn_longest, now - since)
+        if self.laser_high or self.laser_fell_at > since:
+            self.turn_longest_laser_on = max(self.turn_longest_laser_on, now - since)
 
     def edge(self, port, pin, level):
         """Every change of a pin's level: to the EXTI and the plant."""
@@ -206,17 +245,29 @@ class Board:
         port, pin = self.ports[name[1]], int(name[2:])
         self.clock.at(int(at * HZ), lambda: port.set_input(pin, level))
 
+    def _rise(self, source):
+        """The laser enable rose, or DMA2 stream 0 was enabled: a fault
+        timed by the N-th such rise is scheduled."""
+        self.rises[source] += 1
+        if self.fault_on_rise and self.fault_on_rise[:2] == (source, self.rises[source]):
+            self._schedule_fault(self.clock.now + int(self.fault_on_rise[2] * HZ))
+
     def inject(self, kind, when):
-        """Injects fault `kind` (FAULTS) at `when` (`laser+S` or seconds)."""
+        """Injects fault `kind` (FAULTS) at `when`: seconds, or `laser+S`
+        (S seconds after the laser enable first rises), `laserN+S` (after
+        its N-th rise), `dmaN+S` (after DMA2 stream 0 is enabled for the
+        N-th time: a measurement's conversions start)."""
         if kind not in FAULTS:
             raise ValueError(f"unknown fault {kind!r}: one of {', '.join(FAULTS)}")
-        self.fault_plan = (kind, when)
-        if not when.startswith("laser+"):
+        rise = re.fullmatch(r"(laser|dma)(\d*)\+([0-9.eE+-]+)", when)
+        self.fault_plan = kind
+        if rise:
+            self.fault_on_rise = (rise[1], int(rise[2] or 1), float(rise[3]))
+        else:
             self._schedule_fault(int(float(when) * HZ))
 
     def _schedule_fault(self, cycle):
-        kind = self.fault_plan[0]
-        self.fault_plan = (kind, "scheduled")
+        kind, self.fault_on_rise = self.fault_plan, None
         self.clock.at(cycle, lambda: self._strike(kind))
 
     def _strike(self, kind):
@@ -236,9 +287,12 @@ class Board:
         elif kind == "adc-overrun":
             self.adc._advance()
             self.adc.overrun()
-        elif kind == "usb-suspend":
-            # The fault is the suspend itself, at the host's next turn.
-            self.host.suspend_for = int(USB_SUSPEND_S * HZ)
+        elif kind in ("usb-suspend", "usb-replug"):
+            # The fault is the bus going idle, at the host's next turn.
+            if kind == "usb-suspend":
+                self.host.suspend_for = int(USB_SUSPEND_S * HZ)
+            else:
+                self.host.pull_for = int(USB_UNPLUGGED_S * HZ)
             self.host.on_suspend = lambda: setattr(self, "fault_at", self.clock.now)
         elif kind == "usb-in-nak":
             self.host.reading = False
@@ -255,7 +309,7 @@ class Board:
         a fault that makes it fault (a stack overflow does when the stack
         next grows into the missing memory), else after the fault struck."""
         if self.fault_at is None:
-            return None if self.fault_plan is None else {"kind": self.fault_plan[0], "struck": False}
+            return None if self.fault_plan is None else {"kind": self.fault_plan, "struck": False}
         faulted = [c for c, *_ in self.core.faults if c >= self.fault_at]
         at = (faulted[0] if faulted else self.fault_at) / HZ
         level = {}
@@ -273,7 +327,7 @@ class Board:
         after = {p: None if t is None else round(t - at, 9) for p, t in safe_at.items()}
         drivers = [after[p] for p in ("PC2", "PC6", "PC10")]
         return {
-            "kind": self.fault_plan[0],
+            "kind": self.fault_plan,
             "struck": True,
             "struck_s": round(self.fault_at / HZ, 9),
             "faulted_s": round(faulted[0] / HZ, 9) if faulted else None,
@@ -364,6 +418,12 @@ class Board:
             # handler's first instruction (its latency), and what the core
             # was doing meanwhile.
             "interrupt_worst_wait": {IRQ_NAMES.get(i, str(i)): self._wait(*w) for i, w in self.core.worst_wait.items()},
+            # Each handler's runs, entry to return, what pre-empted it
+            # included: how many, their cycles in all and the longest.
+            "interrupt_runs": {
+                IRQ_NAMES.get(i, str(i)): {"count": n, "cycles": total, "longest_cycles": longest}
+                for i, (n, total, longest) in self.core.handler_runs.items()
+            },
             "step_edges": self.steps,
             # Cycles from the step timer's compare to the STEP edge it raised.
             "step_edge_lateness_cycles": {
@@ -387,6 +447,10 @@ class Board:
             "locked_up": self.core.locked,
             "fault": self._fault_report(),
             "first_sleep_instructions": self.core.first_sleep,
+            # The longest the thread stayed awake without turning its loop
+            # (one poll of the executor and what pre-empted it), µs.
+            "thread_turn_longest_us": round(self.turn_longest / HZ * 1e6, 1),
+            "thread_turn_longest_laser_on_us": round(self.turn_longest_laser_on / HZ * 1e6, 1),
             # The stack is the 64 KiB of CCM RAM below 0x1001_0000 (memory.x).
             "stack_bytes_max": CCM_END - self.machine.counter.lowest_sp,
             "stack_deepest_in": self.elf.function_at(self.machine.counter.lowest_at),
@@ -429,7 +493,8 @@ def main():
     ap.add_argument(
         "--fault",
         metavar="KIND@WHEN",
-        help="inject a fault at WHEN (seconds, or laser+S: S seconds after the laser enable first rises); KIND: "
+        help="inject a fault at WHEN (seconds, or laser+S: S seconds after the laser enable first rises, or "
+        "laserN+S: after its N-th rise, or dmaN+S: after DMA2 stream 0's N-th enable); KIND: "
         + "; ".join(f"{k}: {v}" for k, v in FAULTS.items()),
     )
     ap.add_argument("--replug", action="store_true", help="after each session, the cable pulled and plugged back")

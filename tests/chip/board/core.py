@@ -74,6 +74,11 @@ class Core:
         self.clock = clock
         self.event = False  # the event register
         self.sleeping = False
+        # Since when the thread has been awake without a turn of its loop
+        # (a WFE executed in thread mode), and who hears of each turn:
+        # `on_thread_turn(since, now)`.
+        self.awake_since = 0
+        self.on_thread_turn = None
         self._running = False  # inside `emu_start`
         self.instructions = 0
         # (cycle, "enter"/"return"/"chain", IRQ, SP, PC) of the last
@@ -85,6 +90,10 @@ class Core:
         # was taken).
         self.blocked = {}
         self.worst_wait = {}
+        # Per IRQ, when its handler was entered, and its runs: [count,
+        # total cycles, longest] (what pre-empted it included).
+        self.entered = {}
+        self.handler_runs = {}
         self.first_sleep = None  # instructions from reset to the first idle wait
         # HardFault active; the core locked up; a fault to take at the next
         # instruction (a test's); the faults taken: (cycle, why, PC, stacked).
@@ -127,9 +136,13 @@ class Core:
         self.event = True
 
     def _on_wfe(self, uc, address, size, _user):
+        if self._current_exception() == 0 and self.awake_since is not None and self.on_thread_turn:
+            self.on_thread_turn(self.awake_since, self.clock.now)
+        self.awake_since = self.clock.now
         if self.event:
             self.event = False
         else:
+            self.awake_since = None
             self.sleeping = True
             if self.first_sleep is None:
                 self.first_sleep = self.instructions + self.m.executed - self._run_start
@@ -299,8 +312,11 @@ class Core:
         uc.reg_write(arm.UC_ARM_REG_IPSR, irq + EXTERNAL)
         uc.reg_write(arm.UC_ARM_REG_LR, exc_return)
         self.nvic.enter(irq)
+        self.entered[irq] = self.clock.now
         self.pc = self._vector(irq + EXTERNAL) | 1
         uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+        if self.sleeping:
+            self.awake_since = self.clock.now
         self.sleeping = False
 
     def _return(self, exc_return):
@@ -309,6 +325,11 @@ class Core:
         if leaving < 0:
             raise Fault(f"return from exception {leaving + EXTERNAL}: only interrupts are taken here")
         self.nvic.leave(leaving)
+        ran = self.clock.now - self.entered.pop(leaving, self.clock.now)
+        runs = self.handler_runs.setdefault(leaving, [0, 0, 0])
+        runs[0] += 1
+        runs[1] += ran
+        runs[2] = max(runs[2], ran)
         # An exception return sets the event register (B1.5.18).
         self.event = True
         # Tail-chaining: the next exception would preempt what is returned

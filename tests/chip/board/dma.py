@@ -59,6 +59,8 @@ class Dma(Block):
         # plans again after a write.
         self.before_access = lambda: None
         self.after_write = lambda: None
+        # Told when software enables the stream (a test times a fault by it).
+        self.on_enable = lambda: None
         self.forbidden = []  # (seconds, register, value): writes the manual forbids
         self.moved = 0  # items moved in all, for the board's report
         # A test's fault: the stream stops serving requests (NDTR frozen)
@@ -149,6 +151,8 @@ class Dma(Block):
                 self.pointer = 0  # the pointer starts at the base address
                 self.frozen = False
             self.cr = value
+            if not running and value & EN:
+                self.on_enable()
         elif offset in (0x14, 0x18, 0x1C, 0x20) and running:
             self.forbidden.append((self.clock.now, {0x14: "S0NDTR", 0x18: "S0PAR", 0x1C: "S0M0AR", 0x20: "S0M1AR"}[offset], value))
         elif offset == 0x14:

@@ -3,7 +3,8 @@ the device (descriptors, address, configuration), opens the CDC-ACM port
 (line coding, DTR) as an operating system's driver does when a program
 opens the port, moves bytes between a byte stream (a pseudo-terminal's
 master side) and the bulk endpoints, and drops DTR when the program
-closes the port; optionally the cable is then pulled and plugged back.
+closes the port, raising it again for the next program that opens it;
+optionally the cable is pulled and plugged back after each session.
 
 It runs as a coroutine on the virtual clock: each transaction is one call
 into the OTG model, and a NAK is retried a little later, the firmware
@@ -47,6 +48,12 @@ class Host:
         # when it suspends.
         self.suspend_for = None
         self.on_suspend = lambda: None
+        # A test's fault: the cable pulled in the middle of a session for
+        # this long (cycles), then plugged back: the bus reset and the
+        # device enumerated again, the port reopened (the program holding
+        # it open meanwhile); what was on its way is lost. Told when the
+        # cable goes, as for a suspend.
+        self.pull_for = None
         # A test's fault: the host keeps the port open but stops reading
         # (every IN NAKed from then on).
         self.reading = True
@@ -124,14 +131,23 @@ class Host:
         self._note("attached")
         while True:
             yield from self._enumerate()
-            yield from self._session()
-            if not self.replug:
-                return
-            # The cable out (the bus idles: the device suspends) and back in.
-            self._note("unplugged")
-            self.otg.suspend()
-            yield 100 * MS
-            self._note("plugged")
+            # Sessions, one per program that opens the port, until the
+            # cable is pulled (a test's fault, or `replug` after each).
+            while True:
+                pulled = yield from self._session()
+                if pulled:
+                    break
+                if self.replug:
+                    yield from self._unplug(100 * MS)
+                    break
+
+    def _unplug(self, cycles):
+        """The cable out for `cycles` (the bus idles: the device
+        suspends), then back in."""
+        self._note("unplugged")
+        self.otg.suspend()
+        yield cycles
+        self._note("plugged")
 
     def _enumerate(self):
         self.otg.bus_reset()
@@ -175,7 +191,8 @@ class Host:
 
     def _session(self):
         """Waits for a program to open the port, bridges the bulk endpoints
-        while it is open, and drops DTR when it closes the port."""
+        while it is open, and drops DTR when it closes the port; True when
+        the cable was pulled instead."""
         while not self._port_open():
             yield MS
         yield from self._set_dtr(True)
@@ -183,7 +200,13 @@ class Host:
         while True:
             if not self._port_open():
                 yield from self._set_dtr(False)
-                return
+                return False
+            if self.pull_for is not None:
+                pulled, self.pull_for = self.pull_for, None
+                self.on_suspend()
+                self.to_device.clear()
+                yield from self._unplug(pulled)
+                return True
             busy = False
             if self.to_device:
                 chunk = bytes(self.to_device[:64])
