@@ -16,7 +16,8 @@
 //! stream that stopped, and it starts each measurement at the ring's base
 //! with nothing of the last one in it.
 
-use embassy_futures::select::{select, Either};
+use super::guard;
+use embassy_futures::select::{select3, Either3};
 use embassy_stm32::adc::{Adc, RxDma, SampleTime};
 use embassy_stm32::dma::{ReadableRingBuffer, Request, TransferOptions};
 use embassy_stm32::gpio::{Flex, OutputType};
@@ -184,9 +185,12 @@ impl AdcStream for TimedAdc {
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::RISING_EDGE));
         self.sample_clock.start();
         self.running = true;
+        let sample_us = (t.ticks_per_sample.max(2) as u64 * 1_000_000).div_ceil(Self::TIMER_HZ as u64);
+        guard::watch_chain(sample_us.min(u32::MAX as u64) as u32);
     }
 
     fn stop(&mut self) {
+        guard::unwatch_chain();
         self.sample_clock.stop();
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::DISABLED));
         // A conversion already triggered ends 96 ADC clocks (4.6 µs) later;
@@ -202,20 +206,29 @@ impl AdcStream for TimedAdc {
         self.running = false;
     }
 
-    /// A period that has not arrived when the ring could have filled once
-    /// more means the chain stopped (a trigger, conversion or transfer
-    /// that no longer comes): the stream stops, chop dark, and this and every
-    /// later read until the next `start` fail at once, so the core ends the
-    /// measurement and turns the laser off (it reports it as a lost block,
-    /// `Fault::AdcOverrun` on the second), instead of waiting for ever with
-    /// the laser on.
+    /// A chain that stops (a trigger, conversion or transfer that no
+    /// longer comes) is found by the guard within a few hundred µs, which
+    /// cuts the laser and ends the read; failing that (a DMA that moves but
+    /// no longer interrupts), by a period that has not arrived when the
+    /// ring could have filled once more. Either way the stream stops, chop
+    /// dark, and this and every later read until the next `start` fail at
+    /// once, so the core ends the measurement and turns the laser off (it
+    /// reports it as a lost block, `Fault::AdcOverrun` on the second),
+    /// instead of waiting for ever with the laser on.
     async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
-        let (true, Some(ring)) = (self.running, self.ring.as_mut()) else {
+        let (true, Some(ring), false) = (self.running, self.ring.as_mut(), guard::tripped()) else {
+            self.stop();
             return Err(Overrun);
         };
-        match select(ring.read_exact(out), embassy_time::Timer::after_micros(self.stall_us)).await {
-            Either::First(r) => r.map(|_| ()).map_err(|_| Overrun),
-            Either::Second(()) => {
+        match select3(
+            ring.read_exact(out),
+            embassy_time::Timer::after_micros(self.stall_us),
+            guard::trip(),
+        )
+        .await
+        {
+            Either3::First(r) => r.map(|_| ()).map_err(|_| Overrun),
+            Either3::Second(()) | Either3::Third(()) => {
                 self.stop();
                 Err(Overrun)
             }

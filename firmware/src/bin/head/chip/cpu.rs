@@ -5,7 +5,8 @@
 //!   code runs from flash at roughly half speed at 168 MHz (RM0090 §3.5.2).
 //! - Interrupt priorities: every interrupt starts at priority 0, so none can
 //!   pre-empt another. The step timer must pre-empt everything (a late STEP
-//!   is a lost microstep at speed), the E-STOP comes next, then the
+//!   is a lost microstep at speed), the E-STOP and the guard come next
+//!   (each cuts the laser; neither pre-empts the other), then the
 //!   conversions' DMA and the time driver, and USB last (its host retries).
 //!   Lower numbers pre-empt higher ones; the serve loop runs in thread mode.
 //! - Watchdog under a debugger: left counting while the core is halted
@@ -21,6 +22,7 @@ use embassy_stm32::pac;
 /// Priorities of the interrupts the head uses (P0 highest).
 pub const STEP_TIMER: Priority = Priority::P0;
 pub const ESTOP: Priority = Priority::P1;
+pub const GUARD: Priority = Priority::P1;
 pub const DMA: Priority = Priority::P2;
 pub const TIME_DRIVER: Priority = Priority::P2;
 pub const USB: Priority = Priority::P3;
@@ -35,6 +37,7 @@ pub fn setup() {
     });
     interrupt::TIM5.set_priority(STEP_TIMER);
     interrupt::EXTI15_10.set_priority(ESTOP);
+    interrupt::TIM7.set_priority(GUARD);
     interrupt::TIM4.set_priority(TIME_DRIVER);
     interrupt::OTG_FS.set_priority(USB);
 }

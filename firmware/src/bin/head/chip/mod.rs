@@ -3,6 +3,7 @@
 mod adc_stream;
 mod cpu;
 mod fault;
+mod guard;
 mod pins;
 mod sentry;
 mod step_timer;
@@ -11,7 +12,7 @@ mod watchdog;
 
 use adc_stream::TimedAdc;
 use defmt_rtt as _;
-use embassy_executor::Spawner;
+use embassy_executor::{raw, Spawner};
 use embassy_futures::select::{select, Either};
 use embassy_stm32::{bind_interrupts, peripherals, usb, Config};
 use embassy_time::Timer;
@@ -25,6 +26,7 @@ bind_interrupts!(pub struct Irqs {
     OTG_FS => usb::InterruptHandler<peripherals::USB_OTG_FS>;
     TIM5 => step_timer::StepInterrupt;
     EXTI15_10 => sentry::EstopInterrupt;
+    TIM7 => guard::GuardInterrupt;
 });
 
 /// The chip's types for the core.
@@ -85,8 +87,20 @@ fn make_head(hw: Hardware<Stm32Board>, info: HeadInfo) -> &'static mut Head<Stm3
     HEAD.init(Head::new(gonio_firmware::config::REFERENCE, hw, info))
 }
 
-#[embassy_executor::main]
-async fn main(spawner: Spawner) {
+/// Reset lands here: the thread-mode executor, its loop watched by the
+/// guard (guard.rs), runs `run`.
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    static EXECUTOR: StaticCell<raw::Executor> = StaticCell::new();
+    // The context embassy's thread-mode pender expects (a SEV wakes the loop).
+    let executor: &'static raw::Executor = EXECUTOR.init(raw::Executor::new(usize::MAX as *mut ()));
+    let spawner = executor.spawner();
+    spawner.must_spawn(run(spawner));
+    guard::run(executor)
+}
+
+#[embassy_executor::task]
+async fn run(spawner: Spawner) {
     let p = embassy_stm32::init(clocks());
     cpu::setup();
     defmt::info!("gonio head {} starting", env!("CARGO_PKG_VERSION"));
@@ -94,6 +108,7 @@ async fn main(spawner: Spawner) {
     // the watchdog then guards the rest.
     let restarted_by_watchdog = watchdog::reset_cause();
     watchdog::start(&spawner, p.IWDG);
+    guard::start(p.TIM7);
     let pins = pins::Pins::new(
         p.PA1, p.PA6, p.PB0, p.PB1, p.PB2, p.PC0, p.PC1, p.PC2, p.PC3, p.PC4, p.PC5, p.PC6, p.PC7, p.PC8, p.PC9, p.PC10, p.PC11,
     );

@@ -15,7 +15,7 @@
 //! release ([`Sentry::rearm`]).
 //!
 //! The E-STOP chain should also cut the laser's and the drivers' enables in
-//! series, in hardware (docs/architecture.md): this is the firmware's half.
+//! series, in hardware (docs/faults.md): this is the firmware's half.
 
 use core::sync::atomic::{AtomicU32, Ordering};
 use embassy_futures::select::{select, Either};
