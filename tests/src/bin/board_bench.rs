@@ -10,16 +10,27 @@
 //!   simulated head's plate scan (the plant is the simulated head's world:
 //!   same laser, photodiode and gains), every parameter within 2 combined
 //!   standard errors;
-//! - `step_edge_lateness_ticks_max` (bar ≤ 2): the longest a STEP edge rose
-//!   after the step timer's compare that was due, in ticks of its 1 MHz
-//!   clock, from the board's pin log;
+//! - `step_edge_jitter_ticks_max` (bar ≤ 2): the longest a STEP edge rose
+//!   after its planned time (the step timer's compare that was due: an
+//!   edge is never early), in ticks of its 1 MHz clock, from the board's
+//!   pin log;
 //! - `step_isr_latency_cycles_max`: the longest the step timer's interrupt
 //!   waited from pending to its handler (USB, DMA and the time driver's
 //!   interrupts, and critical sections, in the way);
-//! - `cpu_load`: instructions over cycles for the whole run (one cycle per
-//!   instruction; the core's waits are idle);
+//! - `cpu_load_scan`: instructions over cycles for the whole run (one cycle
+//!   per instruction; the core's waits are idle), and `interrupt_runs`,
+//!   each handler's count and cycles (the guard's, TIM7, among them);
 //! - `stack_high_water_bytes` (bar ≤ 48 KiB);
-//! - `emulated_s`, `wall_s`.
+//! - `thread_turn_longest_laser_on_us` (bar: the guard's allowance, 750
+//!   µs): the longest the thread ran without a turn of its loop while the
+//!   laser was on, which the guard would take for a stuck thread;
+//! - `faults_survived` of `faults_tried` and `laser_off_us_max` (bar ≤
+//!   1 000): the fault trials (`gonio_tests::board_faults`), each a board of
+//!   its own;
+//! - `faulted_scans_complete` of `faulted_scans_tried`: scans a fault
+//!   strikes in the middle of, each ending with every position stored once
+//!   (`gonio_tests::board_scans`);
+//! - `emulated_s`, `wall_s` (of the scan; the trials' are in theirs).
 //!
 //! The board runs at most `PACE` times faster than the wall clock: the
 //! host's heartbeat (every 5 s) must reach the head's 20 s watch. The
@@ -28,6 +39,9 @@
 
 use anyhow::{bail, Context, Result};
 use gonio_firmware::config::{CPU_HZ, REFERENCE};
+use gonio_firmware::guard::{STUCK_TICKS, TICK_US};
+use gonio_tests::board_faults;
+use gonio_tests::board_scans::{self, gonio, stored};
 use gonio_tests::virtual_board::{board_plant, head_image, Board};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -46,7 +60,8 @@ const GRID: [&str; 7] = [
 const MATERIAL: [&str; 4] = ["--material", "retro-phong", "--seed", "1"];
 const PACE: &str = "3";
 const STACK_BAR_BYTES: u64 = 48 * 1024;
-const LATENESS_BAR_TICKS: f64 = 2.0;
+const JITTER_BAR_TICKS: f64 = 2.0;
+const LASER_OFF_BAR_US: f64 = 1_000.0;
 /// The step timer's tick (cycles of the 168 MHz core).
 const TICK_CYCLES: f64 = CPU_HZ / 1e6;
 
@@ -63,17 +78,6 @@ fn cargo(root: &Path, args: &[&str]) -> Result<()> {
     Ok(())
 }
 
-/// Runs `gonio ARGS` and reads the JSON object it prints.
-fn gonio(bin: &Path, args: &[&str]) -> Result<Value> {
-    let out = Command::new(bin).args(args).output().with_context(|| format!("gonio {args:?}"))?;
-    let v: Value = serde_json::from_slice(&out.stdout)
-        .with_context(|| format!("gonio {args:?} printed no JSON: {}", String::from_utf8_lossy(&out.stderr)))?;
-    if !out.status.success() {
-        bail!("gonio {args:?}: {v}");
-    }
-    Ok(v)
-}
-
 /// Calibrates the scan in `dir` with the plate scan `reference` and fits
 /// retro-phong to it: (parameters, standard errors).
 fn fit(bin: &Path, dir: &Path, reference: &Path) -> Result<Value> {
@@ -83,15 +87,6 @@ fn fit(bin: &Path, dir: &Path, reference: &Path) -> Result<Value> {
         &["calibrate", d, "--reference", reference.to_str().context("a UTF-8 path")?, "--json"],
     )?;
     gonio(bin, &["fit", &format!("{d}/calibrated.csv"), "--model", "retro-phong", "--json"])
-}
-
-/// Samples stored in `dir`: its samples file, or the one an interrupted
-/// scan left.
-fn stored(dir: &Path) -> Result<usize> {
-    let whole = dir.join("samples.csv");
-    let file = if whole.exists() { whole } else { dir.join("samples.csv.part") };
-    let text = std::fs::read_to_string(&file).with_context(|| format!("{}", file.display()))?;
-    Ok(text.lines().count().saturating_sub(1))
 }
 
 fn main() -> Result<()> {
@@ -163,7 +158,15 @@ fn main() -> Result<()> {
         fits_agree &= z <= 2.0;
         agree.insert(name.clone(), json!({"simulated": a, "board": b, "combined_sigmas": z}));
     }
-    let lateness_ticks = report["step_edge_lateness_cycles"]["max"].as_f64().map(|c| c / TICK_CYCLES);
+    let jitter_ticks = report["step_edge_lateness_cycles"]["max"].as_f64().map(|c| c / TICK_CYCLES);
+    let turn_us = report["thread_turn_longest_laser_on_us"].as_f64();
+    let turn_bar_us = (STUCK_TICKS * TICK_US) as f64;
+
+    let faults = board_faults::run(&root, &image, &plant)?;
+    let laser_off_us = faults["laser_off_us_max"].as_f64();
+    let faults_all = faults["faults_survived"] == faults["faults_tried"];
+    let scans = board_scans::run(&root, &image, &gonio_bin, &plant_cmd, &MATERIAL, work.path())?;
+    let scans_all = scans["scans_complete"] == scans["scans_tried"];
     let stack = report["stack_bytes_max"].as_u64().context("the board's stack")?;
     let emulated_s = report["virtual_seconds"].as_f64().context("the board's time")?;
     let instructions = report["instructions"].as_f64().context("the board's instructions")?;
@@ -177,27 +180,44 @@ fn main() -> Result<()> {
         "fits": agree,
         "fits_agree": fits_agree,
         "step_edges": report["step_edges"],
-        "step_edge_lateness_ticks_max": lateness_ticks,
+        "step_edge_jitter_ticks_max": jitter_ticks,
         "step_edge_lateness_cycles": report["step_edge_lateness_cycles"],
         "step_isr_latency_cycles_max": report["interrupt_worst_wait"]["TIM5"]["cycles"],
         "interrupt_worst_wait": report["interrupt_worst_wait"],
         "interrupts": report["interrupts"],
-        "cpu_load": instructions / (emulated_s * CPU_HZ),
+        "interrupt_runs": report["interrupt_runs"],
+        "cpu_load_scan": instructions / (emulated_s * CPU_HZ),
         "stack_high_water_bytes": stack,
+        "thread_turn_longest_laser_on_us": turn_us,
+        "faults_tried": faults["faults_tried"],
+        "faults_survived": faults["faults_survived"],
+        "laser_off_us_max": laser_off_us,
+        "faults": faults["faults"],
+        "faulted_scans_tried": scans["scans_tried"],
+        "faulted_scans_complete": scans["scans_complete"],
+        "faulted_scans": scans,
         "board_stopped": report["stopped"],
         "unsafe_at_end": !report["safe_at_end"].as_bool().unwrap_or(false),
         "emulated_s": emulated_s,
         "wall_s": wall_s,
         "bars": {
             "points_stored": planned,
-            "step_edge_lateness_ticks_max": LATENESS_BAR_TICKS,
+            "step_edge_jitter_ticks_max": JITTER_BAR_TICKS,
             "stack_high_water_bytes": STACK_BAR_BYTES,
+            "thread_turn_longest_laser_on_us": turn_bar_us,
+            "faults_survived": faults["faults_tried"],
+            "laser_off_us_max": LASER_OFF_BAR_US,
+            "faulted_scans_complete": scans["scans_tried"],
         },
         "bars_met": {
             "points_stored": points == planned,
             "fits_agree": fits_agree,
-            "step_edge_lateness_ticks_max": lateness_ticks.is_some_and(|t| t <= LATENESS_BAR_TICKS),
+            "step_edge_jitter_ticks_max": jitter_ticks.is_some_and(|t| t <= JITTER_BAR_TICKS),
             "stack_high_water_bytes": stack <= STACK_BAR_BYTES,
+            "thread_turn_longest_laser_on_us": turn_us.is_some_and(|t| t <= turn_bar_us),
+            "faults_survived": faults_all,
+            "laser_off_us_max": laser_off_us.is_some_and(|t| t <= LASER_OFF_BAR_US),
+            "faulted_scans_complete": scans_all,
         },
     });
     println!("{figures}");
