@@ -169,9 +169,9 @@ class Board:
         self.machine.start_profile()
         self.host = None
         self.stop_requested = False
-        # An injected fault: its kind; the laser enable's rise and the
-        # seconds after it it strikes at, until it is scheduled; the cycle
-        # it struck at.
+        # An injected fault: its kind; the rise it is timed by (the laser
+        # enable's or DMA2 stream 0's, which one) and the seconds after it,
+        # until it is scheduled; the cycle it struck at.
         self.fault_plan = None
         self.fault_on_rise = None
         self.fault_at = None

@@ -217,7 +217,9 @@ impl AdcStream for TimedAdc {
     /// instead of waiting for ever with the laser on.
     async fn next_period(&mut self, out: &mut [u16]) -> Result<(), Overrun> {
         let (true, Some(ring), false) = (self.running, self.ring.as_mut(), guard::tripped()) else {
-            self.stop();
+            if self.running {
+                self.stop();
+            }
             return Err(Overrun);
         };
         match select3(

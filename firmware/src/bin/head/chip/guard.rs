@@ -43,12 +43,17 @@ struct HandlerState(UnsafeCell<Guard>);
 unsafe impl Sync for HandlerState {}
 static STATE: HandlerState = HandlerState(UnsafeCell::new(Guard::new()));
 
+/// The laser enable (PB0) as driven: its output register, whoever set it.
+fn laser_enabled() -> bool {
+    pac::GPIOB.odr().read().odr(0) == pac::gpio::vals::Odr::HIGH
+}
+
 pub struct GuardInterrupt;
 
 impl Handler<Tim7Irq> for GuardInterrupt {
     unsafe fn on_interrupt() {
         pac::TIM7.sr().write(|w| w.set_uif(false));
-        let laser_on = pac::GPIOB.odr().read().odr(0) == pac::gpio::vals::Odr::HIGH;
+        let laser_on = laser_enabled();
         let chain = ChainWatch::unpack(CHAIN.load(Ordering::Acquire)).map(|w| (w, pac::DMA2.st(0).ndtr().read().ndt()));
         // SAFETY: see `HandlerState`.
         let guard = unsafe { &mut *STATE.0.get() };
@@ -88,8 +93,7 @@ pub fn run(executor: &'static raw::Executor) -> ! {
 /// `sample_us`: watched until [`unwatch_chain`]. A trip is forgotten if the
 /// thread has set the laser enable high since.
 pub fn watch_chain(sample_us: u32) {
-    let laser_on = pac::GPIOB.odr().read().odr(0) == pac::gpio::vals::Odr::HIGH;
-    if laser_on {
+    if laser_enabled() {
         TRIPPED.store(false, Ordering::Release);
     }
     let generation = STARTS.fetch_add(1, Ordering::Relaxed).wrapping_add(1);
