@@ -16,7 +16,8 @@ use gonio_scan_dir::samples::SampleWriter;
 use gonio_shared::icd::{
     AbortEndpoint, HomeEndpoint, HomeRequest, MeasureEndpoint, MeasureRequest, PauseEndpoint, StatusEndpoint, VisitEndpoint,
 };
-use gonio_shared::{HeadState, ScanAccepted, ScanSpec, VisitChunk, VISIT_CHUNK, VISIT_QUEUE};
+use gonio_shared::{HeadState, ScanAccepted, ScanEvent, ScanSpec, VisitChunk, VISIT_CHUNK, VISIT_QUEUE};
+use postcard_rpc::host_client::Subscription;
 use progress::Progress;
 use sequencer::{Action, Interruption, Sequencer, Stretch, EVENT_TIMEOUT};
 use std::collections::BTreeMap;
@@ -270,10 +271,17 @@ impl ScanDriver<'_> {
                     // also the heartbeat the head watches for).
                     beat = Instant::now();
                     match head.request::<StatusEndpoint>(&()).await {
-                        Ok(st) => seq
-                            .on_status(st.state, waiting_since.elapsed() > EVENT_TIMEOUT)
-                            .into_iter()
-                            .collect(),
+                        // An event the head sent before this answer is in
+                        // the channel by now: taken first, or a head that
+                        // finished the position while the question was on
+                        // its way would look like one whose event was lost.
+                        Ok(st) => match arrived(&mut events).await {
+                            Some(ev) => seq.on_event(ev, outcome),
+                            None => seq
+                                .on_status(st.state, waiting_since.elapsed() > EVENT_TIMEOUT)
+                                .into_iter()
+                                .collect(),
+                        },
                         Err(e) => return lost(e, seq.expected()),
                     }
                 }
@@ -317,6 +325,16 @@ impl ScanDriver<'_> {
             }
         }
     }
+}
+
+/// The event already received, if any, taken without waiting: the link's
+/// reader hands a frame to the subscription before it reads the next, so
+/// an event sent before an answer is here once the answer is.
+async fn arrived(events: &mut Subscription<ScanEvent>) -> Option<ScanEvent> {
+    tokio::time::timeout(Duration::ZERO, tokio::task::unconstrained(events.recv()))
+        .await
+        .ok()
+        .flatten()
 }
 
 /// A request of the stretch failed at position `at`: a lost link is an
