@@ -31,7 +31,7 @@ impl Progress {
     /// positions (points, positions).
     pub fn new(operator: Operator, left_s: Vec<f64>, first: u32, items: &str, live: Live) -> Progress {
         let positions = left_s.len().saturating_sub(1) as u64;
-        let bar = if operator == Operator::Silent {
+        let bar = if operator != Operator::Terminal {
             ProgressBar::hidden()
         } else {
             ProgressBar::new(positions)
