@@ -53,13 +53,14 @@ const FAULTED_SCANS: [FaultedScan; 3] = [
 ];
 
 /// Runs `gonio ARGS` and reads the JSON object it prints: `Err` with that
-/// object (or what it printed) when it fails.
+/// object (or what it printed) and the notices it gave on the way (the
+/// recoveries before the error) when it fails.
 pub fn gonio(bin: &Path, args: &[&str]) -> Result<Value> {
     let out = Command::new(bin).args(args).output().with_context(|| format!("gonio {args:?}"))?;
-    let v: Value = serde_json::from_slice(&out.stdout)
-        .with_context(|| format!("gonio {args:?} printed no JSON: {}", String::from_utf8_lossy(&out.stderr)))?;
+    let notices = String::from_utf8_lossy(&out.stderr);
+    let v: Value = serde_json::from_slice(&out.stdout).with_context(|| format!("gonio {args:?} printed no JSON: {notices}"))?;
     if !out.status.success() {
-        bail!("gonio {args:?}: {v}");
+        bail!("gonio {args:?}: {v}; its notices: {:?}", notices.lines().collect::<Vec<_>>());
     }
     Ok(v)
 }

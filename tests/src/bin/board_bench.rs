@@ -42,6 +42,7 @@ use gonio_firmware::config::{CPU_HZ, REFERENCE};
 use gonio_firmware::guard::{STUCK_TICKS, TICK_US};
 use gonio_tests::board_faults;
 use gonio_tests::board_scans::{self, gonio, stored};
+use gonio_tests::chip_costs;
 use gonio_tests::virtual_board::{board_plant, head_image, Board};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
@@ -135,8 +136,17 @@ fn main() -> Result<()> {
     let scan = gonio(&gonio_bin, &args);
     let report = board.stop()?;
     let wall_s = started.elapsed().as_secs_f64();
-    // An interrupted scan is reported too, with what the board saw.
+    // An interrupted scan is reported too, with what the board saw: its
+    // whole report (USB log, pins, interrupts) is kept beside the build.
     let scan = scan.map_err(|e| format!("{e:#}"));
+    let kept_report = match &scan {
+        Ok(_) => None,
+        Err(_) => {
+            let path = chip_costs::target_dir().join("board-bench-report.json");
+            std::fs::write(&path, report.to_string()).with_context(|| format!("{}", path.display()))?;
+            Some(path.display().to_string())
+        }
+    };
     let points = stored(&board_dir)?;
     let board_fit = match &scan {
         Ok(_) => fit(&gonio_bin, &board_dir, &reference)?,
@@ -177,6 +187,7 @@ fn main() -> Result<()> {
         "points_stored": points,
         "scan": scan.as_ref().ok(),
         "scan_error": scan.as_ref().err(),
+        "board_report": kept_report,
         "fits": agree,
         "fits_agree": fits_agree,
         "step_edges": report["step_edges"],
