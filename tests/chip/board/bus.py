@@ -15,6 +15,7 @@ value first read, or nothing for a store.
 """
 
 from unicorn import arm_const as arm
+from registers import Registers
 
 PAGE = 0x1000
 # A store replayed: nothing to do.
@@ -52,6 +53,7 @@ class Plain(Block):
 class Bus:
     def __init__(self, uc):
         self.uc = uc
+        self.reg = Registers(uc)
         self.blocks = []  # (base, size, block)
         self.pages = {}
         self.accesses = {}  # address → reads and writes: where the image polls
@@ -66,11 +68,11 @@ class Bus:
             self._stopped = True
 
     def _replayed(self, address):
-        key = (self.uc.reg_read(arm.UC_ARM_REG_PC), address)
+        key = (self.reg.read(arm.UC_ARM_REG_PC), address)
         return self._replay.pop(key, None)
 
     def _record(self, address, what):
-        self._replay[(self.uc.reg_read(arm.UC_ARM_REG_PC), address)] = what
+        self._replay[(self.reg.read(arm.UC_ARM_REG_PC), address)] = what
 
     def attach(self, base, size, block):
         self.blocks.append((base, size, block))

@@ -38,7 +38,7 @@ from unicorn import UC_HOOK_CODE, UC_HOOK_INTR, UcError
 from unicorn import arm_const as arm
 
 from nvic import EXTERNAL
-from registers import Batch
+from registers import Batch, Registers
 
 WFE, WFI, SEV, CPSIE_I = 0xBF20, 0xBF30, 0xBF40, 0xB662
 FRAME = (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2, arm.UC_ARM_REG_R3, arm.UC_ARM_REG_R12, arm.UC_ARM_REG_LR)
@@ -126,6 +126,7 @@ class Core:
                 if hook:
                     self.uc.hook_add(UC_HOOK_CODE, hook, begin=base + off, end=base + off)
         self.uc.hook_add(UC_HOOK_INTR, self._on_interrupt)
+        self.reg = Registers(self.uc)
         self._state = Batch(self.uc, STATE)
         self._frame = Batch(self.uc, FRAME)
         self._fp_frame = Batch(self.uc, FP_FRAME)
@@ -147,32 +148,32 @@ class Core:
             if self.first_sleep is None:
                 self.first_sleep = self.instructions + self.m.executed - self._run_start
             uc.emu_stop()
-        uc.reg_write(arm.UC_ARM_REG_PC, (address + 2) | 1)
+        self.reg.write(arm.UC_ARM_REG_PC, (address + 2) | 1)
 
     def _on_cpsie(self, uc, address, size, _user):
         if self.nvic.best_pending() is not None:
-            uc.reg_write(arm.UC_ARM_REG_PRIMASK, 0)
-            uc.reg_write(arm.UC_ARM_REG_PC, (address + 2) | 1)
+            self.reg.write(arm.UC_ARM_REG_PRIMASK, 0)
+            self.reg.write(arm.UC_ARM_REG_PC, (address + 2) | 1)
             uc.emu_stop()
 
     def _on_msr_primask(self, uc, address, size, _user):
         """Unmasking with a pending interrupt: done here, and the interrupt
         taken right after the instruction, as on silicon."""
         rn = uc.mem_read(address, 2)[0] & 0xF
-        value = uc.reg_read(arm.UC_ARM_REG_R0 + rn) if rn < 13 else 0
+        value = self.reg.read(arm.UC_ARM_REG_R0 + rn) if rn < 13 else 0
         if not value & 1 and self.nvic.best_pending() is not None:
-            uc.reg_write(arm.UC_ARM_REG_PRIMASK, 0)
-            uc.reg_write(arm.UC_ARM_REG_PC, (address + 4) | 1)
+            self.reg.write(arm.UC_ARM_REG_PRIMASK, 0)
+            self.reg.write(arm.UC_ARM_REG_PC, (address + 4) | 1)
             uc.emu_stop()
 
     def _on_interrupt(self, uc, intno, _user):
         if intno != EXCEPTION_EXIT:
             # QEMU's EXCP_UDEF (1), EXCP_SWI (2), ...: a usage fault, escalated.
-            self.pc = uc.reg_read(arm.UC_ARM_REG_PC) | 1
+            self.pc = self.reg.read(arm.UC_ARM_REG_PC) | 1
             self.fault(f"exception {intno} (undefined instruction: 1)")
             uc.emu_stop()
             return
-        self._return(uc.reg_read(arm.UC_ARM_REG_PC) | 1)
+        self._return(self.reg.read(arm.UC_ARM_REG_PC) | 1)
 
     def request_hang(self, address):
         """The thread continues at `address` (a loop) the next time the core
@@ -206,15 +207,15 @@ class Core:
 
     # --- exceptions ----------------------------------------------------------
     def _current_exception(self):
-        return self.uc.reg_read(arm.UC_ARM_REG_IPSR) & 0x1FF
+        return self.reg.read(arm.UC_ARM_REG_IPSR) & 0x1FF
 
     def _execution_priority(self, active_excluding=None):
         if self.in_hardfault:
             return -1
         p = self.nvic.running_priority(active_excluding)
-        if self.uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1:
+        if self.reg.read(arm.UC_ARM_REG_PRIMASK) & 1:
             p = min(p, 0)
-        basepri = self.uc.reg_read(arm.UC_ARM_REG_BASEPRI) & 0xF0
+        basepri = self.reg.read(arm.UC_ARM_REG_BASEPRI) & 0xF0
         if basepri:
             p = min(p, self.nvic.group(basepri))
         return p
@@ -234,11 +235,10 @@ class Core:
         if best[0] < self._execution_priority():
             self._enter(best[1])
         elif best[1] not in self.blocked:
-            uc = self.uc
             self.blocked[best[1]] = (
                 self.pc & ~1,
-                uc.reg_read(arm.UC_ARM_REG_PRIMASK) & 1,
-                uc.reg_read(arm.UC_ARM_REG_BASEPRI) & 0xFF,
+                self.reg.read(arm.UC_ARM_REG_PRIMASK) & 1,
+                self.reg.read(arm.UC_ARM_REG_BASEPRI) & 0xFF,
                 self._current_exception(),
             )
 
@@ -264,11 +264,11 @@ class Core:
                 uc.mem_write(sp, frame)
         except UcError:
             stacked = False
-        uc.reg_write(arm.UC_ARM_REG_MSP, sp)
+        self.reg.write(arm.UC_ARM_REG_MSP, sp)
         exc_return = 0xFFFF_FFF1 if handler else 0xFFFF_FFF9
         if fp:
             exc_return &= ~0x10
-        uc.reg_write(arm.UC_ARM_REG_CONTROL, control & ~4)
+        self.reg.write(arm.UC_ARM_REG_CONTROL, control & ~4)
         return sp, exc_return, stacked
 
     def _enter(self, irq):
@@ -284,7 +284,6 @@ class Core:
         """A fault at `self.pc`: HardFault entered (`entry`: the stacking
         an interrupt's entry already did), or the core locked up if it
         faulted in HardFault."""
-        uc = self.uc
         if self.in_hardfault or self.locked:
             self.faults.append((self.clock.now, f"lockup: {why}", self.pc & ~1, None))
             self.locked = True
@@ -297,24 +296,23 @@ class Core:
             scb[CFSR] = scb.get(CFSR, 0) | STKERR
         self.trail.append((self.clock.now, "fault", -1, sp, self.pc & ~1))
         self.in_hardfault = True
-        uc.reg_write(arm.UC_ARM_REG_IPSR, HARDFAULT)
-        uc.reg_write(arm.UC_ARM_REG_LR, exc_return)
+        self.reg.write(arm.UC_ARM_REG_IPSR, HARDFAULT)
+        self.reg.write(arm.UC_ARM_REG_LR, exc_return)
         self.pc = self._vector(HARDFAULT) | 1
-        uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+        self.reg.write(arm.UC_ARM_REG_PC, self.pc)
         self.sleeping = False
 
     def _dispatch(self, irq, exc_return):
-        uc = self.uc
         waited = self.clock.now - self.nvic.pended_at[irq]
         why = self.blocked.pop(irq, None)
         if waited > self.worst_wait.get(irq, (-1,))[0]:
             self.worst_wait[irq] = (waited, why, self.pc & ~1)
-        uc.reg_write(arm.UC_ARM_REG_IPSR, irq + EXTERNAL)
-        uc.reg_write(arm.UC_ARM_REG_LR, exc_return)
+        self.reg.write(arm.UC_ARM_REG_IPSR, irq + EXTERNAL)
+        self.reg.write(arm.UC_ARM_REG_LR, exc_return)
         self.nvic.enter(irq)
         self.entered[irq] = self.clock.now
         self.pc = self._vector(irq + EXTERNAL) | 1
-        uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+        self.reg.write(arm.UC_ARM_REG_PC, self.pc)
         if self.sleeping:
             self.awake_since = self.clock.now
         self.sleeping = False
@@ -337,13 +335,13 @@ class Core:
         # FPCA, the stacked frame staying the one EXC_RETURN describes.
         best = self.nvic.best_pending()
         if best is not None and best[0] < self._execution_priority():
-            uc.reg_write(arm.UC_ARM_REG_CONTROL, uc.reg_read(arm.UC_ARM_REG_CONTROL) & ~4)
+            self.reg.write(arm.UC_ARM_REG_CONTROL, self.reg.read(arm.UC_ARM_REG_CONTROL) & ~4)
             self.trail.append((self.clock.now, "chain", best[1], None, None))
             self._dispatch(best[1], exc_return)
             uc.emu_stop()
             return
         fp = not exc_return & 0x10
-        sp = uc.reg_read(arm.UC_ARM_REG_MSP)
+        sp = self.reg.read(arm.UC_ARM_REG_MSP)
         words = 26 if fp else 8
         frame = struct.unpack(f"<{words}I", uc.mem_read(sp, 4 * words))
         self._frame.write(frame[:6])
@@ -352,12 +350,12 @@ class Core:
         if fp:
             self._fp_frame.write(frame[8:25])
         sp += 4 * words + (4 if xpsr >> 9 & 1 else 0)
-        uc.reg_write(arm.UC_ARM_REG_MSP, sp)
-        uc.reg_write(arm.UC_ARM_REG_XPSR, xpsr & ~(1 << 9))
-        control = uc.reg_read(arm.UC_ARM_REG_CONTROL)
-        uc.reg_write(arm.UC_ARM_REG_CONTROL, control | 4 if fp else control & ~4)
+        self.reg.write(arm.UC_ARM_REG_MSP, sp)
+        self.reg.write(arm.UC_ARM_REG_XPSR, xpsr & ~(1 << 9))
+        control = self.reg.read(arm.UC_ARM_REG_CONTROL)
+        self.reg.write(arm.UC_ARM_REG_CONTROL, control | 4 if fp else control & ~4)
         self.pc = pc | 1
-        uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+        self.reg.write(arm.UC_ARM_REG_PC, self.pc)
         # What the return unmasked may be taken now.
         if self.nvic.best_pending() is not None:
             uc.emu_stop()
@@ -374,7 +372,7 @@ class Core:
                 self.fault(why)
             if self.hang_at is not None and self._current_exception() == 0:
                 self.pc, self.hang_at = self.hang_at | 1, None
-                self.uc.reg_write(arm.UC_ARM_REG_PC, self.pc)
+                self.reg.write(arm.UC_ARM_REG_PC, self.pc)
                 self.sleeping = False
             if not self.locked:
                 self.take_pending()
@@ -395,7 +393,7 @@ class Core:
             except UcError as e:
                 # A bus or usage fault on silicon (this image enables none of
                 # the configurable faults): HardFault at the faulting instruction.
-                self.pc = self.uc.reg_read(arm.UC_ARM_REG_PC) | 1
+                self.pc = self.reg.read(arm.UC_ARM_REG_PC) | 1
                 self.fault(str(e))
                 continue
             finally:
@@ -405,4 +403,4 @@ class Core:
                 self._run_start = self.m.executed
                 clock.base += max(executed, 1)
                 self.instructions += executed
-            self.pc = self.uc.reg_read(arm.UC_ARM_REG_PC) | 1
+            self.pc = self.reg.read(arm.UC_ARM_REG_PC) | 1

@@ -1,10 +1,14 @@
-"""Reading and writing a fixed set of the core's registers in one call.
+"""Reading and writing the core's registers without unicorn's per-call
+dispatch.
 
-unicorn's `reg_read_batch` picks a value type per register and builds its
-argument arrays on every call, some 20 µs for the 26 registers of an
-exception frame: with tens of thousands of step interrupts a second, more
-than the emulation itself. A `Batch` builds them once and calls the engine
-directly; the registers are the 32-bit core and FPU registers only."""
+unicorn's `reg_read`, `reg_write` and `reg_read_batch` pick a value type
+per register and build their arguments on every call: some 20 µs for the
+26 registers of an exception frame, several µs for one register. With tens
+of thousands of step and guard interrupts a second, each touching some
+twenty registers, that cost more than the emulation itself. A `Batch`
+builds a fixed set's arrays once, `Registers` one value for every single
+access, and both call the engine directly; the registers are the 32-bit
+core and FPU registers only."""
 
 import ctypes
 
@@ -30,3 +34,22 @@ class Batch:
         self.values[:] = [v & 0xFFFF_FFFF for v in values]
         if uclib.uc_reg_write_batch(self.uc._uch, self.ids, self.pointers, self.n):
             raise RuntimeError("uc_reg_write_batch failed")
+
+
+class Registers:
+    """Single 32-bit registers, read and written through one reused value."""
+
+    def __init__(self, uc):
+        self.uch = uc._uch
+        self.value = ctypes.c_uint32()
+        self.ref = ctypes.byref(self.value)
+
+    def read(self, register):
+        if uclib.uc_reg_read(self.uch, register, self.ref):
+            raise RuntimeError(f"uc_reg_read({register}) failed")
+        return self.value.value
+
+    def write(self, register, value):
+        self.value.value = value & 0xFFFF_FFFF
+        if uclib.uc_reg_write(self.uch, register, self.ref):
+            raise RuntimeError(f"uc_reg_write({register}) failed")
