@@ -57,6 +57,12 @@ pub fn seconds_to_us(s: f32) -> u32 {
     seconds_to_ticks(s, 1_000_000)
 }
 
+/// Ticks of a `tick_hz` timer → microseconds (rounded up, saturating): a
+/// wait that must not end before the ticks have passed.
+pub fn ticks_to_us(ticks: u64, tick_hz: u32) -> u64 {
+    (ticks as u128 * 1_000_000).div_ceil(tick_hz.max(1) as u128).min(u64::MAX as u128) as u64
+}
+
 /// Chop settings → ADC trigger period of a `timer_hz` timer. The chop
 /// frequency actually produced is returned by [`chop_hz_actual`].
 pub fn chop_timing(s: &DetectionSettings, timer_hz: u32) -> ChopTiming {
@@ -79,7 +85,16 @@ pub fn codes_to_volts(codes: f32, bits: u8, vref: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    use super::wrap_deg;
+    use super::{ticks_to_us, wrap_deg};
+
+    #[test]
+    fn ticks_become_whole_microseconds_never_short() {
+        assert_eq!(ticks_to_us(84, 84_000_000), 1);
+        assert_eq!(ticks_to_us(85, 84_000_000), 2);
+        assert_eq!(ticks_to_us(0, 84_000_000), 0);
+        assert_eq!(ticks_to_us(3 * 32 * 11_413, 84_000_000), 13_044);
+        assert_eq!(ticks_to_us(u64::MAX, 1), u64::MAX);
+    }
 
     #[test]
     fn angles_wrap_into_the_half_open_turn() {

@@ -30,6 +30,7 @@ use embassy_stm32::Peri;
 
 use gonio_firmware::demod::MAX_M;
 use gonio_firmware::hw::{AdcStream, ChopTiming, Overrun};
+use gonio_firmware::units;
 use static_cell::StaticCell;
 
 /// ADC1 external trigger selection for TIM2 TRGO (RM0090, ADC_CR2.EXTSEL).
@@ -147,10 +148,10 @@ impl AdcStream for TimedAdc {
     fn start(&mut self, t: ChopTiming) {
         self.stop();
         let m = t.samples_per_period.max(2) as u32;
-        // The ring's two periods plus one, in µs of the timer clock, and a
-        // millisecond for the DMA's interrupt and the executor.
-        let samples = 3 * m as u64;
-        self.stall_us = samples * t.ticks_per_sample.max(2) as u64 * 1_000_000 / Self::TIMER_HZ as u64 + 1_000;
+        // The ring's two periods plus one, and a millisecond for the DMA's
+        // interrupt and the executor.
+        let sample_ticks = t.ticks_per_sample.max(2) as u64;
+        self.stall_us = units::ticks_to_us(3 * m as u64 * sample_ticks, Self::TIMER_HZ) + 1_000;
         self.sample_clock.regs_core().psc().write_value(0);
         self.sample_clock.set_max_compare_value(t.ticks_per_sample.max(2) - 1);
         self.sample_clock.regs_core().cnt().write(|w| w.set_cnt(0));
@@ -185,7 +186,7 @@ impl AdcStream for TimedAdc {
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::RISING_EDGE));
         self.sample_clock.start();
         self.running = true;
-        let sample_us = (t.ticks_per_sample.max(2) as u64 * 1_000_000).div_ceil(Self::TIMER_HZ as u64);
+        let sample_us = units::ticks_to_us(sample_ticks, Self::TIMER_HZ);
         guard::watch_chain(sample_us.min(u32::MAX as u64) as u32);
     }
 
