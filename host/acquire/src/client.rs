@@ -18,10 +18,12 @@ use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::thread::JoinHandle;
 use std::time::Duration;
+use tokio::time::Instant;
 
 /// Timeouts of the three [`Latency`] classes: prompt requests, the ones that
-/// move the stages, homing. A lost request is found much sooner than these
-/// (see [`watched`]).
+/// move the stages, homing: how long a request may go without its answer or
+/// a sign that the head still works on it (see [`watched`]: a lost request
+/// is found much sooner, a long operation the head reports is waited for).
 const QUICK: Duration = Duration::from_secs(5);
 const HOMING: Duration = Duration::from_secs(300);
 const MOTION: Duration = Duration::from_secs(120);
@@ -30,7 +32,7 @@ const PROBE_AFTER: Duration = Duration::from_secs(1);
 /// While a long request runs, a status request this often shows the head
 /// that the host is still there (its host watch runs during moves and
 /// homing too: `SafetySettings::host_timeout_s`, 4× this on a real head).
-pub const HEARTBEAT: Duration = Duration::from_secs(5);
+const HEARTBEAT: Duration = Duration::from_secs(5);
 
 pub struct HeadClient {
     client: HostClient<WireError>,
@@ -162,7 +164,7 @@ fn timeout(latency: Latency) -> Duration {
 /// Why a request got no valid answer.
 #[derive(Debug, thiserror::Error)]
 pub enum CallError {
-    #[error("no answer from the head to {0} within {1:.0} s")]
+    #[error("no answer from the head to {0}, nor any sign that it still works on it, for {1:.0} s")]
     Timeout(&'static str, f64),
     #[error("{0}: the head does not know this request (protocol mismatch)")]
     UnknownKey(&'static str),
@@ -183,54 +185,78 @@ where
 {
     match tokio::time::timeout(timeout, client.send_resp::<E>(req)).await {
         Err(_) => Err(CallError::Timeout(E::PATH, timeout.as_secs_f64())),
-        Ok(Ok(r)) => Ok(r),
-        Ok(Err(HostErr::Wire(WireError::UnknownKey))) => Err(CallError::UnknownKey(E::PATH)),
-        Ok(Err(HostErr::Wire(e))) => Err(CallError::Wire(E::PATH, e)),
-        Ok(Err(HostErr::Closed)) => Err(CallError::Closed(E::PATH)),
-        Ok(Err(e)) => Err(CallError::BadAnswer(E::PATH, e.to_string())),
+        Ok(r) => answered::<E>(r),
+    }
+}
+
+/// What an answer to `E`, or its failure, means.
+fn answered<E: Endpoint>(r: Result<E::Response, HostErr<WireError>>) -> Result<E::Response, CallError> {
+    match r {
+        Ok(r) => Ok(r),
+        Err(HostErr::Wire(WireError::UnknownKey)) => Err(CallError::UnknownKey(E::PATH)),
+        Err(HostErr::Wire(e)) => Err(CallError::Wire(E::PATH, e)),
+        Err(HostErr::Closed) => Err(CallError::Closed(E::PATH)),
+        Err(e) => Err(CallError::BadAnswer(E::PATH, e.to_string())),
     }
 }
 
 /// A request watched for loss. Once it has gone unanswered for
-/// [`PROBE_AFTER`], one status request follows it. The head reads frames in
-/// the order they arrive and answers a status poll at once, also while an
+/// [`PROBE_AFTER`], a status request follows it, and another every
+/// [`probe_period`] until the answer comes. The head reads frames in the
+/// order they arrive and answers a status poll at once, also while an
 /// operation or a scan point runs, with that operation's state and the
-/// number of requests it keeps for when it ends; so a probe answered with
-/// no request kept and no operation of this request's kind running means
-/// the request, or its answer, was lost on the link: that is reported at
-/// once as [`CallError::Lost`] instead of after the request's full timeout
-/// (minutes for homing). A probe that finds the request possibly kept or
-/// running, or is not answered, changes nothing: the request's own timeout
-/// stands.
+/// number of requests it keeps for when it ends; so a probe answered with no
+/// request kept and no operation of this request's kind running means the
+/// request, or its answer, was lost on the link: that is reported at once as
+/// [`CallError::Lost`]. A probe that finds the request kept or running shows
+/// the head alive and working on it: the request's timeout counts from that
+/// answer, not from the request. So the timeout bounds the head's silence,
+/// never the operation's length, which the head bounds itself (homing
+/// within the axis' travel, a move within twice its schedule: E402): a head
+/// whose homing outlasts the timeout, slow stages or a slow emulated board,
+/// is waited for while it answers. The probes double as the heartbeat the
+/// head's host watch needs during long operations.
 async fn watched<E: Endpoint>(client: &HostClient<WireError>, req: &E::Request, timeout: Duration) -> Result<E::Response, CallError>
 where
     E::Request: Serialize + Schema,
     E::Response: DeserializeOwned + Schema,
 {
-    let answer = call::<E>(client, req, timeout);
+    let answer = client.send_resp::<E>(req);
     tokio::pin!(answer);
-    tokio::select! {
-        biased;
-        r = &mut answer => return r,
-        () = tokio::time::sleep(PROBE_AFTER) => {}
+    let period = probe_period(timeout);
+    let mut heard = Instant::now();
+    let mut next_probe = heard + PROBE_AFTER.min(period);
+    loop {
+        // A probe unanswered for a period may itself be lost: the next one
+        // goes at once, so that neither the restarts nor the heartbeat stop.
+        let probe = async {
+            tokio::time::sleep_until(next_probe).await;
+            tokio::time::timeout(period, client.send_resp::<StatusEndpoint>(&())).await
+        };
+        // Biased: when both answers have come in, the request's is taken (it
+        // was delivered first).
+        tokio::select! {
+            biased;
+            r = &mut answer => return answered::<E>(r),
+            p = probe => {
+                next_probe = Instant::now() + period;
+                match p {
+                    Ok(Ok(status)) if !may_hold(&status, E::PATH) => return Err(CallError::Lost(E::PATH)),
+                    Ok(Ok(_)) => heard = Instant::now(),
+                    Ok(Err(_)) => {}
+                    Err(_) => next_probe = Instant::now(),
+                }
+            }
+            () = tokio::time::sleep_until(heard + timeout) => return Err(CallError::Timeout(E::PATH, timeout.as_secs_f64())),
+        }
     }
-    let probe = call::<StatusEndpoint>(client, &(), timeout);
-    tokio::pin!(probe);
-    // Biased: when both answers have come in, the request's is taken (it
-    // was delivered first).
-    let answer = tokio::select! {
-        biased;
-        r = &mut answer => return r,
-        p = &mut probe => match p {
-            Ok(status) if !may_hold(&status, E::PATH) => return Err(CallError::Lost(E::PATH)),
-            _ => answer,
-        },
-        () = heartbeats(client) => unreachable!("heartbeats never end"),
-    };
-    tokio::select! {
-        r = answer => r,
-        () = heartbeats(client) => unreachable!("heartbeats never end"),
-    }
+}
+
+/// How often a pending request is probed: at least four probes within its
+/// timeout, so that one late answer does not end a request the head holds,
+/// and at most every [`HEARTBEAT`].
+fn probe_period(timeout: Duration) -> Duration {
+    (timeout / 4).min(HEARTBEAT)
 }
 
 /// Whether the head, as `status` shows it, may still answer the request
@@ -238,8 +264,12 @@ where
 /// this request's own operation (answered when it ends). A scan's own
 /// request is answered as the scan starts, and a visit chunk is kept or
 /// answered between points, so a scan found running with nothing kept
-/// means the request was lost.
+/// means the request was lost. A status request is never kept: answered
+/// before the probe that follows it, or lost.
 fn may_hold(status: &Status, path: &str) -> bool {
+    if path == StatusEndpoint::PATH {
+        return false;
+    }
     let running = match status.state {
         HeadState::Homing => path == HomeEndpoint::PATH,
         HeadState::Moving => path == MoveEndpoint::PATH,
@@ -250,14 +280,158 @@ fn may_hold(status: &Status, path: &str) -> bool {
     running || status.requests_held > 0
 }
 
-/// Sends a status request every [`HEARTBEAT`], answers unread, for as long
-/// as it is polled.
-async fn heartbeats(client: &HostClient<WireError>) {
-    loop {
-        tokio::time::sleep(HEARTBEAT).await;
-        let c = client.clone();
-        tokio::spawn(async move {
-            let _ = tokio::time::timeout(MOTION, c.send_resp::<StatusEndpoint>(&())).await;
-        });
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::link::channel_client;
+    use gonio_firmware::dispatch::{self, Midway};
+    use gonio_shared::icd::{HomeReply, HomeRequest};
+    use gonio_shared::wire::{check, framing};
+    use gonio_shared::{AxisAngles, DetectionSettings};
+    use postcard_rpc::header::{VarKeyKind, VarSeq};
+    use postcard_rpc::Key;
+    use std::sync::mpsc;
+    use tokio::sync::mpsc as tmpsc;
+
+    /// What the head in these tests does with a homing request: it answers
+    /// every status poll with `state` until `silent_after`, but for the
+    /// first `polls_lost` (lost on the link), and answers the homing at
+    /// `answer_after` (never if `None`).
+    struct Script {
+        state: HeadState,
+        silent_after: Duration,
+        polls_lost: usize,
+        answer_after: Option<Duration>,
+    }
+
+    fn status(state: HeadState) -> Status {
+        Status {
+            state,
+            homed: false,
+            laser_on: false,
+            drivers_enabled: true,
+            estop_open: false,
+            axes: AxisAngles::default(),
+            detection: DetectionSettings::default(),
+            samples_sent: 0,
+            samples_flagged: 0,
+            samples_remeasured: 0,
+            sanity_loaded: false,
+            last_fault: None,
+            uptime_us: 0,
+            requests_held: 0,
+        }
+    }
+
+    fn frame<T: Serialize>(key: Key, id: (VarSeq, VarKeyKind), msg: &T) -> Vec<u8> {
+        let mut buf = vec![0u8; framing::MAX_FRAME];
+        let n = dispatch::encode(key, id.1, id.0, msg, &mut buf).expect("a reply fits a frame");
+        buf.truncate(n + check::LEN);
+        check::seal(&mut buf, n).expect("room for the check");
+        buf
+    }
+
+    /// The head's side of the link, on the test's paused clock.
+    async fn head(from_host: mpsc::Receiver<Vec<u8>>, to_host: tmpsc::UnboundedSender<Vec<u8>>, script: Script) {
+        let t0 = Instant::now();
+        let mut homing = None;
+        let mut polls_lost = 0;
+        loop {
+            while let Ok(sealed) = from_host.try_recv() {
+                match dispatch::midway(&sealed) {
+                    Midway::Status(..) if polls_lost < script.polls_lost => polls_lost += 1,
+                    Midway::Status(seq, kind) if t0.elapsed() < script.silent_after => {
+                        let _ = to_host.send(frame(StatusEndpoint::RESP_KEY, (seq, kind), &status(script.state)));
+                    }
+                    Midway::Status(..) => {}
+                    _ => homing = dispatch::request_id(&sealed),
+                }
+            }
+            if let (Some(id), Some(after)) = (homing, script.answer_after) {
+                if t0.elapsed() >= after {
+                    let reply: HomeReply = Ok(AxisAngles::default());
+                    let _ = to_host.send(frame(HomeEndpoint::RESP_KEY, id, &reply));
+                    homing = None;
+                }
+            }
+            tokio::time::sleep(Duration::from_millis(10)).await;
+        }
+    }
+
+    /// Sends a homing request with `timeout` to a head following `script`.
+    async fn home(script: Script, timeout: Duration) -> Result<HomeReply, CallError> {
+        let (to_head, from_host) = mpsc::channel();
+        let (to_host, from_head) = tmpsc::unbounded_channel();
+        let (client, _workers) = channel_client(to_head, from_head);
+        tokio::spawn(head(from_host, to_host, script));
+        watched::<HomeEndpoint>(&client, &HomeRequest::ALL, timeout).await
+    }
+
+    const TIMEOUT: Duration = Duration::from_secs(300);
+
+    #[tokio::test(start_paused = true)]
+    async fn an_operation_the_head_reports_is_waited_for_past_the_timeout() {
+        let script = Script {
+            state: HeadState::Homing,
+            silent_after: Duration::MAX,
+            polls_lost: 0,
+            answer_after: Some(TIMEOUT * 3),
+        };
+        let t0 = Instant::now();
+        assert!(matches!(home(script, TIMEOUT).await, Ok(Ok(_))));
+        assert!(t0.elapsed() >= TIMEOUT * 3);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_head_gone_silent_times_out_a_timeout_after_its_last_answer() {
+        let silent_after = TIMEOUT * 2;
+        let script = Script {
+            state: HeadState::Homing,
+            silent_after,
+            polls_lost: 0,
+            answer_after: None,
+        };
+        let t0 = Instant::now();
+        assert!(matches!(home(script, TIMEOUT).await, Err(CallError::Timeout(..))));
+        let waited = t0.elapsed();
+        // The last answered probe went at most a period (and the head's
+        // 10 ms turn) before the head fell silent.
+        let earliest = silent_after + TIMEOUT - probe_period(TIMEOUT) - Duration::from_millis(10);
+        assert!(waited >= earliest && waited <= silent_after + TIMEOUT, "{waited:?}");
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_request_the_head_does_not_hold_is_lost_at_the_first_probe() {
+        let script = Script {
+            state: HeadState::Idle,
+            silent_after: Duration::MAX,
+            polls_lost: 0,
+            answer_after: None,
+        };
+        let t0 = Instant::now();
+        assert!(matches!(home(script, TIMEOUT).await, Err(CallError::Lost(_))));
+        assert!(t0.elapsed() < PROBE_AFTER * 2);
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_short_timeout_is_probed_often_enough_to_be_restarted() {
+        let script = Script {
+            state: HeadState::Homing,
+            silent_after: Duration::MAX,
+            polls_lost: 0,
+            answer_after: Some(QUICK * 4),
+        };
+        assert!(matches!(home(script, QUICK).await, Ok(Ok(_))));
+    }
+
+    #[tokio::test(start_paused = true)]
+    async fn a_lost_probe_does_not_end_the_probing() {
+        let script = Script {
+            state: HeadState::Homing,
+            silent_after: Duration::MAX,
+            polls_lost: 2,
+            answer_after: Some(TIMEOUT * 3),
+        };
+        assert!(matches!(home(script, TIMEOUT).await, Ok(Ok(_))));
     }
 }
