@@ -2,7 +2,7 @@
 //! seconds ↔ timer ticks, hertz ↔ timer reloads, ADC codes ↔ volts. Nothing
 //! else in the firmware converts.
 
-use crate::config::AxisConfig;
+use crate::config::{AxisConfig, DriverTiming};
 use crate::hw::ChopTiming;
 use gonio_shared::DetectionSettings;
 
@@ -47,6 +47,19 @@ pub fn brake_ticks(axis: &AxisConfig, tick_hz: u32) -> f32 {
     (libm::sqrt(2.0 / a) * tick_hz as f64) as f32
 }
 
+/// A STEP pulse's width in ticks of a `tick_hz` step timer: the driver's
+/// minimum in whole ticks, and one tick more. The executor raises a pin at
+/// a counter value it read and drops it once the counter reaches that value
+/// plus the width; the read may come up to a tick after the value began,
+/// so without the extra tick a pulse could be a tick short (2 µs of 3).
+/// The whole ticks are rounded up, but not for the f32's representation
+/// error (3 µs reads as 3.0000001 ticks): the extra tick is meant, not an
+/// accident of rounding.
+pub fn step_pulse_ticks(driver: &DriverTiming, tick_hz: u32) -> u64 {
+    let ticks = driver.step_pulse_s as f64 * tick_hz as f64 * (1.0 - f32::EPSILON as f64);
+    libm::ceil(ticks).max(0.0) as u64 + 1
+}
+
 /// Seconds → nanoseconds for `DelayNs` (rounded up, saturating).
 pub fn seconds_to_ns(s: f32) -> u32 {
     seconds_to_ticks(s, 1_000_000_000)
@@ -85,7 +98,8 @@ pub fn codes_to_volts(codes: f32, bits: u8, vref: f32) -> f32 {
 
 #[cfg(test)]
 mod tests {
-    use super::{ticks_to_us, wrap_deg};
+    use super::{step_pulse_ticks, ticks_to_us, wrap_deg};
+    use crate::config::REFERENCE;
 
     #[test]
     fn ticks_become_whole_microseconds_never_short() {
@@ -94,6 +108,18 @@ mod tests {
         assert_eq!(ticks_to_us(0, 84_000_000), 0);
         assert_eq!(ticks_to_us(3 * 32 * 11_413, 84_000_000), 13_044);
         assert_eq!(ticks_to_us(u64::MAX, 1), u64::MAX);
+    }
+
+    #[test]
+    fn a_step_pulse_outlasts_the_drivers_minimum_by_the_counters_lag() {
+        // 3 µs on a 1 MHz timer: 3 ticks, and one for the counter read
+        // that lags its tick by up to one.
+        assert_eq!(step_pulse_ticks(&REFERENCE.driver, 1_000_000), 4);
+        for (s, ticks) in [(2.5e-6, 4), (3.5e-6, 5), (1.0e-6, 2), (0.0, 1)] {
+            let mut driver = REFERENCE.driver;
+            driver.step_pulse_s = s;
+            assert_eq!(step_pulse_ticks(&driver, 1_000_000), ticks, "{s} s");
+        }
     }
 
     #[test]

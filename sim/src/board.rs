@@ -333,7 +333,7 @@ impl Clock for SimClock {
 
 /// Wires a firmware `Hardware` set to the virtual world.
 pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
-    let step_pulse_s = world.borrow().cfg.driver.step_pulse_s;
+    let driver = world.borrow().cfg.driver;
     let pin = |role| SimPin {
         world: world.clone(),
         role,
@@ -355,7 +355,7 @@ pub fn hardware(world: &Shared) -> Hardware<SimBoard> {
             world: world.clone(),
             exec: Executor::new(
                 [0, 1, 2].map(|i| pin(Role::Step(i))),
-                units::seconds_to_ticks(step_pulse_s, SimSteps::TICK_HZ) as u64,
+                units::step_pulse_ticks(&driver, SimSteps::TICK_HZ),
             ),
             origin_s: 0.0,
             next: None,

@@ -148,7 +148,7 @@ fn hardware<S: StepTimer>(scope: &Scope, steps: S) -> Hardware<Scoped<S>> {
 #[test]
 fn dir_is_set_up_before_the_first_step_and_pulses_have_their_width() {
     let scope = Scope::default();
-    let pulse = units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, 1_000_000) as u64;
+    let pulse = units::step_pulse_ticks(&REFERENCE.driver, 1_000_000);
     let steps = ScopeSteps {
         exec: executor(&scope, pulse),
         scope: scope.clone(),

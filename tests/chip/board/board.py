@@ -129,6 +129,10 @@ class Board:
         self.rises = {"laser": 0, "dma": 0}
         self.steps = {name: 0 for name in STEP}  # rising STEP edges
         self.step_lateness = {}  # cycles from TIM5's compare to a rising STEP edge → edges
+        # When each STEP line last rose, and the shortest and longest its
+        # pulses were high (cycles): the driver needs the configured width.
+        self.step_rose = {}
+        self.step_high = [None, None]
         bus = self.bus = Bus(uc)
         for i, (name, irq, bits) in enumerate((("TIM2", 28, 32), ("TIM3", 29, 16), ("TIM4", 30, 16), ("TIM5", 50, 32))):
             setattr(self, name.lower(), bus.attach(0x4000_0000 + 0x400 * i, 0x400, Timer(name, irq, bits, self.clock, self.nvic, self.rcc)))
@@ -220,7 +224,12 @@ class Board:
                 self._rise("laser")
             self.laser_high = bool(level)
         if name in self.steps:
+            if not level and name in self.step_rose:
+                high = self.clock.now - self.step_rose.pop(name)
+                shortest, longest = self.step_high
+                self.step_high = [high if shortest is None else min(shortest, high), high if longest is None else max(longest, high)]
             if level:
+                self.step_rose[name] = self.clock.now
                 self.steps[name] += 1
                 due = self.tim5.matched[0]
                 if due is not None:
@@ -429,6 +438,10 @@ class Board:
             "step_edge_lateness_cycles": {
                 "max": max(self.step_lateness, default=None),
                 "histogram": dict(sorted(self.step_lateness.items())),
+            },
+            "step_pulse_us": {
+                "shortest": None if self.step_high[0] is None else round(self.step_high[0] / HZ * 1e6, 3),
+                "longest": None if self.step_high[1] is None else round(self.step_high[1] / HZ * 1e6, 3),
             },
             "watchdog": {
                 "running": self.iwdg.running,

@@ -91,7 +91,7 @@ fn ik_errors(cfg: &HeadConfig) -> (f64, f64, usize) {
 }
 
 fn max_step_error(cfg: &HeadConfig) -> (f64, u64) {
-    let pulse = units::seconds_to_ticks(cfg.driver.step_pulse_s, TICK_HZ) as u64;
+    let pulse = units::step_pulse_ticks(&cfg.driver, TICK_HZ);
     let (mut worst, mut steps) = (0.0f64, 0u64);
     for axis in Axis::ALL {
         let c = cfg.axis(axis);
@@ -153,7 +153,7 @@ fn main() {
         .fold(f64::MAX, f64::min);
     let (step_err, steps_checked) = max_step_error(&cfg);
 
-    let pulse = units::seconds_to_ticks(cfg.driver.step_pulse_s, TICK_HZ) as u64;
+    let pulse = units::step_pulse_ticks(&cfg.driver, TICK_HZ);
     let isr_cycles = measured_isr_cycles();
     if isr_cycles.is_none() {
         eprintln!("no target/chip-bench.json: run chip-bench first for the step rate");

@@ -158,7 +158,7 @@ const TICK_HZ: u32 = 1_000_000;
 /// half-way (`step_isr_braking`: the brake's f32 steps).
 #[inline(never)]
 fn step_events() {
-    let pulse = units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, TICK_HZ) as u64;
+    let pulse = units::step_pulse_ticks(&REFERENCE.driver, TICK_HZ);
     let mut exec = Executor::new([StorePin("a"), StorePin("bb"), StorePin("ccc")], pulse);
     queue_move(&mut exec);
     let mut next = exec.start();

@@ -84,7 +84,7 @@ impl StepTimer5 {
         regs().psc().write_value(psc as u16);
         timer.set_max_compare_value(u32::MAX);
         timer.generate_update_event();
-        let pulse = units::seconds_to_ticks(REFERENCE.driver.step_pulse_s, TICK_HZ) as u64;
+        let pulse = units::step_pulse_ticks(&REFERENCE.driver, TICK_HZ);
         STATE.lock(|s| {
             *s.borrow_mut() = Some(State {
                 exec: Executor::new(step_pins, pulse),
