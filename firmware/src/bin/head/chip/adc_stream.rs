@@ -20,11 +20,11 @@ use super::guard;
 use embassy_futures::select::{select3, Either3};
 use embassy_stm32::adc::{Adc, RxDma, SampleTime};
 use embassy_stm32::dma::{ReadableRingBuffer, Request, TransferOptions};
-use embassy_stm32::gpio::{Flex, OutputType};
+use embassy_stm32::gpio::{Flex, OutputType, Pull, Speed};
 use embassy_stm32::pac;
 use embassy_stm32::peripherals::{ADC1, DMA2_CH0, PA1, PA6, TIM2, TIM3};
 use embassy_stm32::timer::low_level::{MasterMode, OutputCompareMode, SlaveMode, Timer, TriggerSource};
-use embassy_stm32::timer::simple_pwm::PwmPin;
+use embassy_stm32::timer::simple_pwm::{PwmPin, PwmPinConfig};
 use embassy_stm32::timer::{Ch1, Channel};
 use embassy_stm32::Peri;
 
@@ -97,7 +97,15 @@ impl TimedAdc {
         // Dark until the first measurement.
         chop.set_output_compare_mode(Channel::Ch1, OutputCompareMode::ForceInactive);
         chop.enable_channel(Channel::Ch1, true);
-        let chop_pin = PwmPin::new(chop_pin, OutputType::PushPull);
+        // The slowest slew rate, as every output of the board (pins.rs).
+        let chop_pin = PwmPin::new_with_config(
+            chop_pin,
+            PwmPinConfig {
+                output_type: OutputType::PushPull,
+                speed: Speed::Low,
+                pull: Pull::None,
+            },
+        );
         TimedAdc {
             dma,
             request,

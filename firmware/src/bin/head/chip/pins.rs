@@ -11,10 +11,31 @@
 //! | arm STEP/DIR/EN/HOME      | PC8–PC11 |                                     |
 //! | USB FS D−/D+          | PA11, PA12 |                                        |
 //! | E-STOP (EXTI12)       | PB12 | NC switch to ground, pull-up: high = stop  |
+//! | USB VBUS sense        | PA9  | OTG_FS_VBUS, straight from the connector   |
 //!
 //! Home switches are normally closed to ground with the internal pull-up, so a
 //! pressed switch and a broken wire both read high: homing then stops at once
 //! instead of driving into the end stop. The E-STOP is wired the same way.
+//! The internal pull-up (30–50 kΩ) alone is too weak for a metre of stage
+//! cable beside the motor leads: each of these four inputs also gets a
+//! 4.7 kΩ pull-up and 100 nF to ground at the MCU (τ ≈ 0.5 ms). The firmware
+//! does not debounce the home switches: homing reads them only with the
+//! axis standing, after each chunk, and finds the edge one microstep at a
+//! time (at least 1.25 ms a microstep), so a bounce costs at most a
+//! microstep of the edge. Nor does it debounce the E-STOP's opening, on
+//! purpose: its first edge stops the head; only the release is debounced
+//! (`serve::ESTOP_DEBOUNCE_US`, sentry.rs).
+//!
+//! PB2 is also BOOT1, sampled at reset when BOOT0 is high: a 10 kΩ
+//! pull-down selects the system memory's boot loader then (DFU over the
+//! same USB port), and keeps gain bit 1 low until `Pins::new` drives it.
+//!
+//! Every output is set to the slowest slew rate (OSPEEDR 00: up to 2 MHz,
+//! edges of at most 125 ns into 50 pF by the STM32F405's datasheet): the
+//! fastest signal here is a 4 µs STEP pulse, and slower
+//! edges ring less on the drivers' cables and radiate less near the
+//! photodiode's amplifier. Only the USB pins, set by the USB driver, are
+//! fast.
 //!
 //! From reset until `Pins::new` runs (the boot ROM, `embassy_stm32::init`,
 //! the clock start-up) every pin is a floating input. The board must hold the
@@ -61,7 +82,7 @@ pub struct Pins {
 }
 
 fn out(pin: Peri<'static, impl embassy_stm32::gpio::Pin>, level: Level) -> Output<'static> {
-    Output::new(pin, level, Speed::VeryHigh)
+    Output::new(pin, level, Speed::Low)
 }
 
 impl Pins {

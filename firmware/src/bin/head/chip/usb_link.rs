@@ -151,6 +151,15 @@ impl embassy_usb::Handler for BusWatch {
             end_session();
         }
     }
+
+    /// VBUS gone (the cable pulled): the core's session-end interrupt,
+    /// with no bus reset or suspend after it, since the pull-up on D+ goes
+    /// with VBUS.
+    fn enabled(&mut self, enabled: bool) {
+        if !enabled {
+            end_session();
+        }
+    }
 }
 
 #[embassy_executor::task]
@@ -236,8 +245,12 @@ pub fn start(spawner: &Spawner, usb: Peri<'static, USB_OTG_FS>, dp: Peri<'static
     static STATE: StaticCell<State> = StaticCell::new();
     static BUS_WATCH: StaticCell<BusWatch> = StaticCell::new();
 
+    // The head has its own supply: with VBUS sensed on PA9, the core
+    // connects the pull-up on D+ only while a host powers the bus (USB 2.0
+    // §7.1.5.1: no pull-up current while VBUS is off), and says when the
+    // cable goes.
     let mut cfg = embassy_stm32::usb::Config::default();
-    cfg.vbus_detection = false;
+    cfg.vbus_detection = true;
     let driver = Driver::new_fs(usb, super::Irqs, dp, dm, EP_OUT.init([0; 256]), cfg);
 
     let mut dev_cfg = embassy_usb::Config::new(USB_VID, USB_PID);
