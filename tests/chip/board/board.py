@@ -133,6 +133,8 @@ class Board:
         # pulses were high (cycles): the driver needs the configured width.
         self.step_rose = {}
         self.step_high = [None, None]
+        # pin → the fastest slew rate (OSPEEDR) its driven edges had
+        self.output_speed = {}
         bus = self.bus = Bus(uc)
         for i, (name, irq, bits) in enumerate((("TIM2", 28, 32), ("TIM3", 29, 16), ("TIM4", 30, 16), ("TIM5", 50, 32))):
             setattr(self, name.lower(), bus.attach(0x4000_0000 + 0x400 * i, 0x400, Timer(name, irq, bits, self.clock, self.nvic, self.rcc)))
@@ -217,6 +219,9 @@ class Board:
         driven; a STEP edge counted, with how late it rose after the step
         timer's compare that was due."""
         name = f"P{port.letter}{pin}"
+        speed = port.ospeedr >> (2 * pin) & 3
+        if port.mode(pin) in (1, 2) and speed >= self.output_speed.get(name, 0):
+            self.output_speed[name] = speed
         if name == "PB0":
             if self.laser_high and not level:
                 self.laser_fell_at = self.clock.now
@@ -443,6 +448,10 @@ class Board:
                 "shortest": None if self.step_high[0] is None else round(self.step_high[0] / HZ * 1e6, 3),
                 "longest": None if self.step_high[1] is None else round(self.step_high[1] / HZ * 1e6, 3),
             },
+            # Each output's fastest slew rate over its edges (RM0090 §8.4.3).
+            "output_speeds": {
+                p: ("low", "medium", "high", "very high")[v] for p, v in sorted(self.output_speed.items())
+            },
             "watchdog": {
                 "running": self.iwdg.running,
                 "reloads": len(reloads),
@@ -471,6 +480,7 @@ class Board:
             "busiest_registers": {
                 f"{a:#010x}": n for a, n in sorted(self.bus.accesses.items(), key=lambda kv: -kv[1])[:8]
             },
+            "usb_pullup_without_vbus": self.otg.pullup_without_vbus,
             "usb": None
             if self.host is None
             else {

@@ -18,8 +18,9 @@ SYSCFG_BASE, EXTI_BASE = 0x4001_3800, 0x4001_3C00
 # EXTI lines' IRQs: 0–4 one each, 5–9 and 10–15 shared (RM0090 Table 61).
 EXTI_IRQ = [6, 7, 8, 9, 10] + [23] * 5 + [40] * 6
 # Reset values (RM0090 §8.4): PA13–15 and PB3–4 are the debug port's
-# alternate functions, with their pulls.
+# alternate functions, with their pulls, SWDIO (PA13) and SWO (PB3) fast.
 MODER_RESET = {"A": 0xA800_0000, "B": 0x0000_0280}
+OSPEEDR_RESET = {"A": 0x0C00_0000, "B": 0x0000_00C0}
 PUPDR_RESET = {"A": 0x6400_0000, "B": 0x0000_0100}
 
 
@@ -37,7 +38,7 @@ class Port(Block):
     def _registers_reset(self):
         self.moder = MODER_RESET.get(self.letter, 0)
         self.otyper = 0
-        self.ospeedr = 0
+        self.ospeedr = OSPEEDR_RESET.get(self.letter, 0)
         self.pupdr = PUPDR_RESET.get(self.letter, 0)
         self.odr = 0
         self.afr = [0, 0]

@@ -2,7 +2,9 @@
 moves the data through the FIFOs), as a host on its bus sees it and as
 its driver programs it.
 
-Registers (offsets from 0x5000_0000): the global ones (GAHBCFG,
+Registers (offsets from 0x5000_0000): the global ones (GOTGCTL's
+connector ID and B-session valid, GOTGINT's session end, GCCFG's VBUS
+sensing, GAHBCFG,
 GRSTCTL with self-clearing resets and flushes and AHBIDL, GINTSTS with
 its write-1-to-clear flags and the read-only RXFLVL/IEPINT/OEPINT
 summaries, GINTMSK, GRXSTSR/GRXSTSP, GRXFSIZ, DIEPTXF0–3, CID = 0x1200),
@@ -26,9 +28,25 @@ The host's side (`Host` in usb_host.py calls these):
 - `in_(ep)`: the next packet if the endpoint is enabled, not NAKing and its
   TX FIFO holds the whole packet; then XFRC when the packet count reaches
   0 and EPENA clears; else NAK or STALL;
-- `suspend()`/`resume()`: USBSUSP, WKUPINT.
+- `suspend()`/`resume()`: USBSUSP, WKUPINT;
+- `vbus(on)`: the cable's VBUS on PA9 (RM0090 §34.5.3, peripheral
+  states): while the PHY is powered (GCCFG.PWRDWN) and sensing B-device
+  VBUS (VBUSBSEN, NOVBUSSENS clear), a B-session valid rising sets
+  GINTSTS.SRQINT and connects the pull-up on D+, its fall sets
+  GOTGINT.SEDET (seen as GINTSTS.OTGINT) and removes it; with NOVBUSSENS
+  the session is always valid and the pull-up stays on, so a pulled cable
+  leaves an idle bus the device takes for a suspend.
 
-One reading of RM0090 is a choice: an OUT endpoint here takes data when it
+Two readings of RM0090 are choices here. The session-valid comparator
+acts at once (its debounce is a matter of microseconds, the host's
+timings of milliseconds), and its edge when the PHY is powered with VBUS
+already present counts as a rising one. With VBUS sensing, a pulled cable
+gives a session end only: with no pull-up and no host, the lines sit at
+SE0, which the core does not take for a reset or suspend outside a
+valid session.
+
+
+One more reading is a choice: an OUT endpoint here takes data when it
 does not NAK, whatever EPENA says. embassy-usb-synopsys-otg arms every
 read after the first by CNAK alone, and works on silicon; RM0090 says EPENA
 clears at transfer completion, and does not say that a disabled endpoint
@@ -46,6 +64,10 @@ CMOD, MMIS, OTGINT, SOF, RXFLVL, NPTXFE = 0, 1, 2, 3, 4, 5
 USBSUSP, USBRST, ENUMDNE, EOPF, IEPINT, OEPINT, SRQINT, WKUPINT = 11, 12, 13, 15, 18, 19, 30, 31
 W1C = (1 << MMIS | 1 << SOF | 1 << USBSUSP | 1 << USBRST | 1 << ENUMDNE | 1 << EOPF | 1 << SRQINT | 1 << WKUPINT
        | 1 << 10 | 1 << 14 | 1 << 20 | 1 << 21 | 1 << 28 | 1 << 29)
+# GCCFG bits, GOTGCTL's, GOTGINT's
+PWRDWN, VBUSBSEN, NOVBUSSENS = 1 << 16, 1 << 19, 1 << 21
+CIDSTS, BSVLD = 1 << 16, 1 << 19
+SEDET = 1 << 2
 # GRXSTSP packet status
 OUT_DATA, OUT_DONE, SETUP_DONE, SETUP_DATA = 2, 3, 4, 6
 # D*EPCTL bits
@@ -79,12 +101,31 @@ class OtgFs(Block):
         self.tx = [[] for _ in range(ENDPOINTS)]  # words pushed per IN endpoint
         self.dieptxf = [0] * ENDPOINTS
         self.diepmsk = self.doepmsk = self.daintmsk = self.diepempmsk = 0
+        self.gccfg = 0
+        self.gotgint = 0
+        self.vbus_on = False  # the cable's VBUS
+        self.session_valid = False  # the B-session valid comparator's output
+        # Whether the pull-up on D+ was ever on with no VBUS: current into
+        # an unpowered host's D+ (USB 2.0 §7.1.5.1 forbids it).
+        self.pullup_without_vbus = False
 
     # --- derived state -----------------------------------------------------
     @property
     def connected(self):
-        """The pull-up on D+ (DCTL.SDIS clear): a host sees the device."""
-        return not self.dctl & 2
+        """The pull-up on D+ (DCTL.SDIS clear, in a valid session): a host
+        sees the device."""
+        return not self.dctl & 2 and self.session_valid
+
+    def _sense(self):
+        """The B-session valid comparator after a change of VBUS or of
+        GCCFG, and the interrupt its edge raises."""
+        powered = self.gccfg & PWRDWN
+        valid = bool(powered and (self.gccfg & NOVBUSSENS or self.gccfg & VBUSBSEN and self.vbus_on))
+        if valid and not self.session_valid:
+            self.gintsts |= 1 << SRQINT
+        if self.session_valid and not valid:
+            self.gotgint |= SEDET
+        self.session_valid = valid
 
     def daint(self):
         v = 0
@@ -98,7 +139,9 @@ class OtgFs(Block):
         return v
 
     def _gintsts(self):
-        v = self.gintsts & ~(1 << RXFLVL | 1 << IEPINT | 1 << OEPINT)
+        v = self.gintsts & ~(1 << RXFLVL | 1 << IEPINT | 1 << OEPINT | 1 << OTGINT)
+        if self.gotgint:
+            v |= 1 << OTGINT
         if self.rx:
             v |= 1 << RXFLVL
         d = self.daint() & self.daintmsk
@@ -109,6 +152,8 @@ class OtgFs(Block):
         return v
 
     def update(self):
+        if self.connected and not self.vbus_on:
+            self.pullup_without_vbus = True
         self.nvic.line(OTG_FS_IRQ, bool(self.gahbcfg & 1 and self._gintsts() & self.gintmsk))
 
     def tx_depth(self, n):
@@ -142,6 +187,15 @@ class OtgFs(Block):
 
     def resume(self):
         self.gintsts |= 1 << WKUPINT
+        self.update()
+
+    def vbus(self, on):
+        """The cable plugged (VBUS on) or pulled; pulled without VBUS
+        sensing, the bus idles with the device's pull-up on: a suspend."""
+        self.vbus_on = on
+        self._sense()
+        if not on and self.connected:
+            self.gintsts |= 1 << USBSUSP
         self.update()
 
     def start_of_frame(self):
@@ -234,6 +288,12 @@ class OtgFs(Block):
     def read(self, offset):
         if offset >= 0x1000:  # any FIFO address pops the RX FIFO
             return self.rx_data.pop(0) if self.rx_data else 0
+        if offset == 0x00:  # GOTGCTL: a B-device (ID pin open)
+            return CIDSTS | (BSVLD if self.session_valid else 0)
+        if offset == 0x04:
+            return self.gotgint
+        if offset == 0x38:
+            return self.gccfg
         if offset == 0x10:  # GRSTCTL: the AHB idle, resets and flushes done
             return 1 << 31
         if offset == 0x14:
@@ -308,6 +368,11 @@ class OtgFs(Block):
             if value & 1 << 4:
                 self.rx.clear()
                 self.rx_data.clear()
+        elif offset == 0x04:
+            self.gotgint &= ~value
+        elif offset == 0x38:
+            self.gccfg = value
+            self._sense()
         elif offset == 0x14:
             self.gintsts &= ~(value & W1C)
         elif offset == 0x18:

@@ -59,6 +59,7 @@ class Host:
         self.reading = True
 
     def start(self):
+        self.otg.vbus(True)
         self.proc = self._run()
         self.clock.at(self.clock.now + MS, self._step)
 
@@ -126,10 +127,10 @@ class Host:
 
     # --- the host's life --------------------------------------------------------
     def _run(self):
-        while not (self.otg.connected and self.otg.gahbcfg & 1):
-            yield MS
-        self._note("attached")
         while True:
+            while not (self.otg.connected and self.otg.gahbcfg & 1):
+                yield MS
+            self._note("attached")
             yield from self._enumerate()
             # Sessions, one per program that opens the port, until the
             # cable is pulled (a test's fault, or `replug` after each).
@@ -142,12 +143,12 @@ class Host:
                     break
 
     def _unplug(self, cycles):
-        """The cable out for `cycles` (the bus idles: the device
-        suspends), then back in."""
+        """The cable out for `cycles`, then back in."""
         self._note("unplugged")
-        self.otg.suspend()
+        self.otg.vbus(False)
         yield cycles
         self._note("plugged")
+        self.otg.vbus(True)
 
     def _enumerate(self):
         self.otg.bus_reset()

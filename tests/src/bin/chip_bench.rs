@@ -147,6 +147,13 @@ fn board_run(root: &Path, image: &Path) -> Result<Value> {
         (taken("EXTI15_10") != 1).then(|| format!("the E-STOP's edge took {} EXTI15_10 interrupts, not 1", taken("EXTI15_10"))),
         gap.is_none_or(|g| g > 0.5)
             .then(|| format!("the watchdog's longest reload gap is {gap:?} s (its timeout: 1 s)")),
+        fast_outputs(&run).map(|pins| format!("outputs faster than the low slew rate (pins.rs): {pins}")),
+        (run["usb_pullup_without_vbus"] != Value::Bool(false)).then(|| {
+            format!(
+                "the pull-up on D+ was on with no VBUS (no USB host on the board): {}",
+                run["usb_pullup_without_vbus"]
+            )
+        }),
     ]
     .into_iter()
     .flatten()
@@ -155,6 +162,22 @@ fn board_run(root: &Path, image: &Path) -> Result<Value> {
         bail!("the image on the virtual board: {}", problems.join("; "));
     }
     Ok(run)
+}
+
+/// The board's outputs other than USB's D−/D+ (PA11, PA12) and the debug
+/// port's (PA13–15, PB3–4, as reset leaves them) whose edges
+/// were driven faster than the lowest slew rate, if any (or the laser
+/// enable's missing from the report: a board that logged no output).
+fn fast_outputs(run: &Value) -> Option<String> {
+    let Some(speeds) = run["output_speeds"].as_object().filter(|s| s.contains_key("PB0")) else {
+        return Some(format!("no slew rate reported for the laser enable: {}", run["output_speeds"]));
+    };
+    let fast: Vec<String> = speeds
+        .iter()
+        .filter(|(pin, speed)| !matches!(pin.as_str(), "PA11" | "PA12" | "PA13" | "PA14" | "PA15" | "PB3" | "PB4") && *speed != "low")
+        .map(|(pin, speed)| format!("{pin} {speed}"))
+        .collect();
+    (!fast.is_empty()).then(|| fast.join(", "))
 }
 
 /// The unmodified image on the board with a USB host that opens its port
