@@ -6,18 +6,26 @@
 //! fast approach overshoots by at most one chunk (taken up by the back-off);
 //! the last approach does not overshoot, so homing repeats to the
 //! microstep and a stop that re-homes an axis leaves no offset behind.
+//! Each read waits for the switch's input filter after the chunk's last
+//! step ([`SWITCH_SETTLE_S`]): read at once, it would show the level from
+//! before that step, and the edge would be found a microstep late.
 
 use crate::config::HeadConfig;
 use crate::hw::{Board, Hardware};
 use crate::motion::{move_by, Position};
 use crate::units;
 use embedded_hal::digital::InputPin;
+use embedded_hal_async::delay::DelayNs;
 use gonio_shared::{Axis, Fault};
 
 /// Fast approach chunk (degrees).
 const FAST_CHUNK_DEG: f32 = 0.5;
 /// Slow re-approach chunk (microsteps).
 const SLOW_CHUNK_STEPS: i32 = 4;
+/// Time for a home input to follow its switch before it is read: the
+/// board's RC filter (4.7 kΩ, 100 nF: τ = 0.47 ms, chip/pins.rs) within
+/// 1 % of its final level after five time constants.
+pub const SWITCH_SETTLE_S: f32 = 2.5e-3;
 
 fn pressed<B: Board>(hw: &mut Hardware<B>, axis: Axis) -> Result<bool, Fault> {
     hw.home[axis.index()].is_high().map_err(|_| Fault::HomeSwitchNotFound(axis))
@@ -47,6 +55,7 @@ async fn sweep<B: Board>(hw: &mut Hardware<B>, cfg: &HeadConfig, pos: &mut Posit
         let mut speed = [0.0; 3];
         speed[i] = s.speed_dps;
         move_by(hw, cfg, pos, delta, speed).await?;
+        hw.delay.delay_ns(units::seconds_to_ns(SWITCH_SETTLE_S)).await;
         travelled += s.chunk.unsigned_abs();
     }
     Ok(true)

@@ -7,18 +7,20 @@ use embedded_hal_mock::eh1::digital::{State, Transaction as Pin};
 use futures::executor::block_on;
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::detector::Detector;
-use gonio_firmware::homing::home_axis;
+use gonio_firmware::homing::{self, home_axis};
 use gonio_firmware::motion::Position;
 use gonio_firmware::units;
 use gonio_shared::{Axis, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags};
 use gonio_tests::doubles::{chop_period, done, expect, Pins, ScriptedAdc};
 
-/// The delays of one move, as the core asks for them: the drivers' DIR
-/// setup time before the first step and the hold time after the last.
-fn moves(n: usize) -> Vec<Delay> {
+/// The delays of `n` homing chunks, as the core asks for them: each a move
+/// (the drivers' DIR setup time before its first step and hold time after
+/// its last), then the home input's settling before it is read.
+fn homing_chunks(n: usize) -> Vec<Delay> {
     let ns = |s: f32| Delay::async_delay_ns(units::seconds_to_ns(s));
+    let d = &REFERENCE.driver;
     (0..n)
-        .flat_map(|_| [ns(REFERENCE.driver.dir_setup_s), ns(REFERENCE.driver.dir_hold_s)])
+        .flat_map(|_| [ns(d.dir_setup_s), ns(d.dir_hold_s), ns(homing::SWITCH_SETTLE_S)])
         .collect()
 }
 
@@ -63,7 +65,7 @@ fn homing_finds_the_switch_backs_off_and_touches_slowly() {
         ],
     );
     expect(&mut pins.enable_n[0], &vec![Pin::set(State::Low); 6]);
-    let mut hw = pins.into_hardware(CheckedDelay::new(&moves(6)));
+    let mut hw = pins.into_hardware(CheckedDelay::new(&homing_chunks(6)));
     let mut pos = Position::default();
     block_on(home_axis(&mut hw, &REFERENCE, &mut pos, Axis::Rotation)).unwrap();
 
@@ -85,7 +87,7 @@ fn homing_faults_when_the_switch_never_closes() {
     expect(&mut pins.home[0], &vec![Pin::get(State::Low); chunks + 1]);
     expect(&mut pins.dir[0], &vec![Pin::set(State::Low); chunks]);
     expect(&mut pins.enable_n[0], &vec![Pin::set(State::Low); chunks]);
-    let mut hw = pins.into_hardware(CheckedDelay::new(&moves(chunks)));
+    let mut hw = pins.into_hardware(CheckedDelay::new(&homing_chunks(chunks)));
     let mut pos = Position::default();
     let r = block_on(home_axis(&mut hw, &REFERENCE, &mut pos, Axis::Rotation));
     assert_eq!(r, Err(Fault::HomeSwitchNotFound(Axis::Rotation)));
@@ -103,7 +105,7 @@ fn homing_faults_when_the_switch_is_stuck_closed() {
     expect(&mut pins.home[0], &vec![Pin::get(State::High); backoff_chunks + 2]);
     expect(&mut pins.dir[0], &vec![Pin::set(State::High); backoff_chunks]);
     expect(&mut pins.enable_n[0], &vec![Pin::set(State::Low); backoff_chunks]);
-    let mut hw = pins.into_hardware(CheckedDelay::new(&moves(backoff_chunks)));
+    let mut hw = pins.into_hardware(CheckedDelay::new(&homing_chunks(backoff_chunks)));
     let mut pos = Position::default();
     let r = block_on(home_axis(&mut hw, &REFERENCE, &mut pos, Axis::Rotation));
     assert_eq!(r, Err(Fault::HomeSwitchStuck(Axis::Rotation)));

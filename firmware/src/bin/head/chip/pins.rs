@@ -11,24 +11,32 @@
 //! | arm STEP/DIR/EN/HOME      | PC8–PC11 |                                     |
 //! | USB FS D−/D+          | PA11, PA12 |                                        |
 //! | E-STOP (EXTI12)       | PB12 | NC switch to ground, pull-up: high = stop  |
-//! | USB VBUS sense        | PA9  | OTG_FS_VBUS, straight from the connector   |
+//! | USB VBUS sense        | PA9  | OTG_FS_VBUS, from VBUS through a divider   |
 //!
 //! Home switches are normally closed to ground with the internal pull-up, so a
 //! pressed switch and a broken wire both read high: homing then stops at once
 //! instead of driving into the end stop. The E-STOP is wired the same way.
-//! The internal pull-up (30–50 kΩ) alone is too weak for a metre of stage
-//! cable beside the motor leads: each of these four inputs also gets a
-//! 4.7 kΩ pull-up and 100 nF to ground at the MCU (τ ≈ 0.5 ms). The firmware
-//! does not debounce the home switches: homing reads them only with the
-//! axis standing, after each chunk, and finds the edge one microstep at a
-//! time (at least 1.25 ms a microstep), so a bounce costs at most a
-//! microstep of the edge. Nor does it debounce the E-STOP's opening, on
-//! purpose: its first edge stops the head; only the release is debounced
-//! (`serve::ESTOP_DEBOUNCE_US`, sentry.rs).
+//! The internal pull-ups (30–50 kΩ; about 10 kΩ on PB12, which is also
+//! OTG_HS_ID) alone are too weak for a metre of stage cable beside the
+//! motor leads: each of these four inputs also gets a 4.7 kΩ pull-up at the
+//! MCU and a capacitor to ground, 100 nF on the home inputs (τ = 0.47 ms)
+//! and 10 nF on the E-STOP (τ = 47 µs, so its trip waits at most about
+//! 60 µs for the input to cross its threshold). The firmware does not
+//! debounce the home switches: homing reads them only with the axis
+//! standing, five time constants after each chunk's last step
+//! (`homing::SWITCH_SETTLE_S`), and finds the edge one microstep at a time,
+//! so a bounce costs at most a microstep of the edge. Nor does it debounce
+//! the E-STOP's opening, on purpose: its first edge stops the head; only
+//! the release is debounced (`serve::ESTOP_DEBOUNCE_US`, sentry.rs).
+//!
+//! PA9 senses VBUS for the USB core (usb_link.rs) through 4.7 kΩ from VBUS
+//! and 10 kΩ to ground (3.4 V): straight from the connector, a host's 5 V
+//! would exceed the pin's absolute maximum (VDD + 4 V) while the head is
+//! off (ST's AN4879 §2.6). The pin stays a floating input.
 //!
 //! PB2 is also BOOT1, sampled at reset when BOOT0 is high: a 10 kΩ
-//! pull-down selects the system memory's boot loader then (DFU over the
-//! same USB port), and keeps gain bit 1 low until `Pins::new` drives it.
+//! pull-down selects the system memory's boot loader then (RM0090 §2.4),
+//! and keeps gain bit 1 low until `Pins::new` drives it.
 //!
 //! Every output is set to the slowest slew rate (OSPEEDR 00: up to 2 MHz,
 //! edges of at most 125 ns into 50 pF by the STM32F405's datasheet): the
