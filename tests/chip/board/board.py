@@ -18,6 +18,7 @@ high after it. A watchdog reset ends the run, the pins let go as a reset
 lets them go (the board's resistors then hold them)."""
 
 import argparse
+from collections import deque
 import json
 import re
 import shlex
@@ -129,6 +130,11 @@ class Board:
         self.rises = {"laser": 0, "dma": 0}
         self.steps = {name: 0 for name in STEP}  # rising STEP edges
         self.step_lateness = {}  # cycles from TIM5's compare to a rising STEP edge → edges
+        # The STEP edges that rose last (cycle, pin, lateness), and the
+        # latest edge of all with those that rose just before it: whether
+        # it waited for other axes' edges in the same handler.
+        self.step_recent = deque(maxlen=4)
+        self.step_latest = None
         # When each STEP line last rose, and the shortest and longest its
         # pulses were high (cycles): the driver needs the configured width.
         self.step_rose = {}
@@ -240,6 +246,17 @@ class Board:
                 if due is not None:
                     late = int(self.clock.now - due)
                     self.step_lateness[late] = self.step_lateness.get(late, 0) + 1
+                    if self.step_latest is None or late > self.step_latest["late_cycles"]:
+                        self.step_latest = {
+                            "pin": name,
+                            "t_s": self.clock.now / HZ,
+                            "late_cycles": late,
+                            "before": [
+                                {"pin": p, "cycles_before": self.clock.now - c, "late_cycles": l}
+                                for c, p, l in reversed(self.step_recent)
+                            ],
+                        }
+                    self.step_recent.append((self.clock.now, name, late))
             return
         self.pins.append((self.clock.now / HZ, name, level))
 
@@ -442,6 +459,7 @@ class Board:
             # Cycles from the step timer's compare to the STEP edge it raised.
             "step_edge_lateness_cycles": {
                 "max": max(self.step_lateness, default=None),
+                "latest": self.step_latest,
                 "histogram": dict(sorted(self.step_lateness.items())),
             },
             "step_pulse_us": {
