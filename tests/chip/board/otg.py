@@ -45,7 +45,6 @@ gives a session end only: with no pull-up and no host, the lines sit at
 SE0, which the core does not take for a reset or suspend outside a
 valid session.
 
-
 One more reading is a choice: an OUT endpoint here takes data when it
 does not NAK, whatever EPENA says. embassy-usb-synopsys-otg arms every
 read after the first by CNAK alone, and works on silicon; RM0090 says EPENA
@@ -126,6 +125,7 @@ class OtgFs(Block):
         if self.session_valid and not valid:
             self.gotgint |= SEDET
         self.session_valid = valid
+        self._pullup_check()
 
     def daint(self):
         v = 0
@@ -151,9 +151,13 @@ class OtgFs(Block):
             v |= 1 << OEPINT
         return v
 
-    def update(self):
+    def _pullup_check(self):
+        """After a change of what `connected` depends on (SDIS, the
+        session) or of VBUS."""
         if self.connected and not self.vbus_on:
             self.pullup_without_vbus = True
+
+    def update(self):
         self.nvic.line(OTG_FS_IRQ, bool(self.gahbcfg & 1 and self._gintsts() & self.gintmsk))
 
     def tx_depth(self, n):
@@ -385,6 +389,7 @@ class OtgFs(Block):
             self.dcfg = value
         elif offset == 0x804:
             self.dctl = value & ~(1 << 11 | 0xF << 7)  # the global NAK commands act at once
+            self._pullup_check()
         elif offset == 0x810:
             self.diepmsk = value
         elif offset == 0x814:
