@@ -203,23 +203,41 @@ impl Track {
     }
 
     /// The timer firing at `now` for this axis, whose STEP pin is `pin`:
-    /// ends its pulse if it is over, starts the steps that are due; returns
-    /// its next event.
+    /// ends its pulse if it is over and raises the pin if a step is due (a
+    /// step due while the pin is still high collides); returns whether a
+    /// step was due, for [`Track::follow`]. Every axis's pin is set before
+    /// any axis's bookkeeping, so an edge due with another axis's waits for
+    /// no block load or brake computation of that axis.
     #[inline(always)]
-    fn fire<P: OutputPin>(&mut self, pin: &mut P, now: u32, pulse: u32) -> u32 {
+    fn raise<P: OutputPin>(&mut self, pin: &mut P, now: u32, pulse: u32) -> bool {
         if self.high_until <= now {
             self.high_until = NEVER;
             let _ = pin.set_low();
         }
-        while self.due <= now {
-            if self.high_until != NEVER {
-                self.collided = self.collided.wrapping_add(1);
-            } else {
-                let _ = pin.set_high();
-                self.high_until = now + pulse;
-                self.emitted = self.emitted.wrapping_add(1);
-            }
+        if self.due > now {
+            return false;
+        }
+        if self.high_until == NEVER {
+            let _ = pin.set_high();
+            self.high_until = now + pulse;
+            self.emitted = self.emitted.wrapping_add(1);
+        } else {
+            self.collided = self.collided.wrapping_add(1);
+        }
+        true
+    }
+
+    /// After [`Track::raise`] at `now`: moves past the step it served and
+    /// past every later one already due (the pin is high: they collide);
+    /// returns the axis's next event.
+    #[inline(always)]
+    fn follow(&mut self, stepped: bool, now: u32) -> u32 {
+        if stepped {
             self.advance();
+            while self.due <= now {
+                self.collided = self.collided.wrapping_add(1);
+                self.advance();
+            }
         }
         self.next_event()
     }
@@ -345,7 +363,8 @@ impl<P: OutputPin> Executor<P> {
         let [a, b, c] = &mut self.tracks;
         let [pa, pb, pc] = &mut self.pins;
         let pulse = self.pulse_ticks;
-        let next = a.fire(pa, now, pulse).min(b.fire(pb, now, pulse)).min(c.fire(pc, now, pulse));
+        let (sa, sb, sc) = (a.raise(pa, now, pulse), b.raise(pb, now, pulse), c.raise(pc, now, pulse));
+        let next = a.follow(sa, now).min(b.follow(sb, now)).min(c.follow(sc, now));
         (next != NEVER).then_some(next)
     }
 
