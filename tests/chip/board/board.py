@@ -129,7 +129,7 @@ class Board:
         # Rises of the laser enable and enables of DMA2 stream 0, counted.
         self.rises = {"laser": 0, "dma": 0}
         self.steps = {name: 0 for name in STEP}  # rising STEP edges
-        self.step_lateness = {}  # cycles from TIM5's compare to a rising STEP edge → edges
+        self.step_lateness = {}  # cycles from the tick TIM5's compare was set for to a rising STEP edge → edges
         # The STEP edges that rose last (cycle, pin, lateness), and the
         # latest edge of all with those that rose just before it: whether
         # it waited for other axes' edges in the same handler.
@@ -222,8 +222,9 @@ class Board:
 
     def log_pin(self, port, pin, level):
         """A driven pin's level, when it changes or when it starts to be
-        driven; a STEP edge counted, with how late it rose after the step
-        timer's compare that was due."""
+        driven; a STEP edge counted, with how late it rose after the tick
+        the step timer's compare was set for (the event it serves: one the
+        firmware runs at once, its compare already passed, never matches)."""
         name = f"P{port.letter}{pin}"
         speed = port.ospeedr >> (2 * pin) & 3
         if port.mode(pin) in (1, 2) and speed >= self.output_speed.get(name, 0):
@@ -242,7 +243,7 @@ class Board:
             if level:
                 self.step_rose[name] = self.clock.now
                 self.steps[name] += 1
-                due = self.tim5.matched[0]
+                due = self.tim5.reached(0)
                 if due is not None:
                     late = int(self.clock.now - due)
                     self.step_lateness[late] = self.step_lateness.get(late, 0) + 1

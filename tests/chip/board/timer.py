@@ -51,7 +51,6 @@ class Timer(Block):
         self.slaves = []  # what counts this timer's updates: slave timers, an ADC
         self.outputs = {}  # channel → (port, pin) its output drives
         self.ref = [0, 0, 0, 0]  # OCxREF
-        self.matched = [None] * 4  # the instant of each channel's last match
 
     # --- the counter's input ----------------------------------------------------
     @property
@@ -85,6 +84,19 @@ class Timer(Block):
             return master.update_at(self.t0, n * (self.psc + 1)) if master and master.running else None
         return self.t0 + n * self._tick()
 
+    def reached(self, ch):
+        """The instant the counter last became equal to CCRx, at or before
+        now: a compare written after the counter passed it never matches,
+        yet it says when the event it was written for was due. Reads the
+        counter without touching its flags; None for a timer stopped or
+        clocked by another."""
+        if not self.running or self._external():
+            return None
+        k = self._edges(self.t0, self.clock.now)
+        span = self.arr + 1
+        back = (self.cnt0 + k - self.ccr[ch]) % span
+        return self.t0 + (k - back) * self._tick()
+
     # --- this timer as a master ---------------------------------------------------
     def _first_overflow(self):
         return self.t0 + (self.arr + 1 - self.cnt0) * self._tick()
@@ -114,7 +126,6 @@ class Timer(Block):
             self.t0 = now
             return
         k = self._edges(self.t0, now)
-        start = self.t0
         if self._external():
             self.t0 = now
         else:
@@ -129,8 +140,6 @@ class Timer(Block):
                 first = (self.ccr[ch] - old - 1) % span + 1
                 matches = (k - first) // span + 1
                 self._on_match(ch, matches)
-                if not self._external():
-                    self.matched[ch] = start + (first + (matches - 1) * span) * self._tick()
         wrapped = old + k > self.arr
         self.cnt0 = (old + k) % span
         if wrapped:
