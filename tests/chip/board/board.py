@@ -223,8 +223,11 @@ class Board:
     def log_pin(self, port, pin, level):
         """A driven pin's level, when it changes or when it starts to be
         driven; a STEP edge counted, with how late it rose after the tick
-        the step timer's compare was set for (the event it serves: one the
-        firmware runs at once, its compare already passed, never matches)."""
+        the step timer's compare was set for, matched or already passed
+        when written (the firmware then runs its event at once). A step the
+        handler serves with an earlier event, the counter having passed its
+        tick, is timed from that earlier tick: overstated, never understated;
+        an edge before its compare's tick counts as early (negative)."""
         name = f"P{port.letter}{pin}"
         speed = port.ospeedr >> (2 * pin) & 3
         if port.mode(pin) in (1, 2) and speed >= self.output_speed.get(name, 0):

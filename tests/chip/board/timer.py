@@ -85,16 +85,18 @@ class Timer(Block):
         return self.t0 + n * self._tick()
 
     def reached(self, ch):
-        """The instant the counter last became equal to CCRx, at or before
-        now: a compare written after the counter passed it never matches,
-        yet it says when the event it was written for was due. Reads the
-        counter without touching its flags; None for a timer stopped or
-        clocked by another."""
+        """The instant the counter became (or, less than half its range
+        ahead, will become) equal to CCRx: a compare written after the
+        counter passed it never matches, yet it says when the event it was
+        written for was due. Reads the counter without touching its flags;
+        None for a timer stopped or clocked by another."""
         if not self.running or self._external():
             return None
         k = self._edges(self.t0, self.clock.now)
         span = self.arr + 1
         back = (self.cnt0 + k - self.ccr[ch]) % span
+        if back > span // 2:
+            back -= span  # not reached yet: an edge now is early
         return self.t0 + (k - back) * self._tick()
 
     # --- this timer as a master ---------------------------------------------------

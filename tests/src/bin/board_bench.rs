@@ -11,9 +11,9 @@
 //!   same laser, photodiode and gains), every parameter within 2 combined
 //!   standard errors;
 //! - `step_edge_jitter_ticks_max` (bar ≤ 2): the longest a STEP edge rose
-//!   after its planned time (the step timer's compare that was due: an
-//!   edge is never early), in ticks of its 1 MHz clock, from the board's
-//!   pin log;
+//!   after its planned time (the tick the step timer's compare was set
+//!   for, matched or already passed when written), in ticks of its 1 MHz
+//!   clock, from the board's pin log;
 //! - `step_isr_latency_cycles_max`: the longest the step timer's interrupt
 //!   waited from pending to its handler (USB, DMA and the time driver's
 //!   interrupts, and critical sections, in the way);
