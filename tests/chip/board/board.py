@@ -508,6 +508,7 @@ class Board:
             else {
                 "state": self.host.state,
                 "sessions": self.host.sessions,
+                "pty_full": self.host.pty_full,
                 "error": self.host.error,
                 "address": self.otg.address,
                 "log": self.host.log,

@@ -35,6 +35,13 @@ class Host:
         self.clock = clock
         self.stream = stream  # a file descriptor, read and written raw
         self.to_device = bytearray()
+        # What the device sent that the pseudo-terminal has not taken yet
+        # (its buffer full: the program is not reading). While any waits, no
+        # IN is polled, as a tty's driver stops reading its USB endpoint
+        # when its buffer fills: nothing is dropped. `pty_full` counts the
+        # writes it did not take whole.
+        self.to_host = bytearray()
+        self.pty_full = 0
         self.log = []  # (seconds, what)
         self.descriptor = None
         self.configuration = None
@@ -181,6 +188,17 @@ class Host:
             return False
         return True
 
+    def _to_pty(self):
+        """Hands the pseudo-terminal what it takes of the device's bytes."""
+        try:
+            del self.to_host[: os.write(self.stream, self.to_host)]
+        except BlockingIOError:
+            pass
+        except OSError:
+            self.to_host.clear()  # the program closed the port: `_port_open` sees it
+        if self.to_host:
+            self.pty_full += 1
+
     def _set_dtr(self, on):
         """What an operating system's CDC-ACM driver does when a program
         opens the port (115 200 8N1, then DTR and RTS) and closes it."""
@@ -200,12 +218,14 @@ class Host:
         self.sessions += 1
         while True:
             if not self._port_open():
+                self.to_host.clear()
                 yield from self._set_dtr(False)
                 return False
             if self.pull_for is not None:
                 pulled, self.pull_for = self.pull_for, None
                 self.on_suspend()
                 self.to_device.clear()
+                self.to_host.clear()
                 yield from self._unplug(pulled)
                 return True
             busy = False
@@ -217,15 +237,16 @@ class Host:
                     busy = True
                 elif status == "STALL":
                     raise HostError("bulk OUT stalled")
-            status, data = self.otg.in_(CDC_IN) if self.reading else ("NAK", b"")
+            if self.to_host:
+                self._to_pty()
+            polling = self.reading and not self.to_host
+            status, data = self.otg.in_(CDC_IN) if polling else ("NAK", b"")
             if status == "ACK":
                 busy = True
                 # Without a stream, what the device sends is dropped.
                 if self.stream is not None:
-                    try:
-                        os.write(self.stream, data)
-                    except OSError:
-                        pass
+                    self.to_host += data
+                    self._to_pty()
             elif status == "STALL":
                 raise HostError("bulk IN stalled")
             self.otg.start_of_frame()

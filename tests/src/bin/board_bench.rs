@@ -136,16 +136,19 @@ fn main() -> Result<()> {
     let scan = gonio(&gonio_bin, &args);
     let report = board.stop()?;
     let wall_s = started.elapsed().as_secs_f64();
-    // An interrupted scan is reported too, with what the board saw: its
-    // whole report (USB log, pins, interrupts) is kept beside the build.
+    // An interrupted scan, or one that had to recover its link, is reported
+    // too, with what the board saw: its whole report (USB log, sessions,
+    // pins, interrupts) is kept beside the build.
     let scan = scan.map_err(|e| format!("{e:#}"));
-    let kept_report = match &scan {
-        Ok(_) => None,
-        Err(_) => {
-            let path = chip_costs::target_dir().join("board-bench-report.json");
-            std::fs::write(&path, report.to_string()).with_context(|| format!("{}", path.display()))?;
-            Some(path.display().to_string())
-        }
+    let recovered = scan
+        .as_ref()
+        .is_ok_and(|s| s["recoveries"].as_object().is_some_and(|r| !r.is_empty()));
+    let kept_report = if scan.is_err() || recovered {
+        let path = chip_costs::target_dir().join("board-bench-report.json");
+        std::fs::write(&path, report.to_string()).with_context(|| format!("{}", path.display()))?;
+        Some(path.display().to_string())
+    } else {
+        None
     };
     let points = stored(&board_dir)?;
     let board_fit = match &scan {
