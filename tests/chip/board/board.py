@@ -460,7 +460,7 @@ class Board:
                 for i, (n, total, longest) in self.core.handler_runs.items()
             },
             "step_edges": self.steps,
-            # Cycles from the step timer's compare to the STEP edge it raised.
+            # Cycles from the tick the step timer's compare was set for to the STEP edge it raised.
             "step_edge_lateness_cycles": {
                 "max": max(self.step_lateness, default=None),
                 "latest": self.step_latest,
