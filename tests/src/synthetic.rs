@@ -101,5 +101,6 @@ pub fn samples_of(brdf: impl Fn(&Directions) -> f64, geos: &[(f64, f64, f64)], n
         metadata: Vec::new(),
         units_stated: true,
         warnings: Vec::new(),
+        instrument: gonio_analysis::instrument::Instrument::Unknown,
     }
 }

@@ -5,7 +5,7 @@
 //! [`calibration`] scales raw samples by the reference plate, with each
 //! value's budget from [`uncertainty`]; [`fit`] fits the models of
 //! `gonio-brdf` (`docs/models.md`); [`coefficients`] gives R_A and R_L with
-//! what each rests on; [`formats`] reads and writes other tools' files;
+//! what each rests on, and [`instrument`] what measured the data; [`formats`] reads and writes other tools' files;
 //! [`plot`] and [`report`] draw and tabulate; [`lobe`] places the points a
 //! narrow lobe needs; [`moments`] measures a retro lobe's shape;
 //! [`rational`] fits the non-parametric rational model through the data's
@@ -15,6 +15,7 @@ pub mod calibration;
 pub mod coefficients;
 pub mod fit;
 pub mod formats;
+pub mod instrument;
 pub mod lobe;
 pub mod moments;
 pub mod plot;

@@ -8,6 +8,7 @@ use crate::calibration::IncidenceBudget;
 use crate::coefficients::{self, Estimate, Fitted, Kind, Provenance, Source, Support};
 use crate::fit::compared::ComparedFit;
 use crate::fit::file::{self as fit_file, FittedBrdf};
+use crate::fit::goodness::{Adequacy, Goodness, ADEQUATE_P};
 use crate::fit::{Dataset, Metrics, Units};
 use crate::formats::{brdf_explorer, rgl};
 use crate::plot;
@@ -42,7 +43,8 @@ fn fitted(fits: &[ComparedFit]) -> Vec<Fitted> {
     fits.iter().map(ComparedFit::fitted).collect()
 }
 
-/// One table cell: the value ± u, extrapolated ones marked.
+/// One table cell: the value ± u, extrapolated ones marked, values the
+/// data cannot support named with their reason.
 fn coefficient_cell(e: &Estimate) -> String {
     let provenance = e.basis.as_ref().map(|b| b.provenance);
     let title = e.basis.as_ref().map_or(String::new(), |b| escape(&b.why));
@@ -53,9 +55,49 @@ fn coefficient_cell(e: &Estimate) -> String {
             e.model.unwrap_or("model"),
             rounding::significant(e.u_model.unwrap_or(0.0), 2)
         ),
+        Some(Provenance::NotMeasured) => format!("<td class=\"nm\" title=\"{title}\">—<br><small>not measured</small></td>"),
         Some(p) => format!("<td title=\"{title}\">{text}<br><small>{}</small></td>", p.name()),
         None => format!("<td>{text}</td>"),
     }
+}
+
+/// The report's first word on the models: whether any is consistent with
+/// the data within their uncertainty, and so whether any may carry a
+/// coefficient where the data end.
+fn adequacy_paragraph(fits: &[ComparedFit]) -> String {
+    let judged: Vec<(&ComparedFit, &Goodness)> = fits.iter().filter_map(|f| Some((f, f.goodness()?))).collect();
+    if judged.is_empty() {
+        return "<p><b>Adequacy cannot be judged</b>: the data carry no uncertainties, so no residual can be weighed \
+                against what the measurement allows. The table ranks the models by RMSE only, and the coefficients rest \
+                on the data alone: where they do not hold a geometry, no value is given.</p>\n"
+            .into();
+    }
+    let adequate: Vec<&str> = judged
+        .iter()
+        .filter(|(_, g)| Adequacy::of(Some(g)) == Adequacy::Adequate)
+        .map(|(f, _)| f.name())
+        .collect();
+    let level = format!("χ² test at the {} % level", rounding::significant(100.0 * ADEQUATE_P, 1));
+    if adequate.is_empty() {
+        let (f, g) = judged
+            .iter()
+            .max_by(|a, b| a.1.p_value.total_cmp(&b.1.p_value))
+            .copied()
+            .expect("judged is not empty");
+        return format!(
+            "<p><b>No model is consistent with the data</b> within their uncertainty ({level}): the closest, {}, has \
+             reduced χ² {} over {} degrees of freedom. Its parameters describe the data's shape, not the material; \
+             the coefficients rest on the data alone, and where they do not hold a geometry no value is given.</p>\n",
+            f.name(),
+            rounding::significant(g.reduced_chi2, 3),
+            g.dof
+        );
+    }
+    format!(
+        "<p><b>Consistent with the data</b> within their uncertainty ({level}): {}. Only these carry coefficients \
+         where the data end, within the data's own spacing.</p>\n",
+        escape(&adequate.join(", "))
+    )
 }
 
 /// R_A (ASTM E810 set, ε = 0: the BRDF is isotropic) and R_L (EN 1436):
@@ -64,30 +106,36 @@ fn coefficient_cell(e: &Estimate) -> String {
 /// picture of R_A against α per β.
 fn coefficients_section(fits: &[ComparedFit], support: Support, dir: &Path) -> Result<String> {
     let all = fitted(fits);
-    let carrier = coefficients::best(&all).map_or(
-        "none: only the rational function was fitted, so such values are refused",
-        |(_, m)| m.model.name(),
-    );
+    let adequate: Vec<Fitted> = all
+        .iter()
+        .filter(|f| Adequacy::of(f.goodness.as_ref()) == Adequacy::Adequate)
+        .cloned()
+        .collect();
+    let carrier = coefficients::best(&adequate).map_or("none: no model is adequate, so such values are not given", |(_, m)| m.model.name());
     let models: Vec<&ComparedFit> = fits.iter().filter(|f| matches!(f, ComparedFit::Model(_))).collect();
+    let instrument = support.instrument;
     let source = Source::measured(all, support)?;
     let values = coefficients::compute(&source, &coefficients::report_requests())?;
     let mut html = format!(
-        "<h2>Coefficients of retroreflection</h2>\n<p>Each value says what it rests on. <b>measured</b>: a sample of this \
-         scan at the geometry, carried from the head's apertures (a collimated laser, a 0.39° detector field) to the \
-         standard's with the samples' own curvature; <b>interpolated</b>: between samples on every side at most 1° \
-         away; <b>extrapolated</b> (shaded): no sample there (an entrance angle not measured, or the plate's shadow): the \
-         best model by AIC ({carrier}) carries it, scaled to the data at the nearest measured incidences, and its uncertainty \
-         holds half the spread of every model within {}× its RMSE; the rational function, held by its segments only where \
-         there are samples, carries none. ± the standard uncertainty (k = 1{}). Spectral values at \
-         the laser's wavelength ({} nm), <b>not photometric</b>. Definitions: docs/retroreflection.md.</p>\n<table>\n\
-         <tr><th class=\"l\">R_A (cd·lx⁻¹·m⁻²)</th>",
-        coefficients::ADEQUATE_RMSE_RATIO,
+        "<h2>Coefficients of retroreflection</h2>\n<p>Each value says what it rests on. <b>measured</b>: a sample of \
+         this scan at the geometry, carried from {instrument} to the standard's apertures with the samples' own \
+         curvature; <b>interpolated</b>: between samples on every side within the standard's aperture; \
+         <b>extrapolated</b> (shaded): no sample there but within the data's own spacing (an entrance angle between \
+         measured ones, or beyond them by at most their finest step): the best adequate model by AIC ({carrier}) carries \
+         it, scaled to the data at the nearest measured incidences, and its uncertainty holds half the spread of every \
+         adequate model; <b>not measured</b>: farther from the data than their spacing, or no model is adequate to carry \
+         it: no value (the reason and the scan that would measure it are in the cell's tooltip and in \
+         <code>gonio coefficients --json</code>; <code>--extrapolate</code> computes it all the same). The rational \
+         function, held by its segments only where there are samples, carries none. ± the standard uncertainty (k = \
+         1{}). Spectral values at {wavelength}, <b>not photometric</b>. Definitions: docs/retroreflection.md.</p>\n\
+         <table>\n<tr><th class=\"l\">R_A (cd·lx⁻¹·m⁻²)</th>",
         if models.iter().all(|f| matches!(f, ComparedFit::Model(m) if m.covariance.is_some())) {
             ": the samples' budgets, the fit's covariance with the plate and the stage zeros"
         } else {
             "; a fit without covariance adds no parameter term"
         },
-        coefficients::WAVELENGTH_NM
+        instrument = instrument.apertures_text(),
+        wavelength = instrument.wavelength_text(),
     );
     for a in coefficients::ASTM_ALPHAS {
         let _ = write!(html, "<th>α = {a}°</th>");
@@ -121,6 +169,20 @@ fn coefficients_section(fits: &[ComparedFit], support: Support, dir: &Path) -> R
         picture.file_name().and_then(|n| n.to_str()).unwrap_or_default()
     );
     Ok(html)
+}
+
+/// χ²/dof, p and the verdict of a fit: empty with a reason where the data
+/// carry no uncertainties.
+fn goodness_cells(g: Option<&Goodness>) -> String {
+    match g {
+        Some(g) => format!(
+            "<td>{}</td><td>{}</td><td class=\"l\">{}</td>",
+            rounding::significant(g.reduced_chi2, 3),
+            rounding::significant(g.p_value, 2),
+            Adequacy::of(Some(g)).name()
+        ),
+        None => "<td></td><td></td><td class=\"l\">not judged (no uncertainties)</td>".into(),
+    }
 }
 
 /// The largest components of the calibration's budget per incidence angle.
@@ -301,11 +363,13 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
          span.n {{ white-space: nowrap; }}\n\
          tr.best {{ background: #eef6ee; }}\n\
          td.ex {{ background: #f3eee2; font-style: italic; }}\n\
+         td.nm {{ color: #777; }}\n\
          div.row {{ display: flex; gap: 0.8em; overflow-x: auto; }}\n\
          figure {{ margin: 0.3em 0; flex: none; }}\n\
          figcaption {{ max-width: 40em; }}\n\
-         </style>\n</head>\n<body>\n<h1>{t}</h1>\n<table>\n",
-        t = escape(&r.title)
+         </style>\n</head>\n<body>\n<h1>{t}</h1>\n{adequacy}<table>\n",
+        t = escape(&r.title),
+        adequacy = adequacy_paragraph(r.fits)
     );
     for (k, v) in &r.facts {
         let _ = writeln!(
@@ -317,15 +381,18 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     }
     let _ = writeln!(
         html,
-        "<tr><th class=\"l\">samples fitted</th><td class=\"l\">{} (residuals in {})</td></tr>\n</table>",
+        "<tr><th class=\"l\">samples fitted</th><td class=\"l\">{} (residuals in {})</td></tr>\n\
+         <tr><th class=\"l\">measured by</th><td class=\"l\">{}, at {}</td></tr>\n</table>",
         r.data.observations.len(),
         match r.data.units {
             Units::Fr => "f_r, sr⁻¹",
             Units::FrCos => "f_r·cosθo, sr⁻¹",
-        }
+        },
+        escape(&r.data.instrument.apertures_text()),
+        escape(&r.data.instrument.wavelength_text())
     );
     let holdout = r.holdout.iter().any(Option::is_some);
-    html.push_str("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt); the rational function (Belcour et al. 2014 §5.B) is the least-norm one of the fewest terms that passes through every sample's segment.</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th>");
+    html.push_str("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt); the rational function (Belcour et al. 2014 §5.B) is the least-norm one of the fewest terms that passes through every sample's segment.</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th><th>χ²/dof</th><th>p</th><th class=\"l\">adequacy</th>");
     if holdout {
         html.push_str("<th>held-out NRMSE</th><th>held-out NCC</th>");
     }
@@ -352,6 +419,7 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
             rounding::significant(m.nrmse, 4),
             rounding::figure(m.ncc, 5)
         );
+        let _ = write!(html, "{}", goodness_cells(f.goodness()));
         if holdout {
             match r.holdout.get(i).and_then(Option::as_ref) {
                 Some(h) => {

@@ -51,7 +51,8 @@ fn lambertian_ra_and_rl_by_the_named_sets() {
     assert!((rl["value"].as_f64().unwrap() - 3.444).abs() < 1e-3, "R_L {rl}");
     assert!((rl["alpha_deg"].as_f64().unwrap() - 1.05).abs() < 1e-12);
     assert!((rl["beta_deg"].as_f64().unwrap() - 88.76).abs() < 1e-9);
-    assert_eq!(v["wavelength_nm"].as_f64(), Some(633.0));
+    // A model is no instrument's measurement: no wavelength to state.
+    assert!(v["wavelength_nm"].is_null() && v["instrument"].is_null(), "{v}");
     // A negative entrance angle in a list, as the README writes it.
     let v = lambert(&["--alpha", "0.2", "--beta", "-4,30"]);
     assert_eq!(v["ra"].as_array().unwrap().len(), 2);
@@ -164,16 +165,43 @@ fn coefficients_of_a_fitted_scan_hold_the_truth() {
         fit_json.to_str().unwrap(),
         "--json",
     ]);
-    let got = json(&[
-        "coefficients",
-        "--fit",
-        fit_json.to_str().unwrap(),
-        "--set",
-        "astm-e810",
-        "--set",
-        "en1436",
-        "--json",
-    ]);
+    let coefficients = |extra: &[&str]| {
+        let mut args = vec![
+            "coefficients",
+            "--fit",
+            fit_json.to_str().unwrap(),
+            "--set",
+            "astm-e810",
+            "--set",
+            "en1436",
+            "--json",
+        ];
+        args.extend_from_slice(extra);
+        json(&args)
+    };
+    // EN 1436's 88.76° lies 28.76° beyond the scan's last incidence (60°),
+    // farther than its finest spacing (15°): not measured, and the scan
+    // that would measure it named; ASTM E810's −4°, 40° and 45° lie within
+    // the spacing, and the fit (χ² consistent with the budget) carries them.
+    let plain = coefficients(&[]);
+    assert_eq!(plain["rl"]["provenance"], "not measured", "{}", plain["rl"]);
+    assert!(plain["rl"]["value"].is_null());
+    assert_eq!(plain["rl"]["measure_with"], "gonio scan --theta-i 88.76 --retro-rings 1.05");
+    assert_eq!(plain["instrument"]["name"], "this head");
+    assert_eq!(plain["wavelength_nm"].as_f64(), Some(633.0));
+    for r in plain["ra"].as_array().unwrap() {
+        assert!(r["value"].is_number(), "{r}");
+    }
+    let goodness = fit::file::read(&fit_json).unwrap().goodness.expect("the budget's σ judge the fit");
+    assert!(goodness.p_value >= 0.01, "{goodness:?}");
+    // Asked to, the fit carries R_L too, marked, and still covers the truth.
+    let got = coefficients(&["--extrapolate"]);
+    assert_eq!(got["rl"]["provenance"], "extrapolated");
+    assert!(
+        got["rl"]["basis"].as_str().unwrap().contains("extrapolated on request"),
+        "{}",
+        got["rl"]
+    );
     let truth = json(&[
         "coefficients",
         "--model",
@@ -276,16 +304,22 @@ fn values_say_what_they_rest_on_and_the_truth_is_at_hand() {
     let o = gonio(&["calibrate", out.to_str().unwrap(), "--json"]);
     assert!(o.status.success(), "{}", text(&o));
     let csv = out.join("calibrated.csv");
-    let geometry = ["--alpha", "0.2,0.35,7", "--beta", "-4,30"];
+    let geometry = ["--alpha", "0.1,0.2,7", "--beta", "-4,30"];
     let mut args = vec!["coefficients", "--data", csv.to_str().unwrap(), "--json"];
     args.extend(geometry);
     let d = json(&args);
     let at = |v: &Value, a, b| ra_at(v, a, b, 0.0).clone();
     assert_eq!(at(&d, 0.2, 30.0)["provenance"], "measured", "{d}");
-    assert_eq!(at(&d, 0.35, 30.0)["provenance"], "interpolated", "{d}");
-    for (a, b) in [(0.2, -4.0), (7.0, 30.0)] {
+    // α 0.1°: the retro point, the 0.2° ring's view behind it and its two
+    // neighbours all lie within the standard's 10′ aperture.
+    let v = at(&d, 0.1, 30.0);
+    assert_eq!(v["provenance"], "interpolated", "{v}");
+    assert!(v["basis"].as_str().unwrap().contains("within the standard's 0.17° aperture"), "{v}");
+    // θi 4°: one incidence measured (30°), so no spacing to lie within;
+    // α 7° at 30°: among the grid's samples, but none within the aperture.
+    for (a, b, rests_on) in [(0.2, -4.0, "not measured"), (7.0, 30.0, "extrapolated")] {
         let v = at(&d, a, b);
-        assert_eq!(v["provenance"], "extrapolated", "{v}");
+        assert_eq!(v["provenance"], rests_on, "{v}");
         assert!(v["value"].is_null(), "the data alone refuse it: {v}");
     }
     let fit_json = dir.path().join("fit.json");
@@ -300,23 +334,43 @@ fn values_say_what_they_rest_on_and_the_truth_is_at_hand() {
     ]);
     let mut args = vec!["coefficients", "--fit", fit_json.to_str().unwrap(), "--json"];
     args.extend(geometry);
+    // A fit of one incidence does not reach 26° away unasked.
+    let f = json(&args);
+    let v = at(&f, 0.2, -4.0);
+    assert_eq!(v["provenance"], "not measured", "{v}");
+    assert!(
+        v["value"].is_null() && v["basis"].as_str().unwrap().contains("was not measured"),
+        "{v}"
+    );
+    assert_eq!(v["measure_with"], "gonio scan --theta-i 4 --retro-rings 0.2");
+    args.push("--extrapolate");
     let f = json(&args);
     let v = at(&f, 0.2, -4.0);
     assert_eq!(v["provenance"], "extrapolated", "{v}");
     assert!(
-        v["value"].as_f64().unwrap() > 0.0 && v["basis"].as_str().unwrap().contains("was not measured"),
+        v["value"].as_f64().unwrap() > 0.0 && v["basis"].as_str().unwrap().contains("extrapolated on request"),
         "{v}"
     );
     assert_eq!(v["model"], "retro-phong");
-    let out_text = text(&gonio(&[
-        "coefficients",
-        "--fit",
-        fit_json.to_str().unwrap(),
-        "--alpha",
-        "0.2",
-        "--beta",
-        "-4",
-    ]));
+    let text_of = |extra: &[&str]| {
+        let mut args = vec![
+            "coefficients",
+            "--fit",
+            fit_json.to_str().unwrap(),
+            "--alpha",
+            "0.2",
+            "--beta",
+            "-4",
+        ];
+        args.extend_from_slice(extra);
+        text(&gonio(&args))
+    };
+    let out_text = text_of(&[]);
+    assert!(
+        out_text.contains("NOT MEASURED") && out_text.contains("measure it: gonio scan --theta-i 4 --retro-rings 0.2"),
+        "{out_text}"
+    );
+    let out_text = text_of(&["--extrapolate"]);
     assert!(
         out_text.contains("EXTRAPOLATED") && out_text.contains("carried by retro-phong"),
         "{out_text}"

@@ -34,6 +34,7 @@ fn dataset(m: &Material, units: Units) -> Dataset {
         metadata: vec!["material: synthetic".into()],
         units_stated: true,
         warnings: Vec::new(),
+        instrument: gonio_analysis::instrument::Instrument::Unknown,
     }
 }
 

@@ -241,7 +241,7 @@ fn provenance_coverage(rt: &tokio::runtime::Runtime, material: Specimen, scans: 
         "coverage_k2": tallies.iter().map(|(k, t)| (k.to_string(), json!({"values": t.all, "coverage_k2": t.share()}))).collect::<serde_json::Map<_, _>>(),
         "model_spread_over_u": spread_over_u,
         "retro_zone_samples": retro_zone_min,
-        "adequate_rmse_ratio": coefficients::ADEQUATE_RMSE_RATIO,
+        "adequate_p": gonio_analysis::fit::goodness::ADEQUATE_P,
         "per_scan": per_scan,
     }))
 }

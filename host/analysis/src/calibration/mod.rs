@@ -409,6 +409,7 @@ pub fn dataset(rows: &[CalibratedRow]) -> Dataset {
         metadata: Vec::new(),
         units_stated: true,
         warnings: Vec::new(),
+        instrument: crate::instrument::Instrument::ThisHead,
     }
 }
 

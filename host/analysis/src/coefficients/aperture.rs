@@ -24,6 +24,12 @@ impl Apertures {
         source_deg: 0.0,
         receiver_deg: 0.0,
     };
+
+    /// The wider of the two (degrees): the disc the standard averages over,
+    /// within which samples interpolate a value (`Support::classify`).
+    pub fn widest(&self) -> f64 {
+        self.source_deg.max(self.receiver_deg)
+    }
 }
 
 /// The average of `f(directions)` over every source point and every

@@ -13,7 +13,7 @@ mod source;
 pub use angles::Cie;
 pub use aperture::Apertures;
 pub use provenance::{Basis, Provenance, Support};
-pub use source::{best, head_apertures, Estimate, Fitted, ModelValue, Nearest, Source, ADEQUATE_RMSE_RATIO};
+pub use source::{best, head_apertures, Estimate, Fitted, ModelValue, Nearest, Source, COMPARABLE_RMSE_RATIO};
 
 use anyhow::{bail, Result};
 use serde::Serialize;

@@ -6,14 +6,19 @@
 //! - **measured**: a sample at the geometry (within [`MEASURED_WITHIN_DEG`]:
 //!   its value is the coefficient, corrected for the apertures);
 //! - **interpolated**: at a measured incidence, surrounded on every side by
-//!   the samples within [`INTERPOLATION_GAP_DEG`] (what a ring pattern holds
-//!   between its rings and views);
-//! - **extrapolated**: anything else: an incidence the data do not hold
-//!   (the entrance angles of ASTM E810 outside 15–60°, EN 1436's 88.76°), the
-//!   plate's shadow, or a gap wider than the data's own spacing. Only a model
-//!   carries the value there, and models that fit the data alike disagree.
+//!   samples within the standard's aperture (the disc it averages over: finer
+//!   structure than that the standard itself does not see);
+//! - **extrapolated**: no sample there, but within the data's own spacing of
+//!   them (an incidence between measured ones, or beyond them by at most
+//!   their finest spacing; an observation angle likewise): only a model
+//!   carries the value, and only one consistent with the data (`source.rs`);
+//! - **not measured**: farther from the data than their own spacing, in the
+//!   incidence or the observation angle (EN 1436's 88.76° on a scan that
+//!   ends at 60°): no value, unless the user asks for an extrapolation, and
+//!   the scan that would measure it.
 
 use crate::fit::{Dataset, Units};
+use crate::instrument::Instrument;
 use anyhow::{bail, Context, Result};
 use gonio_brdf::frame::{angle_between, cross, dot, normalize};
 use gonio_brdf::Directions;
@@ -30,20 +35,25 @@ pub const INCIDENCE_TOL_DEG: f64 = 0.1;
 /// stages' zero uncertainty (0.02°) and a tenth of the reference detector's
 /// field.
 pub const MEASURED_WITHIN_DEG: f64 = 0.02;
-/// Samples up to this far (degrees) interpolate, when they surround the
-/// view: the reference retro rings are at most 1° apart.
-pub const INTERPOLATION_GAP_DEG: f64 = 1.0;
+/// Observation angles closer than this (degrees) are one ring: the data's
+/// spacing in α is taken between distinct rings, not between a ring's
+/// views, which the stages place to a microstep.
+const SAME_ALPHA_DEG: f64 = 0.005;
 /// Samples a view's curvature is fitted through (a quadratic has 6
 /// coefficients; on the reference rings these reach the next ring out and in).
 pub const CURVATURE_SAMPLES: usize = 40;
 
 /// How a value was obtained.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
-#[serde(rename_all = "lowercase")]
 pub enum Provenance {
+    #[serde(rename = "measured")]
     Measured,
+    #[serde(rename = "interpolated")]
     Interpolated,
+    #[serde(rename = "extrapolated")]
     Extrapolated,
+    #[serde(rename = "not measured")]
+    NotMeasured,
 }
 
 impl Provenance {
@@ -52,7 +62,13 @@ impl Provenance {
             Provenance::Measured => "measured",
             Provenance::Interpolated => "interpolated",
             Provenance::Extrapolated => "extrapolated",
+            Provenance::NotMeasured => "not measured",
         }
+    }
+
+    /// Whether the data hold the value (measured or interpolated).
+    pub fn on_data(self) -> bool {
+        matches!(self, Provenance::Measured | Provenance::Interpolated)
     }
 }
 
@@ -61,6 +77,20 @@ impl Provenance {
 pub struct Basis {
     pub provenance: Provenance,
     pub why: String,
+    /// Where the data do not reach: the incidence and observation angle a
+    /// scan would have to measure (`gonio scan --theta-i … --retro-rings …`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub measure: Option<String>,
+}
+
+impl Basis {
+    fn new(provenance: Provenance, why: String) -> Basis {
+        Basis {
+            provenance,
+            why,
+            measure: None,
+        }
+    }
 }
 
 /// A measured value (`f_r`, sr⁻¹), its standard uncertainty, and how much
@@ -93,6 +123,8 @@ pub struct Local {
 pub struct Support {
     pub points: Vec<Point>,
     pub incidences_deg: Vec<f64>,
+    /// What measured them: the apertures a measured value is carried from.
+    pub instrument: Instrument,
 }
 
 fn point(angles_deg: [f64; 3], value: f64, sigma: f64, shift_psi: f64) -> Point {
@@ -125,18 +157,22 @@ impl Support {
             }
         }
         incidences_deg.sort_by(f64::total_cmp);
-        Ok(Support { points, incidences_deg })
+        Ok(Support {
+            points,
+            incidences_deg,
+            instrument: data.instrument,
+        })
     }
 
     /// As a fit file keeps it: `{"incidences_deg", "retro": [[θi, θo, Δφ,
-    /// f_r, σ, shift_zero_psi], …]}`.
+    /// f_r, σ, shift_zero_psi], …], "instrument"}`.
     pub fn to_json(&self) -> Value {
         let rows: Vec<[f64; 6]> = self
             .points
             .iter()
             .map(|p| [p.angles_deg[0], p.angles_deg[1], p.angles_deg[2], p.value, p.sigma, p.shift_psi])
             .collect();
-        json!({"incidences_deg": self.incidences_deg, "support_deg": SUPPORT_DEG, "retro": rows})
+        json!({"incidences_deg": self.incidences_deg, "support_deg": SUPPORT_DEG, "retro": rows, "instrument": self.instrument.to_json()})
     }
 
     pub fn from_json(v: &Value) -> Result<Self> {
@@ -150,6 +186,8 @@ impl Support {
         Ok(Support {
             points: rows.iter().map(|r| point([r[0], r[1], r[2]], r[3], r[4], r[5])).collect(),
             incidences_deg,
+            // A file of an earlier gonio did not say: not known.
+            instrument: Instrument::from_json(&v["instrument"]).context("`support.instrument`")?,
         })
     }
 
@@ -255,44 +293,123 @@ impl Support {
         })
     }
 
-    /// What a coefficient at nominal directions `want` rests on.
-    pub fn classify(&self, want: &Directions) -> Basis {
+    /// What a coefficient at nominal directions `want` rests on, samples
+    /// within `reach_deg` (the standard's aperture) interpolating it; where
+    /// the data do not hold it, the scan that would.
+    pub fn classify(&self, want: &Directions, reach_deg: f64) -> Basis {
+        let mut basis = self.rests_on(want, reach_deg);
+        if !basis.provenance.on_data() {
+            let (ti, _, _) = want.angles();
+            let alpha = angle_between(want.l, want.v).to_degrees();
+            basis.measure = Some(format!(
+                "gonio scan --theta-i {} --retro-rings {}",
+                figure(ti.to_degrees()),
+                figure(alpha)
+            ));
+        }
+        basis
+    }
+
+    fn rests_on(&self, want: &Directions, reach_deg: f64) -> Basis {
         let (ti, _, _) = want.angles();
         let ti = ti.to_degrees();
-        let extrapolated = |why: String| Basis {
-            provenance: Provenance::Extrapolated,
-            why,
-        };
+        let alpha = angle_between(want.l, want.v).to_degrees();
+        let beyond = |why: String| Basis::new(Provenance::NotMeasured, why);
         let Some(at) = self.incidence(ti) else {
             let list: Vec<String> = self.incidences_deg.iter().map(|t| format!("{t:.4}°")).collect();
-            return extrapolated(format!("θi {ti:.2}° was not measured (the data hold θi {})", list.join(", ")));
+            let held = format!("the data hold θi {}", list.join(", "));
+            return match spacing_check(ti, &self.incidences_deg) {
+                Ok(()) => Basis::new(
+                    Provenance::Extrapolated,
+                    format!("θi {ti:.2}° was not measured ({held}), but lies within their spacing"),
+                ),
+                Err(why) => beyond(format!("θi {ti:.2}° was not measured ({held}): {why} in θi")),
+            };
         };
         let views = self.views_near(at, want.v);
         let Some(&(_, nearest)) = views.first() else {
-            return extrapolated(format!("no sample within {SUPPORT_DEG}° of the retro direction at θi {at:.4}°"));
+            return beyond(format!("no sample within {SUPPORT_DEG}° of the retro direction at θi {at:.4}°"));
         };
         let nearest_deg = nearest.to_degrees();
         if nearest_deg <= MEASURED_WITHIN_DEG {
-            return Basis {
-                provenance: Provenance::Measured,
-                why: format!("a sample {nearest_deg:.3}° from the geometry"),
-            };
+            return Basis::new(Provenance::Measured, format!("a sample {nearest_deg:.3}° from the geometry"));
         }
-        let within = views.partition_point(|v| v.1.to_degrees() <= INTERPOLATION_GAP_DEG);
+        let within = views.partition_point(|v| v.1.to_degrees() <= reach_deg);
         let near = &views[..within];
         if near.len() >= 3 && surrounds(want.v, near) {
-            return Basis {
-                provenance: Provenance::Interpolated,
-                why: format!(
-                    "between the {} samples within {INTERPOLATION_GAP_DEG}°, on every side (the nearest {nearest_deg:.2}° away)",
-                    near.len()
+            return Basis::new(
+                Provenance::Interpolated,
+                format!(
+                    "between the {} samples within the standard's {}° aperture, on every side (the nearest {nearest_deg:.3}° away)",
+                    near.len(),
+                    figure(reach_deg)
                 ),
-            };
+            );
         }
-        extrapolated(format!(
-            "the nearest sample is {nearest_deg:.2}° away and none surround it within {INTERPOLATION_GAP_DEG}°"
-        ))
+        let alphas = self.alphas_at(at);
+        match spacing_check(alpha, &alphas) {
+            Ok(()) => Basis::new(
+                Provenance::Extrapolated,
+                format!(
+                    "the nearest sample is {nearest_deg:.2}° away and none surround it within the standard's {}° aperture",
+                    figure(reach_deg)
+                ),
+            ),
+            Err(why) => beyond(format!("at θi {at:.2}° the observation angle α {}°: {why} in α", figure(alpha))),
+        }
     }
+
+    /// The distinct observation angles (light–view angles, degrees) of the
+    /// samples at the incidence `at`, ascending.
+    fn alphas_at(&self, at: f64) -> Vec<f64> {
+        let mut alphas: Vec<f64> = self
+            .points
+            .iter()
+            .filter(|p| (p.angles_deg[0] - at).abs() <= INCIDENCE_TOL_DEG)
+            .map(|p| angle_between(p.d.l, p.d.v).to_degrees())
+            .collect();
+        alphas.sort_by(f64::total_cmp);
+        alphas.dedup_by(|a, b| (*a - *b).abs() < SAME_ALPHA_DEG);
+        alphas
+    }
+}
+
+/// Whether `x` lies within the data's own spacing of the measured values
+/// `held` (ascending): between two of them, or beyond them by at most their
+/// finest spacing (0 with a single value). The finest, not the nearest gap:
+/// a scan at 15°, 30° and 60° says nothing of 88.76° just because its last
+/// step was 30° wide.
+fn spacing_check(x: f64, held: &[f64]) -> Result<(), String> {
+    let (Some(&lo), Some(&hi)) = (held.first(), held.last()) else {
+        return Err("there are no data".into());
+    };
+    if (lo..=hi).contains(&x) {
+        return Ok(());
+    }
+    let finest = held.windows(2).map(|w| w[1] - w[0]).fold(f64::INFINITY, f64::min);
+    let (nearest, distance) = if x < lo { (lo, lo - x) } else { (hi, x - hi) };
+    if !finest.is_finite() {
+        return Err(format!(
+            "{}° from the only value measured ({}°): a single one has no spacing to reach across",
+            figure(distance),
+            figure(nearest)
+        ));
+    }
+    if distance <= finest {
+        return Ok(());
+    }
+    Err(format!(
+        "{}° beyond the nearest measured ({}°), farther than the data's finest spacing ({}°)",
+        figure(distance),
+        figure(nearest),
+        figure(finest)
+    ))
+}
+
+/// An angle in degrees as text: to 0.01°, without trailing zeros.
+fn figure(deg: f64) -> String {
+    let t = format!("{:.2}", deg);
+    t.trim_end_matches('0').trim_end_matches('.').to_string()
 }
 
 /// Two unit vectors spanning the tangent plane at `v`.
@@ -332,6 +449,7 @@ mod tests {
         Support {
             points,
             incidences_deg: vec![15.0, 30.0, 60.0],
+            instrument: Instrument::ThisHead,
         }
     }
 
@@ -339,39 +457,68 @@ mod tests {
         crate::coefficients::Cie::coplanar(alpha, beta, 0.0).directions()
     }
 
+    /// ASTM E810's aperture (10′), within which samples interpolate.
+    const REACH: f64 = 1.0 / 6.0;
+
     #[test]
     fn the_standard_geometries_on_the_rings_are_measured() {
         let s = ring_support();
         for alpha in crate::coefficients::ASTM_ALPHAS {
             for beta in [15.0, 30.0] {
-                let b = s.classify(&cie(alpha, beta));
+                let b = s.classify(&cie(alpha, beta), REACH);
                 assert_eq!(b.provenance, Provenance::Measured, "α {alpha} β {beta}: {}", b.why);
             }
         }
     }
 
     #[test]
-    fn between_the_rings_is_interpolated_and_beyond_them_extrapolated() {
+    fn interpolated_within_the_aperture_extrapolated_between_rings_not_measured_beyond() {
         let s = ring_support();
-        assert_eq!(s.classify(&cie(0.7, 30.0)).provenance, Provenance::Interpolated);
-        let b = s.classify(&cie(0.7, 30.0));
+        // 0.02° outside the 0.33° ring, 0.15° inside the 0.5° one.
+        let b = s.classify(&cie(0.35, 30.0), REACH);
         assert_eq!(b.provenance, Provenance::Interpolated, "{}", b.why);
-        // Beyond the outermost ring (4.75°): the plate's shadow, no sample.
-        let b = s.classify(&cie(7.0, 30.0));
+        assert!(b.why.contains("0.17° aperture"), "{}", b.why);
+        // Between the 0.5° and 1° rings: farther than the aperture from both.
+        let b = s.classify(&cie(0.75, 30.0), REACH);
         assert_eq!(b.provenance, Provenance::Extrapolated, "{}", b.why);
+        // Beyond the outermost ring (4.75°) by more than the finest ring
+        // spacing (0.1°): the plate's shadow, nothing measured near.
+        let b = s.classify(&cie(7.0, 30.0), REACH);
+        assert_eq!(b.provenance, Provenance::NotMeasured, "{}", b.why);
+        assert!(b.why.contains("in α"), "{}", b.why);
+        assert_eq!(b.measure.as_deref(), Some("gonio scan --theta-i 30 --retro-rings 7"));
     }
 
     #[test]
-    fn an_incidence_the_data_do_not_hold_is_extrapolated() {
+    fn an_incidence_within_the_data_spacing_is_extrapolated_beyond_it_not_measured() {
         let s = ring_support();
-        for beta in [-4.0, 40.0, 45.0, 88.76] {
-            let b = s.classify(&cie(0.2, beta));
-            assert_eq!(b.provenance, Provenance::Extrapolated, "β {beta}");
+        // Measured 15°, 30°, 60°: finest spacing 15°. 4° is 11° below 15°,
+        // 40° and 45° lie between 30° and 60°.
+        for beta in [-4.0, 40.0, 45.0] {
+            let b = s.classify(&cie(0.2, beta), REACH);
+            assert_eq!(b.provenance, Provenance::Extrapolated, "β {beta}: {}", b.why);
             assert!(b.why.contains("was not measured"), "{}", b.why);
         }
+        // EN 1436's 88.76°: 28.76° beyond 60°.
+        let b = s.classify(&cie(1.05, 88.76), REACH);
+        assert_eq!(b.provenance, Provenance::NotMeasured, "{}", b.why);
+        assert!(b.why.contains("28.76° beyond the nearest measured (60°)"), "{}", b.why);
+        assert_eq!(b.measure.as_deref(), Some("gonio scan --theta-i 88.76 --retro-rings 1.05"));
         // 60° is held, but no sample about its retro direction.
-        let b = s.classify(&cie(0.2, 60.0));
-        assert_eq!(b.provenance, Provenance::Extrapolated);
+        let b = s.classify(&cie(0.2, 60.0), REACH);
+        assert_eq!(b.provenance, Provenance::NotMeasured);
+    }
+
+    #[test]
+    fn the_spacing_rule() {
+        assert!(spacing_check(45.0, &[15.0, 30.0, 60.0]).is_ok());
+        assert!(spacing_check(0.0, &[15.0, 30.0, 60.0]).is_ok());
+        assert!(spacing_check(75.0, &[15.0, 30.0, 60.0]).is_ok());
+        assert!(spacing_check(75.1, &[15.0, 30.0, 60.0]).is_err());
+        // One incidence: nothing else is within its spacing.
+        assert!(spacing_check(30.0, &[30.0]).is_ok());
+        assert!(spacing_check(31.0, &[30.0]).is_err());
+        assert!(spacing_check(1.0, &[]).is_err());
     }
 
     #[test]
@@ -380,7 +527,7 @@ mod tests {
         let back = Support::from_json(&s.to_json()).unwrap();
         assert_eq!(back.points.len(), s.points.len());
         assert_eq!(back.incidences_deg, s.incidences_deg);
-        assert_eq!(back.classify(&cie(0.7, 30.0)), s.classify(&cie(0.7, 30.0)));
+        assert_eq!(back.classify(&cie(0.7, 30.0), REACH), s.classify(&cie(0.7, 30.0), REACH));
         assert!(Support::from_json(&json!({"incidences_deg": [1.0], "retro": [[1.0, 2.0]]})).is_err());
     }
 }

@@ -7,7 +7,9 @@
 use super::provenance::{Basis, Point, Provenance, Support};
 use super::{aperture, Apertures, Cie, Request};
 use crate::fit::file::FittedBrdf;
+use crate::fit::goodness::{Adequacy, Goodness};
 use crate::fit::Dataset;
+use crate::instrument::Instrument;
 use crate::uncertainty::HeadUncertainty;
 use anyhow::{bail, Result};
 use gonio_brdf::aperture::diameter_deg;
@@ -34,10 +36,16 @@ pub enum Source {
     Data { support: Support },
     /// Measured values and the models fitted to them (`gonio fit --out`
     /// files keep their data's support): where the data hold the geometry
-    /// (measured, interpolated) the value is theirs, corrected from the
-    /// head's apertures to the standard's with the best model; beyond, the
-    /// best model's, its uncertainty widened by the adequate models' spread.
-    Measured { fits: Vec<Fitted>, support: Support },
+    /// (measured, interpolated) the value is theirs, corrected to the
+    /// standard's apertures with their own curvature; within the data's
+    /// spacing, the best adequate model's, its uncertainty widened by the
+    /// adequate models' spread; beyond it, or with no adequate model,
+    /// nothing, unless `extrapolate` (`--extrapolate`) asks for a value.
+    Measured {
+        fits: Vec<Fitted>,
+        support: Support,
+        extrapolate: bool,
+    },
     /// A simulated head's material itself (`gonio coefficients --material`):
     /// the truth a simulated scan's coefficients are checked against,
     /// through the same apertures, without uncertainty.
@@ -57,6 +65,9 @@ pub struct Fitted {
     /// Root mean square residual, in the data's units.
     pub rmse: f64,
     pub aic: f64,
+    /// χ² against the data's σ: whether it may carry a value where the
+    /// data end ([`Adequacy`]).
+    pub goodness: Option<Goodness>,
 }
 
 impl From<&crate::fit::Fit> for Fitted {
@@ -66,14 +77,17 @@ impl From<&crate::fit::Fit> for Fitted {
             covariance: f.covariance.clone(),
             rmse: f.metrics.rmse,
             aic: f.aic,
+            goodness: f.goodness,
         }
     }
 }
 
-/// A model fits the data comparably when its RMSE is within this factor
-/// of the best one's (`docs/retroreflection.md`, *Provenance*): where the
-/// data end, what these models say is what the data cannot tell apart.
-pub const ADEQUATE_RMSE_RATIO: f64 = 2.0;
+/// Where no model is adequate and the user asked for an extrapolation all
+/// the same (`--extrapolate`), the models whose RMSE is within this factor
+/// of the best one's carry it together: what the data cannot tell apart,
+/// their spread the model term. A statement about the models at hand, not
+/// a verdict on any of them.
+pub const COMPARABLE_RMSE_RATIO: f64 = 2.0;
 
 /// The reference head's apertures: a collimated laser (a point source) and
 /// a detector field of `ArmOptics::detector_sr` (a disc 0.39° across),
@@ -173,12 +187,41 @@ impl Source {
         })
     }
 
-    /// Measured values and the models fitted to them (at least one).
+    /// Measured values and the models fitted to them (at least one); no
+    /// value where only a model would carry it beyond the data's spacing or
+    /// without an adequate model (see [`Source::extrapolating`]).
     pub fn measured(fits: Vec<Fitted>, support: Support) -> Result<Self> {
         if fits.is_empty() {
             bail!("no fitted model");
         }
-        Ok(Source::Measured { fits, support })
+        Ok(Source::Measured {
+            fits,
+            support,
+            extrapolate: false,
+        })
+    }
+
+    /// What measured the values a coefficient may rest on: the data's
+    /// instrument; this head for a simulated material; none for a model.
+    pub fn instrument(&self) -> Option<Instrument> {
+        match self {
+            Source::Data { support } | Source::Measured { support, .. } => Some(support.instrument),
+            Source::Truth(_) => Some(Instrument::ThisHead),
+            Source::Model { .. } => None,
+        }
+    }
+
+    /// The same source, computing the values the data cannot support from
+    /// the models all the same (`--extrapolate`), each marked.
+    pub fn extrapolating(self, on: bool) -> Self {
+        match self {
+            Source::Measured { fits, support, .. } => Source::Measured {
+                fits,
+                support,
+                extrapolate: on,
+            },
+            other => other,
+        }
     }
 
     /// The coefficient and its standard uncertainty.
@@ -195,8 +238,8 @@ impl Source {
                 })
             }
             Source::Data { support } => {
-                let basis = support.classify(&r.geometry.directions());
-                if basis.provenance == Provenance::Extrapolated {
+                let basis = support.classify(&r.geometry.directions(), r.apertures.widest());
+                if !basis.provenance.on_data() {
                     return Ok(Estimate {
                         value: f64::NAN,
                         u: f64::NAN,
@@ -209,7 +252,11 @@ impl Source {
                     ..carried(support, r, interpolate(&support.points, r))
                 })
             }
-            Source::Measured { fits, support } => Ok(measured(fits, support, r)),
+            Source::Measured {
+                fits,
+                support,
+                extrapolate,
+            } => Ok(measured(fits, support, r, *extrapolate)),
             Source::Truth(specimen) => Ok(Estimate {
                 value: averaged(|d| specimen.eval(d), r),
                 ..Estimate::default()
@@ -273,29 +320,77 @@ pub fn best(fits: &[Fitted]) -> Option<(&Fitted, &Material)> {
 }
 
 /// A coefficient from the data where they hold its geometry, else from the
-/// best model with the adequate models' spread.
-fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
-    let basis = support.classify(&r.geometry.directions());
-    if basis.provenance != Provenance::Extrapolated {
+/// best adequate model with the adequate models' spread, within the data's
+/// spacing; else nothing, unless `extrapolate`.
+fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) -> Estimate {
+    let mut basis = support.classify(&r.geometry.directions(), r.apertures.widest());
+    if basis.provenance.on_data() {
         return Estimate {
             basis: Some(basis),
             ..carried(support, r, interpolate(&support.points, r))
         };
     }
-    let Some((top, top_material)) = best(fits) else {
+    let models: Vec<&Fitted> = fits.iter().filter(|f| f.material().is_some()).collect();
+    let adequate: Vec<&Fitted> = models
+        .iter()
+        .copied()
+        .filter(|f| Adequacy::of(f.goodness.as_ref()) == Adequacy::Adequate)
+        .collect();
+    let refused = |basis: Basis| Estimate {
+        value: f64::NAN,
+        u: f64::NAN,
+        basis: Some(basis),
+        ..Estimate::default()
+    };
+    if models.is_empty() {
         // Only a rational function, which says nothing beyond its data.
-        return Estimate {
-            value: f64::NAN,
-            u: f64::NAN,
-            basis: Some(basis),
-            ..Estimate::default()
-        };
+        return refused(basis);
+    }
+    if adequate.is_empty() {
+        let why = no_adequate_model(&models);
+        if !extrapolate {
+            basis.provenance = Provenance::NotMeasured;
+            basis.why = format!("{}; {why}, to carry it", basis.why);
+            return refused(basis);
+        }
+        basis.why = format!(
+            "{}; {why}: extrapolated on request by the models within {COMPARABLE_RMSE_RATIO}× the best RMSE",
+            basis.why
+        );
+    } else if basis.provenance == Provenance::NotMeasured {
+        if !extrapolate {
+            return refused(basis);
+        }
+        basis.why = format!("{}: extrapolated on request", basis.why);
+    }
+    basis.provenance = Provenance::Extrapolated;
+    let carriers: Vec<&Fitted> = if adequate.is_empty() {
+        let best_rmse = models.iter().map(|f| f.rmse).fold(f64::INFINITY, f64::min);
+        models
+            .iter()
+            .copied()
+            .filter(|f| f.rmse <= COMPARABLE_RMSE_RATIO * best_rmse)
+            .collect()
+    } else {
+        adequate
+    };
+    let Some((top, top_material)) = carriers
+        .iter()
+        .filter_map(|f| Some((*f, f.material()?)))
+        .min_by(|a, b| a.0.aic.total_cmp(&b.0.aic))
+    else {
+        return refused(basis);
     };
     // The data where they are nearest: the same geometry at the measured
     // incidences about the requested one, each model scaled to them.
     let anchors: Vec<(f64, Request, Estimate)> = anchors(support, r)
         .into_iter()
-        .filter(|(_, a)| support.classify(&a.geometry.directions()).provenance != Provenance::Extrapolated)
+        .filter(|(_, a)| {
+            support
+                .classify(&a.geometry.directions(), a.apertures.widest())
+                .provenance
+                .on_data()
+        })
         .map(|(w, a)| (w, a, carried(support, &a, interpolate(&support.points, &a))))
         .filter(|(_, _, e)| e.value > 0.0)
         .collect();
@@ -314,10 +409,8 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
             .sum();
         at_q * ratio
     };
-    let limit = ADEQUATE_RMSE_RATIO * top.rmse;
-    let models: Vec<ModelValue> = fits
+    let models: Vec<ModelValue> = carriers
         .iter()
-        .filter(|f| f.rmse <= limit)
         .filter_map(|f| {
             let m = f.material()?;
             Some(ModelValue {
@@ -356,6 +449,23 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request) -> Estimate {
     }
 }
 
+/// Why no model may carry a value beyond the data: the best one's χ², or
+/// data without uncertainties to judge any by.
+fn no_adequate_model(models: &[&Fitted]) -> String {
+    let best = models
+        .iter()
+        .filter_map(|f| Some((f.goodness?, f.material()?.model.name())))
+        .max_by(|a, b| a.0.p_value.total_cmp(&b.0.p_value));
+    match best {
+        Some((g, name)) => format!(
+            "no model is consistent with the data within their uncertainty (the best, {name}: reduced χ² {}, p {})",
+            crate::rounding::significant(g.reduced_chi2, 3),
+            crate::rounding::significant(g.p_value, 2)
+        ),
+        None => "the data carry no uncertainties, so no model can be shown adequate".into(),
+    }
+}
+
 /// The same geometry at the measured incidences nearest the request's
 /// entrance angle, with the weights of a linear interpolation in it: the
 /// two about it, or the nearest one beyond the measured range. The entrance
@@ -387,8 +497,9 @@ fn anchors(support: &Support, r: &Request) -> Vec<(f64, Request)> {
     }
 }
 
-/// A value the data hold (the head's reading: the BRDF averaged over a
-/// point source and the detector's field, at the stages' reported angles)
+/// A value the data hold (the instrument's reading: on this head the BRDF
+/// averaged over a point source and the detector's field, at the stages'
+/// reported angles)
 /// carried to the request's apertures, with what the data's own shape says
 /// of its uncertainty ([`Support::local`]):
 ///
@@ -411,24 +522,34 @@ fn carried(support: &Support, r: &Request, data: Estimate) -> Estimate {
     let Some(local) = support.local(&want) else {
         return data;
     };
+    // An instrument whose apertures nobody stated: its reading is left as
+    // it is, and the head's own arm does not apply.
+    let Some(head) = support.instrument.apertures() else {
+        return data;
+    };
     let k = r.kind.factor(want.l[2], want.v[2]);
     let rho2 = |diameter_deg: f64| (diameter_deg / 2.0).powi(2);
-    let head = head_apertures();
-    let reach = (rho2(r.apertures.source_deg) + rho2(r.apertures.receiver_deg) - rho2(head.receiver_deg)) / 8.0;
+    let reach = (rho2(r.apertures.source_deg) + rho2(r.apertures.receiver_deg) - rho2(head.source_deg) - rho2(head.receiver_deg)) / 8.0;
     let delta = reach * local.laplacian * k;
     let u_aperture = (reach.abs() * local.laplacian_se * k).hypot(delta.abs() / (2.0 * 3f64.sqrt()));
     // The arm's zero: the calibration's part of it (the nearest sample's
     // shift, zero and backlash) out, the samples' own slope in.
-    let u = HeadUncertainty::default();
-    let u_psi = u.zero_deg[2].hypot(u.backlash_deg[2] / 2.0);
-    let model_part = data.nearest.first().map_or(0.0, |n| n.shift_psi.abs()) * k * u_psi / u.zero_deg[2];
-    let data_part = local.slope_alpha.abs() * u_psi * k;
-    let u_data = (data.u * data.u - model_part * model_part).max(0.0).sqrt().hypot(data_part);
+    let (u_data, u_arm_zero) = match support.instrument.is_this_head() {
+        true => {
+            let u = HeadUncertainty::default();
+            let u_psi = u.zero_deg[2].hypot(u.backlash_deg[2] / 2.0);
+            let model_part = data.nearest.first().map_or(0.0, |n| n.shift_psi.abs()) * k * u_psi / u.zero_deg[2];
+            let data_part = local.slope_alpha.abs() * u_psi * k;
+            let u_data = (data.u * data.u - model_part * model_part).max(0.0).sqrt().hypot(data_part);
+            (u_data, Some(data_part))
+        }
+        false => (data.u, None),
+    };
     Estimate {
         value: data.value + delta,
         u: u_data.hypot(u_aperture),
         u_aperture: Some(u_aperture),
-        u_arm_zero: Some(data_part),
+        u_arm_zero,
         ..data
     }
 }

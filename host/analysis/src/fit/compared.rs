@@ -5,6 +5,7 @@
 
 use super::criteria::Criteria;
 use super::file::FittedBrdf;
+use super::goodness::Goodness;
 use super::{Fit, Metrics, Units};
 use crate::coefficients::Fitted;
 use crate::rational::RationalFit;
@@ -18,6 +19,8 @@ pub enum ComparedFit {
     Rational {
         fit: RationalFit,
         criteria: Criteria,
+        /// χ² against the samples' σ, where they have one.
+        goodness: Option<Goodness>,
     },
 }
 
@@ -54,6 +57,14 @@ impl ComparedFit {
         }
     }
 
+    /// χ² against the samples' σ (`None` where they have none).
+    pub fn goodness(&self) -> Option<&Goodness> {
+        match self {
+            ComparedFit::Model(f) => f.goodness.as_ref(),
+            ComparedFit::Rational { goodness, .. } => goodness.as_ref(),
+        }
+    }
+
     pub fn seconds(&self) -> f64 {
         match self {
             ComparedFit::Model(f) => f.seconds,
@@ -73,11 +84,12 @@ impl ComparedFit {
     pub fn fitted(&self) -> Fitted {
         match self {
             ComparedFit::Model(f) => Fitted::from(f),
-            ComparedFit::Rational { fit, criteria } => Fitted {
+            ComparedFit::Rational { fit, criteria, goodness } => Fitted {
                 brdf: self.brdf(),
                 covariance: None,
                 rmse: fit.metrics.rmse,
                 aic: criteria.aic,
+                goodness: *goodness,
             },
         }
     }
@@ -87,7 +99,9 @@ impl ComparedFit {
     pub fn to_json(&self, units: Units, holdout: Option<&Metrics>) -> Value {
         match self {
             ComparedFit::Model(f) => super::file::to_json(f, units, holdout),
-            ComparedFit::Rational { fit, criteria } => crate::rational::file::to_json(fit, units, criteria, holdout),
+            ComparedFit::Rational { fit, criteria, goodness } => {
+                crate::rational::file::to_json(fit, units, criteria, goodness.as_ref(), holdout)
+            }
         }
     }
 }

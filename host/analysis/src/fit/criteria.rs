@@ -111,6 +111,7 @@ mod tests {
             metadata: Vec::new(),
             units_stated: true,
             warnings: Vec::new(),
+            instrument: crate::instrument::Instrument::Unknown,
         };
         for weighting in [Weighting::Uniform, Weighting::Sigma, Weighting::Relative, Weighting::Area] {
             let f = fit(

@@ -2,6 +2,7 @@
 //! came from: geometry in radians, a value in the file's units, and an
 //! optional standard uncertainty.
 
+use crate::instrument::Instrument;
 use crate::uncertainty::SHARED;
 use anyhow::{bail, Result};
 use gonio_brdf::{Directions, GeometryTerms};
@@ -89,6 +90,9 @@ pub struct Dataset {
     pub units_stated: bool,
     /// What the reader assumed or found doubtful, for the user.
     pub warnings: Vec<String>,
+    /// What measured the values: this head, or another instrument whose
+    /// apertures and wavelength are stated or not known.
+    pub instrument: Instrument,
 }
 
 /// Whether `theta` (rad) is one of `list` (degrees), within 0.05°.

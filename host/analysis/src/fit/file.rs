@@ -2,6 +2,7 @@
 //! parametrization, params, stderr, metrics), and a material read back from
 //! one, for `gonio plot --fit` and `gonio export`.
 
+use super::goodness::Goodness;
 use super::{Fit, Metrics, Units};
 use crate::coefficients::Support;
 use anyhow::{bail, Context, Result};
@@ -25,6 +26,10 @@ pub fn to_json(f: &Fit, units: Units, holdout: Option<&Metrics>) -> Value {
     if let Some(c) = &f.covariance {
         let rows: Vec<Vec<f64>> = (0..c.nrows()).map(|i| c.row(i).iter().copied().collect()).collect();
         v["covariance"] = json!(rows);
+    }
+    if !f.undetermined.is_empty() {
+        let why: Map<String, Value> = f.undetermined.iter().map(|(n, w)| (n.to_string(), json!(w))).collect();
+        v["no_uncertainty"] = Value::Object(why);
     }
     if let Some(c) = &f.correlation {
         let rows: Vec<Vec<f64>> = (0..c.rho.nrows()).map(|i| c.rho.row(i).iter().copied().collect()).collect();
@@ -53,6 +58,9 @@ pub struct FitFile {
     pub covariance: Option<nalgebra::DMatrix<f64>>,
     pub rmse: Option<f64>,
     pub aic: Option<f64>,
+    /// χ² against the data's σ (`None` where they had none, or in a file
+    /// of an earlier gonio).
+    pub goodness: Option<Goodness>,
     /// The measured samples about the retro direction the fit saw (`None`
     /// in a file of an earlier gonio): what its coefficients may rest on.
     pub support: Option<Support>,
@@ -81,12 +89,18 @@ pub fn read(path: &Path) -> Result<FitFile> {
         (FittedBrdf::Rational(_), _) | (_, Value::Null) => None,
         (FittedBrdf::Model(m), c) => {
             let n = m.params.len();
-            let rows: Vec<Vec<f64>> = serde_json::from_value(c.clone())
+            // JSON has no NaN: serde_json writes one as null, as an earlier
+            // gonio did for a covariance it could not compute. Such a
+            // matrix states nothing, as an absent one.
+            let rows: Vec<Vec<Option<f64>>> = serde_json::from_value(c.clone())
                 .with_context(|| format!("{}: `covariance` is not a matrix of numbers", path.display()))?;
             if rows.len() != n || rows.iter().any(|r| r.len() != n) {
                 bail!("{}: `covariance` must be {n} × {n}", path.display());
             }
-            Some(nalgebra::DMatrix::from_fn(n, n, |i, k| rows[i][k]))
+            rows.iter()
+                .flatten()
+                .all(Option::is_some)
+                .then(|| nalgebra::DMatrix::from_fn(n, n, |i, k| rows[i][k].unwrap_or(f64::NAN)))
         }
     };
     let support = match &v["support"] {
@@ -98,6 +112,13 @@ pub fn read(path: &Path) -> Result<FitFile> {
         covariance,
         rmse: v["rmse"].as_f64(),
         aic: v["aic"].as_f64(),
+        goodness: match &v["goodness"] {
+            Value::Null => None,
+            g => Some(
+                serde_json::from_value(g.clone())
+                    .with_context(|| format!("{}: `goodness` is not χ², dof, reduced χ² and p", path.display()))?,
+            ),
+        },
         support,
     })
 }
@@ -160,4 +181,77 @@ fn material_of(v: &Value) -> Result<Material> {
     }
     let param = if v["parametrization"] == "back" { Param::Back } else { Param::View };
     Ok(Material { model, params, param })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::{fit, FitSpec, Weighting};
+    use gonio_brdf::{Directions, ModelId};
+
+    /// What `gonio fit --out` writes is read back whole: its χ², and a
+    /// covariance an earlier gonio could not compute and wrote as nulls.
+    #[test]
+    fn a_fit_file_reads_back_with_its_goodness_and_undefined_covariances() {
+        let truth = Material::parse(ModelId::Lambert, "kd=0.4").unwrap();
+        let observations = (0..30)
+            .map(|k| {
+                let (ti, to, dphi) = ((10.0 + k as f64).to_radians(), (2.0 * k as f64).to_radians(), 0.3 * k as f64);
+                let d = Directions::from_angles(ti, to, dphi);
+                crate::fit::Observation {
+                    theta_i: ti,
+                    theta_o: to,
+                    dphi,
+                    value: truth.eval(&d) * (1.0 + 0.01 * ((k * 7 % 5) as f64 - 2.0)),
+                    sigma: Some(0.002),
+                    shared: Default::default(),
+                }
+            })
+            .collect();
+        let data = crate::fit::Dataset {
+            units: Units::Fr,
+            observations,
+            metadata: Vec::new(),
+            units_stated: true,
+            warnings: Vec::new(),
+            instrument: crate::instrument::Instrument::Unknown,
+        };
+        let spec = FitSpec {
+            weighting: Weighting::Sigma,
+            ..FitSpec::new(ModelId::Lambert)
+        };
+        let f = fit(&data, &spec).unwrap();
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("fit.json");
+        let mut v = to_json(&f, Units::Fr, None);
+        write(&path, &v).unwrap();
+        let back = read(&path).unwrap();
+        assert_eq!(back.goodness, f.goodness);
+        assert!(back.goodness.is_some() && back.covariance.is_some());
+        // NaN is null in JSON: a covariance of nulls states nothing, and
+        // the file is read all the same.
+        v["covariance"] = serde_json::json!([[f64::NAN]]);
+        assert_eq!(v["covariance"], serde_json::json!([[null]]));
+        write(&path, &v).unwrap();
+        let back = read(&path).unwrap();
+        assert!(back.covariance.is_none());
+        assert_eq!(read_material(&path).unwrap(), f.material);
+
+        // retro-phong with its mirror lobe's height k3 held at 0: its
+        // growth k4 moves nothing, has no standard error, and says why.
+        let spec = FitSpec {
+            weighting: Weighting::Sigma,
+            fixed: vec![(4, 0.0)],
+            ..FitSpec::new(ModelId::RetroPhong)
+        };
+        let f = fit(&data, &spec).unwrap();
+        assert_eq!(f.stderr[5], None);
+        assert!(f.stderr[0].is_some(), "{:?}", f.stderr);
+        assert_eq!(f.undetermined.iter().map(|u| u.0).collect::<Vec<_>>(), ["k4"]);
+        let v = to_json(&f, Units::Fr, None);
+        assert!(v["no_uncertainty"]["k4"].as_str().unwrap().contains("do not depend on it"), "{v}");
+        write(&path, &v).unwrap();
+        let back = read(&path).unwrap();
+        assert!(back.covariance.is_some_and(|c| c[(5, 5)] == 0.0 && c[(0, 0)] > 0.0));
+    }
 }

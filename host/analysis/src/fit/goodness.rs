@@ -1,15 +1,56 @@
-//! Whether a fit is adequate within the stated uncertainties: with every
-//! residual weighted by its sample's σ (`--weights sigma`) the cost is χ²,
-//! which a right model with right σ draws from the χ² distribution of
-//! N − k degrees of freedom; and how the parameters' estimates move
-//! together (their correlation matrix from the covariance).
+//! Whether a fit is adequate within the stated uncertainties: χ², the sum of
+//! the residuals squared each in units of its sample's σ (the cost itself
+//! under `--weights sigma`), which a right model with right σ draws from the
+//! χ² distribution of N − k degrees of freedom; and how the parameters'
+//! estimates move together (their correlation matrix from the covariance).
 
+use super::Dataset;
+use gonio_brdf::Directions;
 use nalgebra::DMatrix;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 use statrs::distribution::{ChiSquared, ContinuousCDF};
 
-/// χ² of a fit weighted by the samples' σ.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+/// A fit is consistent with the data when a χ² at least as large as its
+/// own would arise this often from a right model with right σ (a test at
+/// the 1 % level). With thousands of samples this is strict: a model that
+/// misses by a tenth of the budget everywhere fails it, as it should before
+/// it may carry a value where the data end.
+pub const ADEQUATE_P: f64 = 0.01;
+
+/// What the data say of a fit, for a model to carry a coefficient beyond
+/// them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Adequacy {
+    /// χ²'s p-value at least [`ADEQUATE_P`].
+    Adequate,
+    /// Below it: the model misses the data by more than their uncertainty.
+    Inadequate,
+    /// The data carry no uncertainties (a file without them): nothing to
+    /// judge the residuals against.
+    NotJudged,
+}
+
+impl Adequacy {
+    pub fn of(goodness: Option<&Goodness>) -> Adequacy {
+        match goodness {
+            Some(g) if g.p_value >= ADEQUATE_P => Adequacy::Adequate,
+            Some(_) => Adequacy::Inadequate,
+            None => Adequacy::NotJudged,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Adequacy::Adequate => "adequate",
+            Adequacy::Inadequate => "inadequate",
+            Adequacy::NotJudged => "not judged",
+        }
+    }
+}
+
+/// χ² of a fit against the samples' σ.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct Goodness {
     pub chi2: f64,
     /// N − k: samples less free parameters.
@@ -26,7 +67,9 @@ impl Goodness {
     /// From the weighted cost `chi2` of `samples` with `free` parameters;
     /// `None` without a degree of freedom.
     pub fn of(chi2: f64, samples: usize, free: usize) -> Option<Goodness> {
-        let dof = samples.checked_sub(free).filter(|&d| d > 0)?;
+        // A model that overflows somewhere has no finite χ² to test (and
+        // JSON no number to keep it in).
+        let dof = samples.checked_sub(free).filter(|&d| d > 0 && chi2.is_finite())?;
         let p_value = ChiSquared::new(dof as f64).ok()?.sf(chi2);
         Some(Goodness {
             chi2,
@@ -34,6 +77,18 @@ impl Goodness {
             reduced_chi2: chi2 / dof as f64,
             p_value,
         })
+    }
+
+    /// Any BRDF `f_r` with `free` fitted coefficients against the data's
+    /// own σ, however it was fitted: `None` where a sample has none (or
+    /// none is positive), or without a degree of freedom.
+    pub fn of_brdf(data: &Dataset, free: usize, f_r: impl Fn(&Directions) -> f64) -> Option<Goodness> {
+        let mut chi2 = 0.0;
+        for o in &data.observations {
+            let s = o.sigma.filter(|s| *s > 0.0 && s.is_finite())?;
+            chi2 += ((o.unit_factor(data.units) * f_r(&o.directions()) - o.value) / s).powi(2);
+        }
+        Goodness::of(chi2, data.observations.len(), free)
     }
 
     /// The central interval holding `level` of reduced χ² values for this

@@ -107,30 +107,34 @@ pub struct Fit {
     /// rows and columns of fixed ones are zero): the samples' scatter and
     /// the inputs they share; `None` where the normal matrix is singular.
     pub covariance: Option<DMatrix<f64>>,
+    /// Free parameters without a standard error, each with the reason
+    /// (`covariance` is then conditional on them held at their values).
+    pub undetermined: Vec<(&'static str, &'static str)>,
     /// Default boxes the fit widened, each time it ended on an edge that is
     /// not a physical limit: `(parameter, the box it ended in)`.
     pub widened: Vec<Widened>,
     /// The free parameters' correlations, from the covariance.
     pub correlation: Option<goodness::Correlation>,
-    /// χ², its degrees of freedom and p-value: only for a fit weighted by
-    /// the samples' σ, where the cost is χ².
+    /// χ² against the samples' σ, its degrees of freedom and p-value
+    /// (`None` where a sample has no σ); under `--weights sigma` the cost.
     pub goodness: Option<goodness::Goodness>,
 }
 
 impl Fit {
     /// Parameter `k` as text: rounded to its standard error, and marked
     /// where it ended on its search box (its ± then says how the fit bends
-    /// there, not where the optimum lies).
+    /// there, not where the optimum lies) or has no standard error (why).
     pub fn parameter_text(&self, k: usize) -> String {
         let (name, value) = (self.material.model.param_names()[k], self.material.params[k]);
         let text = match self.stderr[k] {
             Some(u) => crate::rounding::with_uncertainty(value, u),
             None => crate::rounding::significant(value, 6),
         };
-        if self.at_bound.contains(&name) {
-            format!("{text} (on its bound)")
-        } else {
-            text
+        let held = self.undetermined.iter().find(|(n, _)| *n == name).map(|(_, why)| *why);
+        match (self.at_bound.contains(&name), held) {
+            (_, Some(why)) => format!("{text} (no uncertainty: {why})"),
+            (true, None) => format!("{text} (on its bound)"),
+            (false, None) => text,
         }
     }
 }
@@ -228,15 +232,16 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         params: problem.full(&x),
         param: spec.param,
     };
-    let covariance = covariance(&problem, &x);
+    let Spread { covariance, undetermined } = covariance(&problem, &x);
+    let names = spec.model.param_names();
     let stderr = (0..material.params.len())
         .map(|i| {
             let v = covariance.as_ref()?[(i, i)];
-            (problem.free.contains(&i) && v.is_finite() && v >= 0.0).then(|| v.sqrt())
+            let held = undetermined.iter().any(|(n, _)| *n == names[i]);
+            (problem.free.contains(&i) && !held && v.is_finite() && v >= 0.0).then(|| v.sqrt())
         })
         .collect();
     let cost = problem.cost(&x);
-    let names = spec.model.param_names();
     let at_bound = problem
         .free
         .iter()
@@ -257,9 +262,7 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         });
     Ok(Fit {
         widened,
-        goodness: (spec.weighting == Weighting::Sigma)
-            .then(|| goodness::Goodness::of(cost, problem.y.len(), problem.free.len()))
-            .flatten(),
+        goodness: goodness::Goodness::of_brdf(data, problem.free.len(), |d| material.eval(d)),
         correlation,
         aic: criteria.aic,
         bic: criteria.bic,
@@ -267,6 +270,7 @@ pub fn fit(data: &Dataset, spec: &FitSpec) -> Result<Fit> {
         metrics: evaluate(&material, data),
         stderr,
         covariance,
+        undetermined,
         samples: data.observations.len(),
         seconds: t0.elapsed().as_secs_f64(),
         cost,
@@ -374,13 +378,52 @@ pub fn evaluate(material: &Material, data: &Dataset) -> Metrics {
 /// `a` is off by one standard uncertainty, and `(JᵀJ)⁻¹Jᵀd_a` the move of the
 /// optimum it causes (one Gauss–Newton step): errors common to every sample
 /// do not average out, however many samples there are.
-fn covariance(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
+///
+/// A free parameter whose column of `J` is not finite where the residuals
+/// are (a derivative that diverges on its bound) or is zero (the data do
+/// not depend on it there) has no uncertainty: it is held at its
+/// value, its row and column are zero, and the others' covariance is
+/// conditional on it; `undetermined` says which and why. Where the rest is
+/// still singular, nothing is stated.
+fn covariance(problem: &Problem, x: &[f64]) -> Spread {
     let n = problem.template.len();
-    let (r, j) = problem.residuals_and_jacobian(x);
-    let dof = r.len().checked_sub(x.len()).filter(|d| *d > 0)?;
+    let (r, mut j) = problem.residuals_and_jacobian(x);
+    // A lobe far from its peak overflows its power (`(1 + b(1 − c))^c` of
+    // the ABC lobes at c ≈ 300): its value is 0 and so is its derivative,
+    // which the arithmetic leaves as ∞/∞. Such a row moves nothing.
+    for (k, rk) in r.iter().enumerate() {
+        if rk.is_finite() {
+            for v in j.row_mut(k).iter_mut().filter(|v| !v.is_finite()) {
+                *v = 0.0;
+            }
+        }
+    }
+    let names = problem.model.param_names();
+    let mut undetermined = Vec::new();
+    let mut kept = Vec::new();
+    for (a, &i) in problem.free.iter().enumerate() {
+        let col = j.column(a);
+        if col.iter().any(|v| !v.is_finite()) {
+            undetermined.push((names[i], NOT_FINITE));
+        } else if col.iter().all(|v| *v == 0.0) {
+            undetermined.push((names[i], NO_EFFECT));
+        } else {
+            kept.push(a);
+        }
+    }
+    let everything = |why: &'static str| Spread {
+        covariance: None,
+        undetermined: problem.free.iter().map(|&i| (names[i], why)).collect(),
+    };
+    let Some(dof) = r.len().checked_sub(kept.len()).filter(|d| *d > 0) else {
+        return everything(NO_DOF);
+    };
+    let j = j.select_columns(&kept);
     let s2 = r.iter().map(|v| v * v).sum::<f64>() / dof as f64;
     let normal: DMatrix<f64> = j.transpose() * &j;
-    let inv = normal.try_inverse()?;
+    let Some(inv) = normal.try_inverse().filter(|m| m.iter().all(|v| v.is_finite())) else {
+        return everything(SINGULAR);
+    };
     let mut cov = &inv * s2;
     for a in 0..crate::uncertainty::SHARED.len() {
         let d = nalgebra::DVector::from_iterator(r.len(), problem.shared.iter().map(|s| s[a]));
@@ -391,10 +434,26 @@ fn covariance(problem: &Problem, x: &[f64]) -> Option<DMatrix<f64>> {
         cov += &shift * shift.transpose();
     }
     let mut out = DMatrix::zeros(n, n);
-    for (a, &i) in problem.free.iter().enumerate() {
-        for (b, &k) in problem.free.iter().enumerate() {
-            out[(i, k)] = cov[(a, b)];
+    for (a, &ka) in kept.iter().enumerate() {
+        for (b, &kb) in kept.iter().enumerate() {
+            out[(problem.free[ka], problem.free[kb])] = cov[(a, b)];
         }
     }
-    Some(out)
+    Spread {
+        covariance: Some(out),
+        undetermined,
+    }
+}
+
+/// Why a free parameter has no standard error (`Fit::undetermined`).
+const NOT_FINITE: &str = "the model's derivative in it is not finite at the optimum (on its bound): held there";
+const NO_EFFECT: &str = "the data do not depend on it at the optimum: held there";
+const NO_DOF: &str = "no degrees of freedom are left (as many free parameters as samples)";
+const SINGULAR: &str = "the data do not determine the parameters separately (their normal matrix is singular)";
+
+/// The covariance of a fit's parameters, and the free parameters it cannot
+/// speak for.
+struct Spread {
+    covariance: Option<DMatrix<f64>>,
+    undetermined: Vec<(&'static str, &'static str)>,
 }

@@ -35,8 +35,9 @@
 
 use crate::fit::data::check_angles;
 use crate::fit::{Dataset, Observation, Units};
+use crate::instrument::Instrument;
 use crate::uncertainty::K_COVERAGE;
-use anyhow::{anyhow, bail, Result};
+use anyhow::{anyhow, bail, Context, Result};
 use gonio_brdf::frame::dot;
 use gonio_brdf::Directions;
 use std::fmt::Write;
@@ -313,12 +314,21 @@ pub fn parse(text: &str) -> Result<Dataset> {
     let Some((_, _, units, _)) = layout else {
         bail!("no data lines: the file holds no sample (a header at most)");
     };
+    // A file says what measured it in a comment line of its own
+    // (`instrument::HEADER`), as `gonio convert` writes; else nobody knows.
+    let mut instrument = Instrument::Unknown;
+    for m in &metadata {
+        if let Some(stated) = Instrument::from_header(m) {
+            instrument = stated.with_context(|| format!("the header's `# {m}`"))?;
+        }
+    }
     Ok(Dataset {
         units: units.unwrap_or(Units::Fr),
         units_stated: units.is_some(),
         observations,
         metadata,
         warnings,
+        instrument,
     })
 }
 
@@ -339,7 +349,14 @@ pub fn write(data: &Dataset) -> String {
     }
     // A note of the columns read back is the writer's to write, above, for
     // the columns it writes: not kept twice, and an older file's never.
-    for m in data.metadata.iter().filter(|m| *m != OFFSETS_NOTE && *m != ENDS_NOTE) {
+    if let Some(line) = data.instrument.header_text() {
+        let _ = writeln!(s, "# {line}");
+    }
+    for m in data
+        .metadata
+        .iter()
+        .filter(|m| *m != OFFSETS_NOTE && *m != ENDS_NOTE && Instrument::from_header(m).is_none())
+    {
         let _ = writeln!(s, "# {m}");
     }
     for o in &data.observations {

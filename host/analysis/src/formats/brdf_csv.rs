@@ -5,10 +5,12 @@
 //! (`shift_NAME_sr`, `uncertainty::SHARED`), which a fit's covariance takes
 //! in. Other columns (the raw values) are ignored. Rows
 //! flagged as rejected (`flags` with the saturated or weak-signal bits) are
-//! left out when a `usable` column says `false`.
+//! left out when a `usable` column says `false`. A file with this head's
+//! raw columns is this head's; any other, of an instrument not known.
 
 use crate::fit::data::check_angles;
 use crate::fit::{Dataset, Observation, Units};
+use crate::instrument::Instrument;
 use crate::uncertainty::SHARED;
 use anyhow::{anyhow, bail, Context, Result};
 
@@ -71,11 +73,19 @@ pub fn parse(text: &str) -> Result<Dataset> {
     if observations.is_empty() {
         bail!("line 2: no data rows");
     }
+    // This head's calibrated.csv keeps the raw columns beside the
+    // calibrated ones: the gain it measured at and the shift of the arm's
+    // zero are in no other tool's file.
+    let instrument = match col("gain_index").and(col("shift_zero_psi_sr")) {
+        Some(_) => Instrument::ThisHead,
+        None => Instrument::Unknown,
+    };
     Ok(Dataset {
         units,
         observations,
         metadata: Vec::new(),
         units_stated: true,
         warnings: Vec::new(),
+        instrument,
     })
 }

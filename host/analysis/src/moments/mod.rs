@@ -248,6 +248,7 @@ mod tests {
             metadata: vec![],
             units_stated: true,
             warnings: vec![],
+            instrument: crate::instrument::Instrument::Unknown,
         }
     }
 

@@ -5,6 +5,7 @@
 use super::fit::RationalFit;
 use super::function::Rational;
 use crate::fit::criteria::Criteria;
+use crate::fit::goodness::Goodness;
 use crate::fit::{Metrics, Units};
 use anyhow::{bail, Context, Result};
 use serde_json::{json, Value};
@@ -14,7 +15,7 @@ pub const MODEL: &str = "rational";
 
 /// The JSON object of a fit, with its information criteria (under the
 /// weighting it is ranked by) and the metrics of held-out samples if any.
-pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, holdout: Option<&Metrics>) -> Value {
+pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, goodness: Option<&Goodness>, holdout: Option<&Metrics>) -> Value {
     let r = &f.function;
     let mut v = json!({
         "model": MODEL,
@@ -38,6 +39,9 @@ pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, holdout: Opti
     });
     if let Some(c) = &f.capped {
         v["capped"] = json!(c);
+    }
+    if let Some(g) = goodness {
+        v["goodness"] = json!(g);
     }
     if let Some(h) = holdout {
         v["holdout"] = json!(h);

@@ -265,6 +265,7 @@ mod tests {
             metadata: Vec::new(),
             units_stated: true,
             warnings: Vec::new(),
+            instrument: crate::instrument::Instrument::Unknown,
         }
     }
 

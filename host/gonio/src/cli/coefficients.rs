@@ -2,9 +2,10 @@
 //! fit, a model, or measured data, with standard uncertainties.
 
 use anyhow::{bail, Context, Result};
-use gonio_analysis::coefficients::{self, Apertures, Coefficient, Fitted, Kind, Provenance, Request, Set, Source, Support, WAVELENGTH_NM};
+use gonio_analysis::coefficients::{self, Apertures, Coefficient, Fitted, Kind, Provenance, Request, Set, Source, Support};
 use gonio_analysis::fit;
 use gonio_analysis::fit::file::FittedBrdf;
+use gonio_analysis::instrument::Instrument;
 use gonio_brdf::{Material, ModelId};
 use serde_json::{json, Value};
 use std::path::PathBuf;
@@ -13,13 +14,15 @@ use std::path::PathBuf;
 pub struct CoefficientsArgs {
     /// Fits (FIT.json from `gonio fit --out`, or a report's fits/*.json),
     /// each of the same data: where the data hold a geometry its value is
-    /// measured (or interpolated) from them; beyond, the best model's fit
-    /// (lowest AIC; never a rational function, which holds only where its
-    /// samples are: with no model, such a value is refused) carries it, scaled to the data at the nearest measured
-    /// incidences, and the spread of the fits within 2× its RMSE
-    /// widens the uncertainty (docs/retroreflection.md). The covariance gives
-    /// the parameters' part (with the plate and the stage zeros when the
-    /// fitted data came from `gonio calibrate`).
+    /// measured (or interpolated) from them; where they do not but it lies
+    /// within their own spacing, the best adequate model (χ² consistent with
+    /// the data's σ; lowest AIC; never a rational function) carries it,
+    /// scaled to the data at the nearest measured incidences, the adequate
+    /// models' spread widening the uncertainty; farther, or with no adequate
+    /// model, it is `not measured` (null, with the reason and the scan that
+    /// would measure it) unless --extrapolate (docs/retroreflection.md). The
+    /// covariance gives the parameters' part (with the plate and the stage
+    /// zeros when the fitted data came from `gonio calibrate`).
     #[arg(long, value_name = "FIT.json", num_args = 1.., conflicts_with_all = ["model", "data"])]
     pub fit: Vec<PathBuf>,
     /// A model id of models.md, with --params (no uncertainty).
@@ -59,15 +62,22 @@ pub struct CoefficientsArgs {
     /// Angular diameter of the receiver seen from the sample (degrees); default: each set's own.
     #[arg(long)]
     pub receiver_aperture_deg: Option<f64>,
+    /// With --fit: compute the values the data cannot support from the
+    /// models all the same (beyond the data's spacing, or with no adequate
+    /// model), each marked `extrapolated` with what it rests on.
+    #[arg(long, requires = "fit")]
+    pub extrapolate: bool,
     /// Print one JSON object (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub instrument: super::instrument::InstrumentArgs,
 }
 
 impl CoefficientsArgs {
     fn source(&self) -> Result<Source> {
         if !self.fit.is_empty() {
-            return fits_source(&self.fit);
+            return Ok(fits_source(&self.fit)?.extrapolating(self.extrapolate));
         }
         if let Some(name) = &self.material {
             return Ok(Source::Truth(super::material::specimen(name, self.params.as_deref())?));
@@ -76,7 +86,7 @@ impl CoefficientsArgs {
             return Ok(Source::model(Material::parse(ModelId::parse(m)?, p)?));
         }
         if let Some(path) = &self.data {
-            let data = super::load_data(path, None)?;
+            let data = super::load_data(path, None, &self.instrument)?;
             return Source::data(&data).with_context(|| format!("{}", path.display()));
         }
         bail!("give a BRDF: --fit FIT.json, --model M --params ..., --data FILE or --material NAME")
@@ -155,13 +165,15 @@ fn fits_source(paths: &[PathBuf]) -> Result<Source> {
             covariance: f.covariance,
             rmse,
             aic,
+            goodness: f.goodness,
         });
     }
     Source::measured(fits, support.context("no fit")?)
 }
 
-/// The coefficients as JSON: `ra` (a list) and `rl` (the last R_L, or null).
-pub fn to_json(values: &[Coefficient]) -> Value {
+/// The coefficients as JSON: `ra` (a list) and `rl` (the last R_L, or
+/// null), with the instrument the values rest on (`None`: a model's).
+pub fn to_json(values: &[Coefficient], instrument: Option<Instrument>) -> Value {
     let entry = |c: &Coefficient| {
         let g = &c.request.geometry;
         let mut v = json!({
@@ -181,6 +193,9 @@ pub fn to_json(values: &[Coefficient]) -> Value {
         if let Some(b) = &e.basis {
             v["provenance"] = json!(b.provenance);
             v["basis"] = json!(b.why);
+            if let Some(m) = &b.measure {
+                v["measure_with"] = json!(m);
+            }
         }
         for (key, part) in [
             ("u_params", e.u_params),
@@ -209,10 +224,13 @@ pub fn to_json(values: &[Coefficient]) -> Value {
     json!({
         "ra": ra, "rl": rl,
         "units": {"ra": Kind::Ra.unit(), "rl": Kind::Rl.unit()},
-        "wavelength_nm": WAVELENGTH_NM,
-        "note": "spectral values at the laser's wavelength (633 nm), not photometric; u is the standard uncertainty (k = 1); \
-                 provenance: measured (a sample at the geometry), interpolated (between samples on every side) or extrapolated \
-                 (a model carries it: u holds the adequate models' spread, u_model); value null: refused (no data there)",
+        "wavelength_nm": instrument.and_then(|i| i.wavelength_nm()),
+        "instrument": instrument.map(|i| i.to_json()),
+        "note": format!("spectral values at {}, not photometric; u is the standard uncertainty (k = 1); \
+                 provenance: measured (a sample at the geometry), interpolated (between samples on every side within the \
+                 standard's aperture), extrapolated (within the data's spacing, an adequate model carries it: u holds the \
+                 adequate models' spread, u_model) or not measured (value null: the basis says why, measure_with the scan \
+                 that would measure it)", instrument.map_or("no instrument's wavelength (a model)".into(), |i| i.wavelength_text())),
     })
 }
 
@@ -220,11 +238,15 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
     let source = a.source()?;
     let requests = a.requests()?;
     let values = coefficients::compute(&source, &requests)?;
+    let instrument = source.instrument();
     if a.json {
-        println!("{}", to_json(&values));
+        println!("{}", to_json(&values, instrument));
         return Ok(());
     }
-    println!("at {WAVELENGTH_NM} nm (the laser's wavelength), not photometric; u: standard uncertainty (k = 1)");
+    match instrument {
+        Some(i) => println!("at {}, not photometric; u: standard uncertainty (k = 1)", i.wavelength_text()),
+        None => println!("a model's values: at no instrument's wavelength, not photometric; u: standard uncertainty (k = 1)"),
+    }
     println!(
         "{:<4} {:>6} {:>7} {:>6} {:>8} {:>8} {:>8} {:>25}  {:<12} unit",
         "", "α°", "β°", "ε°", "θi°", "θo°", "Δφ°", "value ± u (k = 1)", "rests on"
@@ -238,6 +260,7 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
         };
         let rests_on = match &c.estimate.basis {
             Some(b) if b.provenance == Provenance::Extrapolated => "EXTRAPOLATED",
+            Some(b) if b.provenance == Provenance::NotMeasured => "NOT MEASURED",
             Some(b) => b.provenance.name(),
             None => "",
         };
@@ -247,7 +270,7 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
                 g.alpha_deg,
                 g.beta_deg(),
                 g.epsilon_deg,
-                "refused",
+                "—",
                 c.request.kind.unit()
             );
         } else {
@@ -260,15 +283,18 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
                 c.request.kind.unit()
             );
         }
-        if let Some(b) = c.estimate.basis.as_ref().filter(|b| b.provenance == Provenance::Extrapolated) {
+        if let Some(b) = c.estimate.basis.as_ref().filter(|b| !b.provenance.on_data()) {
             match (c.estimate.model, c.estimate.u_model) {
                 (Some(m), Some(um)) => println!(
-                    "       {}: carried by {m}; {} adequate models, their spread ±{}",
+                    "       {}: carried by {m}; {} models carry it, their spread ±{}",
                     b.why,
                     c.estimate.models.len(),
                     gonio_analysis::rounding::significant(um, 2)
                 ),
-                _ => println!("       {}: no data there to interpolate", b.why),
+                _ => println!("       {}", b.why),
+            }
+            if let Some(m) = b.measure.as_ref().filter(|_| c.estimate.value.is_nan()) {
+                println!("       measure it: {m}");
             }
         }
         if let Some(n) = c.estimate.nearest.first() {
@@ -278,13 +304,11 @@ pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
                 .iter()
                 .map(|n| format!("({:.2}°, {:.2}°, {:.1}°)", n.theta_i_deg, n.theta_o_deg, n.dphi_deg))
                 .collect();
-            println!("       from the measured geometries {}", names.join(", "));
-            if n.distance_deg > 1.0 {
-                println!(
-                    "       warning: the nearest measured geometry is {:.2}° away: extrapolated",
-                    n.distance_deg
-                );
-            }
+            println!(
+                "       from the measured geometries {} (the nearest {:.3}° away)",
+                names.join(", "),
+                n.distance_deg
+            );
         }
     }
     Ok(())

@@ -19,10 +19,12 @@ pub struct ConvertArgs {
     /// Print one JSON object: what was written (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub instrument: super::instrument::InstrumentArgs,
 }
 
 pub fn convert_cmd(a: ConvertArgs) -> Result<()> {
-    let mut data = super::load_data(&a.input, a.units)?;
+    let mut data = super::load_data(&a.input, a.units, &a.instrument)?;
     if let Some(u) = a.units {
         data = data.in_units(u)?;
     }

@@ -45,6 +45,8 @@ pub struct FitOptions {
     /// each model takes the names it has).
     #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "NAME=LO:HI")]
     pub bounds: Vec<String>,
+    #[command(flatten)]
+    pub instrument: super::instrument::InstrumentArgs,
     /// Print one JSON object (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
@@ -63,6 +65,7 @@ impl Default for FitOptions {
             units: None,
             seed: 1,
             bounds: Vec::new(),
+            instrument: Default::default(),
             json: false,
         }
     }
@@ -139,7 +142,7 @@ pub struct Domain {
 }
 
 pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
-    let data = super::load_data(path, o.units)?;
+    let data = super::load_data(path, o.units, &o.instrument)?;
     // What the file holds, for the messages below: the restrictions may
     // leave nothing to name.
     let held = degrees(&data.incidence_angles_deg());

@@ -10,6 +10,7 @@ mod export;
 pub mod failure;
 pub mod fit;
 pub mod grid;
+pub mod instrument;
 pub mod interrupt;
 pub mod live;
 pub mod material;
@@ -109,8 +110,15 @@ impl Command {
 /// Reads a data file for a command. Where the file does not say what its
 /// values are (ALTA's `UNKNOWN_OUTPUT`), `units` says it, or they are read
 /// as `f_r` with a warning; what the reader assumed or doubts goes to stderr.
-pub(crate) fn load_data(path: &std::path::Path, units: Option<gonio_analysis::fit::Units>) -> Result<gonio_analysis::fit::Dataset> {
+pub(crate) fn load_data(
+    path: &std::path::Path,
+    units: Option<gonio_analysis::fit::Units>,
+    instrument: &instrument::InstrumentArgs,
+) -> Result<gonio_analysis::fit::Dataset> {
     let mut data = gonio_analysis::formats::load(path)?;
+    if let Some(i) = instrument.stated()? {
+        data.instrument = i;
+    }
     if !data.units_stated {
         match units {
             Some(u) => data.units = u,

@@ -26,10 +26,12 @@ pub struct MomentsArgs {
     /// Print one JSON object: every incidence in both planes (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub instrument: super::instrument::InstrumentArgs,
 }
 
 pub fn moments_cmd(a: MomentsArgs) -> Result<()> {
-    let data = super::load_data(&a.file, a.units)?;
+    let data = super::load_data(&a.file, a.units, &a.instrument)?;
     let entries = moments::analyse(&data, a.threshold)?;
     let pictures = match &a.plot {
         Some(dir) => gonio_analysis::plot::moments::render(&entries, dir)?,
@@ -38,6 +40,7 @@ pub fn moments_cmd(a: MomentsArgs) -> Result<()> {
     if a.json {
         let v = serde_json::json!({
             "file": a.file,
+            "instrument": data.instrument.to_json(),
             "threshold": a.threshold,
             "order": moments::ORDER,
             "incidences": entries,
@@ -46,11 +49,14 @@ pub fn moments_cmd(a: MomentsArgs) -> Result<()> {
         println!("{v}");
         return Ok(());
     }
-    print!("{}", table(&entries, a.threshold));
+    print!("{}", table(&entries, a.threshold, data.instrument.is_this_head()));
     Ok(())
 }
 
-fn table(entries: &[Entry], threshold: Threshold) -> String {
+/// The table of moments; `this_head`: the data are this head's, whose
+/// blind zone explains a gap about the retro lobe (another instrument's
+/// gaps are its own).
+fn table(entries: &[Entry], threshold: Threshold, this_head: bool) -> String {
     let kept = match threshold {
         Threshold::Relative(q) => format!("f_r at or above {} % of its retro value", significant(100.0 * q, 3)),
         Threshold::Absolute(v) => format!("f_r at or above {} sr⁻¹", significant(v, 3)),
@@ -91,8 +97,12 @@ fn table(entries: &[Entry], threshold: Threshold) -> String {
         }
     }
     if entries.iter().filter_map(|e| e.moments.as_ref()).any(|m| m.under_sampled) {
-        out += "* samples more than a lobe width apart (gap/σ > 1): the lobe's outline and r follow the sampling \
-                (the head's blind zone lies 5°–11.5° from the laser); a higher --threshold keeps the lobe within the retro rings\n";
+        out += "* samples more than a lobe width apart (gap/σ > 1): the lobe's outline and r follow the sampling";
+        out += if this_head {
+            " (the head's blind zone lies 5°–11.5° from the laser); a higher --threshold keeps the lobe within the retro rings\n"
+        } else {
+            "; a higher --threshold keeps the lobe where the samples are dense\n"
+        };
     }
     if entries.iter().any(|e| e.mirrored) {
         out += "Δφ < 0 completed from Δφ > 0 by the isotropic BRDF's symmetry\n";

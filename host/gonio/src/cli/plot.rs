@@ -26,10 +26,12 @@ pub struct PlotArgs {
     /// Print one JSON object: the files written (errors too: `{"error", "kind"}`).
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub instrument: super::instrument::InstrumentArgs,
 }
 
 pub fn plot_cmd(a: PlotArgs) -> Result<()> {
-    let data = super::load_data(&a.file, None)?;
+    let data = super::load_data(&a.file, None, &a.instrument)?;
     let fits: Vec<FittedBrdf> = a.fit.iter().map(|p| fit::file::read_fitted(p)).collect::<Result<_>>()?;
     let options = plot::Options {
         scale: a.scale,

@@ -9,6 +9,7 @@ use gonio_analysis::coefficients::Support;
 use gonio_analysis::fit::compared::ComparedFit;
 use gonio_analysis::fit::criteria::Criteria;
 use gonio_analysis::fit::file::FittedBrdf;
+use gonio_analysis::fit::goodness::Goodness;
 use gonio_analysis::fit::{self, Units, Weighting};
 use gonio_analysis::moments::Parametrization;
 use gonio_analysis::rational::{self, RationalFit, RationalSpec};
@@ -70,7 +71,12 @@ pub fn compared(d: &Domain, spec: &RationalSpec, units: Units, weighting: Weight
     let f = fitted(d, spec, json)?;
     let holdout = d.holdout.as_ref().map(|h| f.function.against(h).0);
     let criteria = Criteria::of_brdf(&d.train, units, weighting, f.function.coefficients(), |x| f.function.eval(x))?;
-    let fit = ComparedFit::Rational { fit: f, criteria };
+    let goodness = Goodness::of_brdf(&d.train, f.function.coefficients(), |x| f.function.eval(x));
+    let fit = ComparedFit::Rational {
+        fit: f,
+        criteria,
+        goodness,
+    };
     let json = fit.to_json(d.train.units, holdout.as_ref());
     Ok(Outcome { fit, holdout, json })
 }
@@ -91,7 +97,8 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         f.function.coefficients(),
         |x| f.function.eval(x),
     )?;
-    let mut v = rational::file::to_json(&f, d.train.units, &criteria, holdout.as_ref());
+    let goodness = Goodness::of_brdf(&d.train, f.function.coefficients(), |x| f.function.eval(x));
+    let mut v = rational::file::to_json(&f, d.train.units, &criteria, goodness.as_ref(), holdout.as_ref());
     if !d.train.warnings.is_empty() {
         v["warnings"] = serde_json::json!(d.train.warnings);
     }

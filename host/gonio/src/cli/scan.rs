@@ -194,7 +194,10 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         v["material"] = truth.describe().into();
         v["unfitted"] = serde_json::json!(comparison.unfitted);
         v["best_model"] = best.fit.name().into();
-        v["coefficients"] = super::coefficients::to_json(&fit::coefficients(&domain, rows)?);
+        v["coefficients"] = super::coefficients::to_json(
+            &fit::coefficients(&domain, rows)?,
+            Some(gonio_analysis::instrument::Instrument::ThisHead),
+        );
         v["report"] = report.display().to_string().into();
         println!("{}", serde_json::to_string_pretty(&v)?);
     } else {
