@@ -79,11 +79,7 @@ fn adequacy_paragraph(fits: &[ComparedFit]) -> String {
         .collect();
     let level = format!("χ² test at the {} % level", rounding::significant(100.0 * ADEQUATE_P, 1));
     if adequate.is_empty() {
-        let (f, g) = judged
-            .iter()
-            .max_by(|a, b| a.1.p_value.total_cmp(&b.1.p_value))
-            .copied()
-            .expect("judged is not empty");
+        let (f, g) = judged.iter().max_by(|a, b| a.1.closer(b.1)).copied().expect("judged is not empty");
         return format!(
             "<p><b>No model is consistent with the data</b> within their uncertainty ({level}): the closest, {}, has \
              reduced χ² {} over {} degrees of freedom. Its parameters describe the data's shape, not the material; \

@@ -455,7 +455,7 @@ fn no_adequate_model(models: &[&Fitted]) -> String {
     let best = models
         .iter()
         .filter_map(|f| Some((f.goodness?, f.material()?.model.name())))
-        .max_by(|a, b| a.0.p_value.total_cmp(&b.0.p_value));
+        .max_by(|a, b| a.0.closer(&b.0));
     match best {
         Some((g, name)) => format!(
             "no model is consistent with the data within their uncertainty (the best, {name}: reduced χ² {}, p {})",

@@ -91,6 +91,14 @@ impl Goodness {
         Goodness::of(chi2, data.observations.len(), free)
     }
 
+    /// Which of two fits the data favour: the larger p-value, and where
+    /// both vanish (a p of 0 to double precision) the smaller reduced χ².
+    pub fn closer(&self, other: &Goodness) -> std::cmp::Ordering {
+        self.p_value
+            .total_cmp(&other.p_value)
+            .then(other.reduced_chi2.total_cmp(&self.reduced_chi2))
+    }
+
     /// The central interval holding `level` of reduced χ² values for this
     /// many degrees of freedom (a right model with right σ).
     pub fn interval(dof: usize, level: f64) -> (f64, f64) {
