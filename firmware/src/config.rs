@@ -57,6 +57,9 @@ pub struct ArmOptics {
     /// Solid angle (sr) of the detector seen from the sample: a reading is
     /// the BRDF averaged over this field about the view.
     pub detector_sr: f32,
+    /// Diameter of the laser beam at the sample (mm, 1/e²): its footprint
+    /// on the sample is 1/cosθi as long ([`crate::footprint`]).
+    pub beam_diameter_mm: f32,
 }
 
 /// Photodiode front end.
@@ -97,6 +100,7 @@ impl HeadConfig {
             retro_max_deg: self.optics.retro_max_deg,
             blind_max_deg: self.optics.blind_max_deg,
             detector_sr: self.optics.detector_sr,
+            beam_diameter_mm: self.optics.beam_diameter_mm,
         }
     }
 
@@ -116,6 +120,7 @@ impl HeadConfig {
             retro_max_deg: m.retro_max_deg,
             blind_max_deg: m.blind_max_deg,
             detector_sr: m.detector_sr,
+            beam_diameter_mm: m.beam_diameter_mm,
         };
         cfg
     }
@@ -167,11 +172,13 @@ pub const REFERENCE: HeadConfig = HeadConfig {
     // The CEA head's (Belcour et al. 2014, §2.A): through the splitter out
     // to 5° from the laser, the plate holding splitter and detector in the
     // incident beam from there to 11.5° (docs/optics.md); its 2.4 × 2.4 mm
-    // photodiode subtends 3.6e-5 sr at the sample.
+    // photodiode subtends 3.6e-5 sr at the sample. A HeNe tube's beam is
+    // about 0.8–1 mm across at its waist; 1 mm at the sample.
     optics: ArmOptics {
         retro_max_deg: 5.0,
         blind_max_deg: 11.5,
         detector_sr: 3.6e-5,
+        beam_diameter_mm: 1.0,
     },
     detector: DetectorConfig {
         gains_v_per_a: [1.0e4, 1.0e5, 1.0e6, 1.0e7],

@@ -20,6 +20,7 @@ mod conversation;
 pub mod demod;
 pub mod detector;
 pub mod dispatch;
+pub mod footprint;
 pub mod guard;
 pub mod head;
 pub mod homing;

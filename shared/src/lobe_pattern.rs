@@ -20,8 +20,10 @@ use serde::{Deserialize, Serialize};
 
 const DEG: f64 = core::f64::consts::PI / 180.0;
 
-/// Rings a pattern holds at most (a scan request stays inside one frame).
-pub const RINGS_MAX: usize = 10;
+/// Rings a pattern holds at most (a scan request stays inside one frame):
+/// the reference retro rings and a standard's observation angle besides
+/// them (EN 1436's 1.05°, `gonio scan --for`).
+pub const RINGS_MAX: usize = 12;
 /// Largest ring radius (degrees): a pattern is about a lobe, not the hemisphere.
 pub const RADIUS_MAX_DEG: f32 = 30.0;
 /// Most views on one ring.

@@ -29,6 +29,9 @@ pub struct Mechanics {
     pub blind_max_deg: f32,
     /// Solid angle (sr) of the detector's field seen from the sample.
     pub detector_sr: f32,
+    /// Diameter of the laser beam at the sample (mm, 1/e²): its footprint,
+    /// 1/cosθi as long, must stay on the sample.
+    pub beam_diameter_mm: f32,
 }
 
 impl Mechanics {
@@ -52,6 +55,8 @@ impl Mechanics {
             && self.blind_max_deg.is_finite()
             && self.detector_sr.is_finite()
             && self.detector_sr >= 0.0
+            && self.beam_diameter_mm.is_finite()
+            && self.beam_diameter_mm > 0.0
     }
 }
 
@@ -73,9 +78,10 @@ mod tests {
             retro_max_deg: 5.0,
             blind_max_deg: 11.5,
             detector_sr: 3.6e-5,
+            beam_diameter_mm: 1.0,
         };
         assert!(good.is_plausible());
-        let mut bad = [good; 7];
+        let mut bad = [good; 8];
         bad[0].axes[1].max_speed_dps = 0.0;
         bad[1].axes[2].max_accel_dps2 = f32::NAN;
         bad[2].axes[0].microsteps_per_rev = 0;
@@ -83,6 +89,7 @@ mod tests {
         bad[4].retro_max_deg = 12.0;
         bad[5].blind_max_deg = f32::INFINITY;
         bad[6].detector_sr = -1.0;
+        bad[7].beam_diameter_mm = 0.0;
         for (k, m) in bad.iter().enumerate() {
             assert!(!m.is_plausible(), "case {k}");
         }

@@ -37,6 +37,9 @@ use std::rc::Rc;
 #[derive(Debug, Clone)]
 pub struct SimConfig {
     pub material: Specimen,
+    /// Side of the square sample (mm; `None`: larger than any footprint):
+    /// at grazing incidence a footprint that overfills it loses light.
+    pub sample_mm: Option<f64>,
     pub photodiode: Photodiode,
     /// Seed of the noise generator: the same seed gives the same samples.
     pub seed: u64,
@@ -91,6 +94,7 @@ impl Default for SimConfig {
     fn default() -> Self {
         SimConfig {
             material: Specimen::default(),
+            sample_mm: None,
             photodiode: Photodiode::default(),
             seed: 1,
             protocol_version: PROTOCOL_VERSION,

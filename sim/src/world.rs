@@ -64,6 +64,10 @@ pub struct World {
     /// Running chop timer and the time its current period started.
     pub chop: Option<ChopTiming>,
     pub material: Specimen,
+    /// Side of the square sample (mm): a beam whose footprint overfills it
+    /// loses the light that misses (`None`: a sample larger than any
+    /// footprint).
+    pub sample_mm: Option<f64>,
     /// The reference plate (Lambertian, `PLATE_RHO`) and whether it is mounted.
     pub plate: Specimen,
     pub mount: super::Mount,
@@ -151,6 +155,7 @@ impl World {
             laser: false,
             chop: None,
             material: sim.material.clone(),
+            sample_mm: sim.sample_mm,
             plate: Specimen::Model(
                 Material::parse(gonio_brdf::ModelId::Lambert, &format!("kd={}", sim.imperfections.plate_rho)).expect("a valid Lambertian"),
             ),
@@ -293,9 +298,22 @@ impl World {
     /// Photocurrent (A) of the laser's light at nominal power with the
     /// motors at `m`: what the material sends into the detector, and stray light.
     pub fn optical_a(&self, m: &Motors) -> f64 {
-        self.photodiode
-            .signal_a(self.target(), &self.cfg, self.load_angles(m), |d| self.defect(d))
-            + self.imperfections.stray_a
+        let angles = self.load_angles(m);
+        self.photodiode.signal_a(self.target(), &self.cfg, angles, |d| self.defect(d)) * self.on_target(angles) + self.imperfections.stray_a
+    }
+
+    /// The share of the beam that lands on the mounted target at the true
+    /// stage angles: the sample's finite size at grazing incidence; the
+    /// plate is taken as large as any footprint its geometries make.
+    fn on_target(&self, angles: [f64; 3]) -> f64 {
+        let (Some(side), false) = (self.sample_mm, self.mount.plate()) else {
+            return 1.0;
+        };
+        let Some(d) = gonio_brdf::Directions::from_stage(angles) else {
+            return 0.0;
+        };
+        let theta_i = d.cos_i().clamp(-1.0, 1.0).acos().to_degrees();
+        gonio_firmware::footprint::on_sample(theta_i, self.cfg.optics.beam_diameter_mm as f64, side)
     }
 
     /// The selected range's transimpedance (V/A), as the head truly has it.
@@ -317,5 +335,40 @@ impl World {
 
     pub fn gain_index(&self) -> usize {
         self.gain_bits[0] as usize | (self.gain_bits[1] as usize) << 1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::SimConfig;
+    use gonio_firmware::config::REFERENCE;
+
+    /// At EN 1436's 88.76° a 1 mm beam draws a footprint 46 mm long: a
+    /// 50 mm sample loses what overfills it, a 100 mm one nearly nothing,
+    /// and the plate (taken as large as any footprint) nothing at all.
+    #[test]
+    fn a_footprint_that_overfills_the_sample_loses_its_light() {
+        let reading = |sample_mm: Option<f64>, plate: bool| {
+            let sim = SimConfig {
+                sample_mm,
+                ..SimConfig::default()
+            };
+            sim.mount.set_plate(plate);
+            let w = World::new(REFERENCE, &sim);
+            let angles = [88.76f32, 0.0, 1.05];
+            let m = Motors {
+                steps: [0, 1, 2].map(|i| units::deg_to_steps(&REFERENCE.axes[i], angles[i])),
+                last_step: [1; 3],
+            };
+            w.optical_a(&m)
+        };
+        let whole = reading(None, false);
+        assert!(whole > 0.0);
+        let lost = 1.0 - reading(Some(50.0), false) / whole;
+        let expected = 1.0 - gonio_firmware::footprint::on_sample(88.76, 1.0, 50.0);
+        assert!((lost - expected).abs() < 1e-3 && lost > 0.01, "lost {lost}, expected {expected}");
+        assert!(1.0 - reading(Some(100.0), false) / whole < gonio_firmware::footprint::LOST_MAX);
+        assert_eq!(reading(Some(50.0), true), reading(None, true));
     }
 }

@@ -212,15 +212,27 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
         summary["measured"].as_u64().unwrap(),
         summary["skipped"].as_u64().unwrap(),
     );
-    // The grid and, at each incidence, its lobe patterns (docs/optics.md).
-    assert_eq!(points, 3 * (31 * 37 + 400));
+    // The grid and, at each incidence, its lobe patterns (docs/optics.md),
+    // at the Belcour incidences and those ASTM E810 and EN 1436 add (4°,
+    // 40°, 45°, 88.76°), with EN 1436's 1.05° ring among the CEA rings.
+    assert_eq!(points, 7 * (31 * 37 + 11 * 32 + 5 * 16));
     assert_eq!(measured + skipped, points);
     // θo = 90° is behind the sample for every (θi, Δφ): 3 × 37 points at least.
     assert!(skipped >= 111, "{summary}");
     // R_A and R_L as the report gives them, each saying what it rests on.
+    // The scan measured every one of them: none rests on a model.
     let ra = summary["coefficients"]["ra"].as_array().expect("R_A in the demo's JSON");
-    assert!(!ra.is_empty() && ra.iter().all(|c| c["provenance"].is_string()), "{summary}");
-    assert!(!summary["coefficients"]["rl"].is_null(), "{summary}");
+    assert!(!ra.is_empty() && ra.iter().all(|c| c["provenance"] == "measured"), "{summary}");
+    let rl = &summary["coefficients"]["rl"];
+    assert_eq!(rl["provenance"], "measured", "{rl}");
+    let truth = serde_json::from_slice::<serde_json::Value>(
+        &gonio(&["coefficients", "--material", "glass-beads", "--set", "en1436", "--json"]).stdout,
+    )
+    .unwrap()["rl"]["value"]
+        .as_f64()
+        .unwrap();
+    let (v, u) = (rl["value"].as_f64().unwrap(), rl["u"].as_f64().unwrap());
+    assert!((v - truth).abs() <= 2.0 * u, "R_L {v} ± {u} against the material's {truth}");
     let idx = csv_indices(&out.join("samples.csv"));
     assert_eq!(idx.len() as u64, measured);
     assert_eq!(idx.iter().collect::<BTreeSet<_>>().len(), idx.len(), "duplicate points");
@@ -233,7 +245,20 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
     // Calibrated on the virtual plate, every model fitted. The material is
     // a physical glass-bead layer, none of the models: the summary names it,
     // and no model describes it exactly.
-    assert_eq!(summary["calibration"]["usable"].as_u64(), Some(measured));
+    // Every sample is usable but views within a degree of the horizon at
+    // 88.76°, whose light is below the detector's noise.
+    let mut r = csv::Reader::from_path(out.join("calibrated.csv")).unwrap();
+    let h = r.headers().unwrap().clone();
+    let col = |n: &str| h.iter().position(|x| x == n).unwrap();
+    let (usable, to, flags) = (col("usable"), col("theta_o_deg"), col("flag_names"));
+    let unusable: Vec<csv::StringRecord> = r.records().map(|x| x.unwrap()).filter(|x| &x[usable] == "false").collect();
+    assert!(
+        unusable
+            .iter()
+            .all(|x| x[to].parse::<f64>().unwrap() > 89.0 && x[flags].contains("below_noise")),
+        "{unusable:?}"
+    );
+    assert_eq!(summary["calibration"]["usable"].as_u64(), Some(measured - unusable.len() as u64));
     // The rational function through the samples' k = 2 intervals is
     // fitted beside them, or the summary says why not.
     let rational = summary["models"].as_array().unwrap().iter().any(|m| m["model"] == "rational");
@@ -258,7 +283,27 @@ fn demo_scans_the_belcour_grid_once_per_reachable_point() {
         .iter()
         .map(|m| m["model"].as_str().unwrap())
         .collect();
-    common::check_report(&out, &models, &["15", "30", "60"]);
+    common::check_report(&out, &models, &["4", "15", "30", "40", "45", "60", "88.76"]);
+    // The README's commands on the demo's own output: every fit file reads
+    // back (abc-retro's and its per-lobe twin's covariances included).
+    let fits: Vec<String> = std::fs::read_dir(out.join("fits"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "json"))
+        .map(|p| p.to_str().unwrap().to_string())
+        .collect();
+    assert!(fits.len() >= gonio_brdf::ModelId::ALL.len(), "{fits:?}");
+    for extra in [&[][..], &["--extrapolate"]] {
+        let mut args = vec!["coefficients", "--set", "astm-e810", "--set", "en1436", "--json", "--fit"];
+        args.extend(fits.iter().map(String::as_str));
+        args.extend_from_slice(extra);
+        let o = gonio(&args);
+        assert!(o.status.success(), "{args:?}: {}", text(&o));
+    }
+    for f in fits.iter().filter(|f| !f.ends_with("rational.json")) {
+        let o = gonio(&["export", f, out.join("x.brdf").to_str().unwrap()]);
+        assert!(o.status.success(), "export {f}: {}", text(&o));
+    }
     // A second demo into the same directory is refused rather than mixed in.
     let again = gonio(&["demo", "--out", out.to_str().unwrap()]);
     assert!(!again.status.success());
@@ -619,4 +664,35 @@ fn export_writes_an_rgl_bsdf_and_says_how_closely_it_holds_the_material() {
         assert_eq!(o.status.code(), Some(1), "{args:?}");
         assert!(text(&o).contains(needle), "{args:?}: {}", text(&o));
     }
+}
+
+/// A grazing incidence whose beam footprint would overfill the declared
+/// sample is refused before anything moves, with the incidence the sample
+/// does hold, and leaves no files.
+#[test]
+fn a_footprint_that_overfills_the_sample_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("scan");
+    let o = gonio(&[
+        "scan",
+        "--sim",
+        "--theta-i",
+        "30,88.76",
+        "--theta-o",
+        "0:60:30",
+        "--dphi",
+        "0:0:1",
+        "--no-patterns",
+        "--sample-size-mm",
+        "50",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(!o.status.success());
+    let t = text(&o);
+    assert!(
+        t.contains("θi 88.76°") && t.contains("overfills the 50 mm sample") && t.contains("up to 88.1°"),
+        "{t}"
+    );
+    assert!(!out.join("scan.json").exists());
 }

@@ -29,6 +29,10 @@ pub struct SimHead {
     pub clock_start_s: f64,
     #[serde(default)]
     pub imperfections: Imperfections,
+    /// Side of the simulated square sample (mm; absent: larger than any
+    /// footprint, as in a record of an earlier gonio).
+    #[serde(default)]
+    pub sample_mm: Option<f64>,
 }
 
 impl SimHead {
@@ -40,6 +44,7 @@ impl SimHead {
             seed: self.seed,
             clock_start_s: self.clock_start_s,
             imperfections: Box::new(self.imperfections.clone()),
+            sample_mm: self.sample_mm,
             ..SimConfig::default()
         };
         c.photodiode.laser_drift = self.laser_drift;
@@ -65,6 +70,11 @@ pub struct ScanRecord {
     /// not keep it): a sweep scan's positions depend on it.
     #[serde(default)]
     pub protocol: u16,
+    /// Side of the square sample the operator declared (mm): an incidence
+    /// whose beam footprint overfills it is refused before anything moves
+    /// (`gonio_firmware::footprint`). Absent in a record of an earlier gonio.
+    #[serde(default)]
+    pub sample_size_mm: Option<f64>,
 }
 
 /// A laser-drift monitor: one geometry of the mounted target, measured
@@ -93,6 +103,7 @@ impl ScanRecord {
             laser_drift: c.photodiode.laser_drift,
             clock_start_s: c.clock_start_s,
             imperfections: (*c.imperfections).clone(),
+            sample_mm: c.sample_mm,
         });
         Self::new(head, spec, detector)
     }
@@ -105,6 +116,7 @@ impl ScanRecord {
             monitor: None,
             reference_plate: false,
             protocol: PROTOCOL_VERSION,
+            sample_size_mm: None,
         }
     }
 

@@ -14,6 +14,7 @@ use crate::session::{Session, Setup};
 use crate::target::Target;
 use anyhow::{bail, Context, Result};
 use gonio_firmware::config::HeadConfig;
+use gonio_firmware::footprint;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
 use gonio_scan_dir::record::ScanRecord;
@@ -233,8 +234,29 @@ fn prepare_dir(dir: &Path, force: bool) -> Result<()> {
 }
 
 /// Refuses a scan whose drift monitor or learning geometry this head
-/// cannot reach (its mechanics, as it reported them), before it moves.
+/// cannot reach (its mechanics, as it reported them), or whose beam
+/// footprint would overfill the declared sample at one of its incidences,
+/// before it moves.
 fn reachable(cfg: &HeadConfig, record: &ScanRecord) -> Result<()> {
+    if let Some(side) = record.sample_size_mm {
+        let beam = cfg.optics.beam_diameter_mm as f64;
+        // f32 as the scan holds them, and as the user wrote them.
+        let lit = record.spec.theta_i_deg.iter().copied();
+        let monitor = record.monitor.map(|m| m.at.theta_i_deg);
+        for t in lit.chain(monitor) {
+            let lost = 1.0 - footprint::on_sample(t as f64, beam, side);
+            if lost > footprint::LOST_MAX {
+                bail!(
+                    "θi {t}°: the {beam} mm beam's footprint, {:.0} mm long at this incidence, overfills the {side} mm sample \
+                     ({:.1} % of the light would miss it); declare the sample's real size with --sample-size-mm, or keep \
+                     to incidences up to {:.1}° on this one",
+                    beam / (t as f64).to_radians().cos(),
+                    100.0 * lost,
+                    footprint::largest_incidence_deg(beam, side)
+                );
+            }
+        }
+    }
     let asked = [
         ("--monitor", record.monitor.map(|m| m.at)),
         ("--learn-at", record.detector.learn_at),

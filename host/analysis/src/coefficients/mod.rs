@@ -104,6 +104,26 @@ impl Set {
     }
 }
 
+impl Set {
+    /// What a scan must hold for every value of the set to be measured: the
+    /// incidences (degrees, ascending) and the observation angles α of the
+    /// rings about the retro direction (degrees, ascending). A coplanar view
+    /// at α lies on the ring of radius α, on the side of the laser away
+    /// from the normal (β < 0) or towards it (β > 0).
+    pub fn scan_needs(sets: &[Set]) -> (Vec<f64>, Vec<f64>) {
+        let (mut incidences, mut alphas) = (Vec::new(), Vec::new());
+        for r in sets.iter().flat_map(|s| s.requests()) {
+            incidences.push(r.geometry.sample_angles_deg()[0]);
+            alphas.push(r.geometry.alpha_deg);
+        }
+        for v in [&mut incidences, &mut alphas] {
+            v.sort_by(f64::total_cmp);
+            v.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
+        }
+        (incidences, alphas)
+    }
+}
+
 /// The table of a report: the `astm-e810` set at ε = 0 (an isotropic BRDF
 /// gives the same at every ε) and `en1436`'s R_L.
 pub fn report_requests() -> Vec<Request> {

@@ -1,6 +1,7 @@
 //! Scan grids on the command line: `--theta-i 15,30,60 --theta-o 0:90:3 --dphi -180:180:10`.
 
 use anyhow::{bail, Context, Result};
+use gonio_analysis::coefficients::Set;
 use gonio_analysis::{fit, lobe};
 use gonio_shared::lobe_pattern::{AZIMUTHS_MAX, RADIUS_MAX_DEG, RINGS_MAX};
 use gonio_shared::{AngleRange, LobePatterns, Rings, ScanSpec, SweepLobe, SweepRequest, SweepScan};
@@ -38,6 +39,13 @@ pub struct GridArgs {
     pub lobe: LobeArgs,
     #[command(flatten)]
     pub patterns: PatternArgs,
+    /// Also measure what these sets of coefficients need (`gonio
+    /// coefficients --set`): their incidences added to --theta-i, their
+    /// observation angles to --retro-rings, so that every value of the set
+    /// is `measured` (astm-e810: θi 4°, 40°, 45° and the rings it has;
+    /// en1436: θi 88.76° and a 1.05° ring).
+    #[arg(long = "for", value_name = "SET", value_enum, value_delimiter = ',')]
+    pub for_sets: Vec<Set>,
 }
 
 /// The rings measured about the retro and the mirror direction of each
@@ -46,7 +54,7 @@ pub struct GridArgs {
 /// coefficient of retroreflection at α ≤ 5° rests on.
 #[derive(Debug, Clone, clap::Args)]
 pub struct PatternArgs {
-    /// Radii α of the rings about the retro direction (degrees, at most 10).
+    /// Radii α of the rings about the retro direction (degrees, at most 12).
     #[arg(
         long,
         value_name = "LIST",
@@ -193,7 +201,7 @@ impl GridArgs {
             }),
             false => None,
         };
-        let spec = ScanSpec {
+        let mut spec = ScanSpec {
             theta_i_deg,
             theta_o: self.theta_o,
             dphi: self.dphi,
@@ -201,9 +209,46 @@ impl GridArgs {
             sweep,
             patterns: self.patterns.patterns()?,
         };
+        measure_for(&mut spec, &self.for_sets)?;
         spec.validate().map_err(|f| anyhow::anyhow!("grid refused: {f}"))?;
         Ok(spec)
     }
+}
+
+/// Adds to `spec` the incidences and retro rings the coefficient `sets`
+/// need (`--for`): each set's geometries then lie on the scan's pattern
+/// points, so that their values are measured, not carried by a model.
+pub fn measure_for(spec: &mut ScanSpec, sets: &[Set]) -> Result<()> {
+    if sets.is_empty() {
+        return Ok(());
+    }
+    let (incidences, alphas) = Set::scan_needs(sets);
+    let Some(patterns) = spec.patterns.as_mut() else {
+        bail!("--for measures on the rings about the retro direction: it cannot go with --no-patterns");
+    };
+    if patterns.retro.azimuths % 2 != 0 {
+        bail!(
+            "--for needs an even --retro-azimuths ({} given): the standards' views lie on the rings' two coplanar azimuths, 0° and 180°",
+            patterns.retro.azimuths
+        );
+    }
+    for t in incidences {
+        let t = t as f32;
+        if !spec.theta_i_deg.iter().any(|h| (h - t).abs() < 0.05) && spec.theta_i_deg.push(t).is_err() {
+            bail!("--for adds θi {t}°: beyond the 8 incidence angles a scan holds; give fewer --theta-i");
+        }
+    }
+    let mut radii: Vec<f32> = patterns.retro.radii_deg.to_vec();
+    for a in alphas {
+        if !radii.iter().any(|r| (*r as f64 - a).abs() < 1e-4) {
+            radii.push(a as f32);
+        }
+    }
+    radii.sort_by(f32::total_cmp);
+    patterns.retro.radii_deg = heapless::Vec::from_slice(&radii)
+        .ok()
+        .with_context(|| format!("--for needs the retro rings {radii:?}: more than the {RINGS_MAX} a scan holds"))?;
+    Ok(())
 }
 
 #[cfg(test)]
@@ -254,6 +299,35 @@ mod tests {
         refused(&["--dphi", "200:400:10"], "beyond −360° to 360°");
     }
 
+    /// Every value of both sets lies on a pattern point of the scan `--for`
+    /// makes, within what `gonio coefficients` calls measured.
+    #[test]
+    fn a_scan_for_the_standards_holds_every_geometry_they_name() {
+        let spec = grid(&["--for", "astm-e810,en1436"]).unwrap();
+        assert_eq!(spec.theta_i_deg.as_slice(), &[15.0, 30.0, 60.0, 4.0, 40.0, 45.0, 88.76]);
+        let p = spec.patterns.as_ref().unwrap();
+        assert_eq!(p.retro.radii_deg.len(), 11);
+        let points: Vec<_> = (0..spec.len()).filter_map(|i| spec.point(i)).collect();
+        for set in [Set::AstmE810, Set::En1436] {
+            for r in set.requests() {
+                let [ti, to, dp] = r.geometry.sample_angles_deg();
+                let held = points.iter().any(|g| {
+                    (g.theta_i_deg as f64 - ti).abs() < 0.01
+                        && (g.theta_o_deg as f64 - to).abs() < 0.01
+                        && (g.dphi_deg.abs() as f64 - dp).abs() < 0.01
+                });
+                assert!(held, "{set:?}: ({ti}, {to}, {dp}) is not a point of the scan");
+            }
+        }
+        let refused = |args: &[&str], why: &str| {
+            let e = grid(args).expect_err(&format!("{args:?}")).to_string();
+            assert!(e.contains(why), "{args:?}: {e}");
+        };
+        refused(&["--for", "en1436", "--no-patterns"], "--no-patterns");
+        refused(&["--for", "en1436", "--retro-azimuths", "7"], "even");
+        refused(&["--for", "astm-e810", "--theta-i", "1,2,3,5,6"], "8 incidence");
+    }
+
     #[test]
     fn bad_patterns_are_refused() {
         let p = |radii: Vec<f32>, az: u16| PatternArgs {
@@ -263,7 +337,7 @@ mod tests {
         };
         assert!(p(vec![0.0], 8).patterns().is_err());
         assert!(p(vec![1.0], 0).patterns().is_err());
-        assert!(p(vec![1.0; 11], 8).patterns().is_err());
+        assert!(p(vec![1.0; 13], 8).patterns().is_err());
         assert!(p(vec![40.0], 8).patterns().is_err());
         assert_eq!(p(vec![1.0, 2.0], 8).patterns().unwrap().unwrap().count(), Some(16 + 80));
         let none = PatternArgs {

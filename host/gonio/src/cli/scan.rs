@@ -11,6 +11,7 @@ use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
 use gonio_acquire::scan::directory::{hms, positions, resume_from, scan_into, Destination};
 use gonio_acquire::scan::live::Live;
+use gonio_analysis::coefficients::Set;
 use gonio_analysis::rounding::{figure, significant, with_uncertainty};
 use gonio_scan_dir::record::{parse_geometry, Monitor, RecordedHead, ScanRecord};
 use gonio_scan_dir::run::ScanOutcome;
@@ -75,6 +76,7 @@ pub struct ScanArgs {
             // The grid's (a group of its own would not hold its flattened parts).
             "theta_i", "theta_o", "dphi", "sweep", "sweep_speed", "sweep_periods", "sweep_lobe", "sweep_lobe_from",
             "sweep_extent", "retro_rings", "retro_azimuths", "mirror_rings", "mirror_azimuths", "no_patterns",
+            "for_sets", "sample_size_mm",
         ]
     )]
     pub resume: Option<PathBuf>,
@@ -88,6 +90,12 @@ pub struct ScanArgs {
     /// to the monitor and back and four readings, so not too few).
     #[arg(long, default_value_t = 500, requires = "monitor")]
     pub monitor_every: u32,
+    /// Side of the square sample (mm): at grazing incidence the beam's
+    /// footprint is 1/cosθi as long (46× at 88.76°), and an incidence whose
+    /// footprint would overfill the sample is refused before anything
+    /// moves. The simulated head's sample is this size.
+    #[arg(long, value_name = "MM", default_value_t = SAMPLE_MM, value_parser = positive_mm)]
+    pub sample_size_mm: f64,
     /// Measure the Lambertian reference plate first (written to
     /// reference.csv), then the sample: the operator is asked to swap them
     /// (the simulated head swaps them itself). For `gonio calibrate`.
@@ -109,10 +117,12 @@ pub struct ScanArgs {
 pub async fn demo(a: DemoArgs) -> Result<()> {
     let sim = SimConfig {
         seed: a.seed,
+        sample_mm: Some(SAMPLE_MM),
         ..SimConfig::default()
     };
     let truth = sim.material.clone();
-    let belcour = ScanSpec::belcour_with_patterns();
+    let mut belcour = ScanSpec::belcour_with_patterns();
+    super::grid::measure_for(&mut belcour, &[Set::AstmE810, Set::En1436])?;
     let sweep = match a.sweep {
         true => Some(SweepScan {
             lobe: a.lobe.lobe(&belcour.theta_i_deg)?,
@@ -232,6 +242,7 @@ pub const DEMO_SWEEP: SweepScan = SweepScan {
 pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &OutputArgs, live: &Live) -> Result<(ScanOutcome, PathBuf)> {
     let mut record = ScanRecord::simulated(&sim, spec, &DetectorArgs::demo().checked()?);
     record.reference_plate = true;
+    record.sample_size_mm = sim.sample_mm;
     let to = Destination {
         dir,
         resume: None,
@@ -268,7 +279,10 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         (Some(_), _) if a.sim_head.inject.is_some() => bail!("--inject acts on the simulated head only (--sim), not on a head at a port"),
         (Some(p), _) => (ScanRecord::at_port(p, &spec, det), Faults::default()),
         (None, true) => {
-            let c = a.sim_head.config()?;
+            let c = SimConfig {
+                sample_mm: Some(a.sample_size_mm),
+                ..a.sim_head.config()?
+            };
             (ScanRecord::simulated(&c, &spec, det), c.faults)
         }
         (None, false) => bail!("one of --sim or --port is required"),
@@ -283,6 +297,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         });
     }
     record.reference_plate = a.reference_plate;
+    record.sample_size_mm = Some(a.sample_size_mm);
     let out = a.out.clone().context("--out is required")?;
     let to = Destination {
         dir: &out,
@@ -300,6 +315,19 @@ async fn scan_and_summarise(record: &ScanRecord, faults: Faults, to: Destination
     let live = super::live::start(&a.live, operator).await?;
     let (outcome, samples) = scan_into(record, target, to, operator, &live, interrupt::requested()).await?;
     summarise(&record.spec, &outcome, &samples, a.output.json)
+}
+
+/// The sample a scan assumes unless told (mm): a 100 mm square holds the
+/// 1 mm beam's footprint at EN 1436's 88.76° (46 mm long at 1/e²) with
+/// all but 0.1 % of its light.
+pub const SAMPLE_MM: f64 = 100.0;
+
+/// A sample size: positive and finite.
+fn positive_mm(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
+        _ => Err(format!("`{s}` is not a positive size in mm")),
+    }
 }
 
 /// Head time against the lower bound, in words.
