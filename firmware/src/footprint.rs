@@ -8,7 +8,7 @@
 //! [`LOST_MAX`] (`gonio scan --sample-size-mm`), and the simulated head
 //! loses it (`gonio-sim`).
 
-/// The share of the light a scan may lose off the sample's edges: a tenth
+/// The share of the light a scan may lose off the sample's edges: a fifth
 /// of the plate's certificate uncertainty (0.5 %), so that no budget
 /// component is needed for it.
 pub const LOST_MAX: f64 = 1e-3;
@@ -17,10 +17,13 @@ pub const LOST_MAX: f64 = 1e-3;
 /// sample of side `sample_mm` at incidence `theta_i_deg` (0 at and beyond
 /// the horizon).
 pub fn on_sample(theta_i_deg: f64, beam_mm: f64, sample_mm: f64) -> f64 {
-    let cos_i = libm::cos(theta_i_deg.to_radians());
-    if cos_i <= 0.0 || beam_mm <= 0.0 {
-        return if beam_mm <= 0.0 { 1.0 } else { 0.0 };
+    if beam_mm <= 0.0 {
+        return 1.0;
     }
+    if theta_i_deg.abs() >= 90.0 {
+        return 0.0;
+    }
+    let cos_i = libm::cos(theta_i_deg.to_radians());
     let k = core::f64::consts::SQRT_2 * sample_mm / beam_mm;
     libm::erf(k * cos_i) * libm::erf(k)
 }
