@@ -95,12 +95,5 @@ pub fn samples_of(brdf: impl Fn(&Directions) -> f64, geos: &[(f64, f64, f64)], n
             o
         })
         .collect();
-    Dataset {
-        units: Units::Fr,
-        observations,
-        metadata: Vec::new(),
-        units_stated: true,
-        warnings: Vec::new(),
-        instrument: gonio_analysis::instrument::Instrument::Unknown,
-    }
+    Dataset::new(Units::Fr, observations)
 }

@@ -105,14 +105,7 @@ mod tests {
                 shared: Default::default(),
             });
         }
-        let data = Dataset {
-            units: Units::Fr,
-            observations,
-            metadata: Vec::new(),
-            units_stated: true,
-            warnings: Vec::new(),
-            instrument: crate::instrument::Instrument::Unknown,
-        };
+        let data = Dataset::new(Units::Fr, observations);
         for weighting in [Weighting::Uniform, Weighting::Sigma, Weighting::Relative, Weighting::Area] {
             let f = fit(
                 &data,

@@ -101,6 +101,19 @@ pub fn theta_in(theta: f64, list_deg: &[f64]) -> bool {
 }
 
 impl Dataset {
+    /// Observations in `units` that say what they are, with no metadata,
+    /// no warning, and an instrument not known (a test's, a simulation's).
+    pub fn new(units: Units, observations: Vec<Observation>) -> Dataset {
+        Dataset {
+            units,
+            observations,
+            metadata: Vec::new(),
+            units_stated: true,
+            warnings: Vec::new(),
+            instrument: Instrument::Unknown,
+        }
+    }
+
     /// The same values in other units.
     pub fn in_units(&self, units: Units) -> Result<Dataset> {
         let mut out = self.clone();

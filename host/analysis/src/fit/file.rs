@@ -208,14 +208,7 @@ mod tests {
                 }
             })
             .collect();
-        let data = crate::fit::Dataset {
-            units: Units::Fr,
-            observations,
-            metadata: Vec::new(),
-            units_stated: true,
-            warnings: Vec::new(),
-            instrument: crate::instrument::Instrument::Unknown,
-        };
+        let data = crate::fit::Dataset::new(Units::Fr, observations);
         let spec = FitSpec {
             weighting: Weighting::Sigma,
             ..FitSpec::new(ModelId::Lambert)

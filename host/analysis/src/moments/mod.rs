@@ -242,14 +242,7 @@ mod tests {
                 }
             }
         }
-        Dataset {
-            units: Units::Fr,
-            observations,
-            metadata: vec![],
-            units_stated: true,
-            warnings: vec![],
-            instrument: crate::instrument::Instrument::Unknown,
-        }
+        Dataset::new(Units::Fr, observations)
     }
 
     fn r_of(entries: &[Entry], p: Parametrization) -> Vec<f64> {

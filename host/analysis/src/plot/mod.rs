@@ -313,14 +313,7 @@ mod tests {
                 }
             })
             .collect();
-        Dataset {
-            units: Units::Fr,
-            observations,
-            metadata: Vec::new(),
-            units_stated: true,
-            warnings: Vec::new(),
-            instrument: crate::instrument::Instrument::Unknown,
-        }
+        Dataset::new(Units::Fr, observations)
     }
 
     fn svg(dir: &Path, stem: &str) -> String {

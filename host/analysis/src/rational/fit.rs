@@ -259,14 +259,7 @@ mod tests {
                 }
             }
         }
-        Dataset {
-            units: Units::Fr,
-            observations,
-            metadata: Vec::new(),
-            units_stated: true,
-            warnings: Vec::new(),
-            instrument: crate::instrument::Instrument::Unknown,
-        }
+        Dataset::new(Units::Fr, observations)
     }
 
     fn spec(segments: SegmentSource) -> RationalSpec {
