@@ -14,12 +14,25 @@ use gonio_shared::Geometry;
 use std::path::Path;
 
 /// Plate geometries (θi, θo, Δφ in degrees): pure retroreflection (through
-/// the splitter) and off-retro directions clear of the blind zone.
-const PLATE_POINTS: [(f32, f32, f32); 16] = [
+/// the splitter) and off-retro directions clear of the blind zone. Every
+/// value seen through the splitter is divided by its factor `T`, which these
+/// retro points alone set: twelve of them, so that `T`'s standard error has
+/// eleven degrees of freedom. With four (three degrees of freedom) that
+/// error was itself a poor estimate: repeat scans scattered 1.6× its
+/// prediction at the retro peaks.
+const PLATE_POINTS: [(f32, f32, f32); 24] = [
+    (10.0, 10.0, 0.0),
     (15.0, 15.0, 0.0),
+    (20.0, 20.0, 0.0),
+    (25.0, 25.0, 0.0),
     (30.0, 30.0, 0.0),
+    (35.0, 35.0, 0.0),
+    (40.0, 40.0, 0.0),
     (45.0, 45.0, 0.0),
+    (50.0, 50.0, 0.0),
+    (55.0, 55.0, 0.0),
     (60.0, 60.0, 0.0),
+    (65.0, 65.0, 0.0),
     (30.0, 0.0, 0.0),
     (30.0, 20.0, 90.0),
     (30.0, 40.0, 90.0),

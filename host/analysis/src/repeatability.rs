@@ -15,6 +15,9 @@ use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+/// The share of the geometries, highest means first, that are the peaks.
+pub const PEAK_SHARE: f64 = 0.05;
+
 /// The components that differ between repeats (columns of `calibrated.csv`).
 pub const REPEATING: [&str; 4] = ["u_noise_sr", "u_scale_sr", "u_splitter_sr", "u_drift_sr"];
 
@@ -65,6 +68,10 @@ pub struct Repeatability {
     pub geometries: Vec<Geometry>,
     /// Median of s / u_predicted over the geometries.
     pub median_ratio: f64,
+    /// The same over the peaks: the geometries whose mean lies in the top
+    /// [`PEAK_SHARE`] of the means, where the budget's smallest relative
+    /// components (the plate's scale, the splitter's factor) dominate.
+    pub peak_median_ratio: f64,
     /// √(mean s² / mean u²): the pooled ratio.
     pub pooled_ratio: f64,
     /// Median of s / mean: the relative repeatability.
@@ -162,9 +169,13 @@ pub fn compare(paths: &[PathBuf]) -> Result<Repeatability> {
         v[v.len() / 2]
     };
     let mean = |f: &dyn Fn(&Geometry) -> f64| geometries.iter().map(f).sum::<f64>() / geometries.len() as f64;
+    let mut by_mean: Vec<&Geometry> = geometries.iter().collect();
+    by_mean.sort_by(|a, b| b.mean_sr.total_cmp(&a.mean_sr));
+    let peaks = ((geometries.len() as f64 * PEAK_SHARE).ceil() as usize).max(1);
     Ok(Repeatability {
         scans: paths.to_vec(),
         median_ratio: median(geometries.iter().map(Geometry::ratio).collect()),
+        peak_median_ratio: median(by_mean[..peaks].iter().map(|g| g.ratio()).collect()),
         pooled_ratio: (mean(&|g| g.s_sr * g.s_sr) / mean(&|g| g.u_predicted_sr * g.u_predicted_sr)).sqrt(),
         median_relative_s: median(geometries.iter().map(|g| g.s_sr / g.mean_sr.abs().max(1e-300)).collect()),
         geometries,

@@ -46,9 +46,11 @@ pub fn repeatability_cmd(a: RepeatabilityArgs) -> Result<()> {
         REPEATING.join(", ")
     );
     println!(
-        "s / predicted σ: median {}, pooled {}; relative repeatability s / mean: median {} %",
+        "s / predicted σ: median {}, pooled {}, at the peaks (the top {} % of values) {}; relative repeatability s / mean: median {} %",
         figure(r.median_ratio, 2),
         figure(r.pooled_ratio, 2),
+        figure(100.0 * gonio_analysis::repeatability::PEAK_SHARE, 0),
+        figure(r.peak_median_ratio, 2),
         significant(100.0 * r.median_relative_s, 2)
     );
     let mut incidences: Vec<f64> = r.geometries.iter().map(|g| g.theta_i_deg).collect();
