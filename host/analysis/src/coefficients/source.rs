@@ -229,7 +229,7 @@ impl Source {
         match self {
             Source::Model { material, covariance } => {
                 let value = model_value(material, r);
-                let u_params = covariance.as_ref().map(|c| linear_u(material, c, r));
+                let u_params = covariance.as_ref().map(|c| linear_u(material, c, |m| model_value(m, r)));
                 Ok(Estimate {
                     value,
                     u: u_params.unwrap_or(0.0),
@@ -267,17 +267,18 @@ impl Source {
     /// The parameters' part of the uncertainty by Monte Carlo (GUM
     /// Supplement 1): `draws` parameter vectors from the normal distribution
     /// of the fit's covariance, the coefficient's standard deviation over
-    /// them. `None` without a covariance (or one that is not positive
-    /// semi-definite).
+    /// them (measured data's: the best fit's value scaled to the anchors, as
+    /// an extrapolated value is). `None` without a covariance (or one that
+    /// is not positive semi-definite).
     pub fn monte_carlo_u(&self, r: &Request, draws: usize, seed: u64) -> Option<f64> {
-        let (material, c) = match self {
+        let (material, c, anchored) = match self {
             Source::Model {
                 material,
                 covariance: Some(c),
-            } => (material, c),
-            Source::Measured { fits, .. } => {
+            } => (material, c, None),
+            Source::Measured { fits, support, .. } => {
                 let (best, material) = best(fits)?;
-                (material, best.covariance.as_ref()?)
+                (material, best.covariance.as_ref()?, Some(Anchored::of(support, r)))
             }
             _ => return None,
         };
@@ -293,7 +294,7 @@ impl Source {
                 for (k, &i) in free.iter().enumerate() {
                     m.params[i] += dp[k];
                 }
-                model_value(&m, r)
+                anchored.as_ref().map_or_else(|| model_value(&m, r), |a| a.scaled(&m, r))
             })
             .collect();
         let mean = values.iter().sum::<f64>() / draws as f64;
@@ -364,6 +365,7 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
         basis.why = format!("{}: extrapolated on request", basis.why);
     }
     basis.provenance = Provenance::Extrapolated;
+    let adequate_carriers = !adequate.is_empty();
     let carriers: Vec<&Fitted> = if adequate.is_empty() {
         let best_rmse = models.iter().map(|f| f.rmse).fold(f64::INFINITY, f64::min);
         models
@@ -381,34 +383,9 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
     else {
         return refused(basis);
     };
-    // The data where they are nearest: the same geometry at the measured
-    // incidences about the requested one, each model scaled to them.
-    let anchors: Vec<(f64, Request, Estimate)> = anchors(support, r)
-        .into_iter()
-        .filter(|(_, a)| {
-            support
-                .classify(&a.geometry.directions(), a.apertures.widest())
-                .provenance
-                .on_data()
-        })
-        .map(|(w, a)| (w, a, carried(support, &a, interpolate(&support.points, &a))))
-        .filter(|(_, _, e)| e.value > 0.0)
-        .collect();
-    let total: f64 = anchors.iter().map(|(w, _, _)| w).sum();
-    let scaled = |m: &Material| {
-        let at_q = model_value(m, r);
-        if total <= 0.0 {
-            return at_q;
-        }
-        let ratio: f64 = anchors
-            .iter()
-            .map(|(w, a, e)| {
-                let at_anchor = model_value(m, a);
-                w / total * if at_anchor > 0.0 { e.value / at_anchor } else { 1.0 }
-            })
-            .sum();
-        at_q * ratio
-    };
+    let anchored = Anchored::of(support, r);
+    let (anchors, total) = (&anchored.anchors, anchored.total);
+    let scaled = |m: &Material| anchored.scaled(m, r);
     let models: Vec<ModelValue> = carriers
         .iter()
         .filter_map(|f| {
@@ -422,16 +399,21 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
         .collect();
     let value = scaled(top_material);
     // Between two measured incidences the data themselves interpolate too
-    // (linearly in the entrance angle): a way across that no model shapes,
-    // whose disagreement with the models' belongs in the spread.
-    let between = (anchors.len() == 2).then(|| anchors.iter().map(|(w, _, e)| w * e.value).sum::<f64>());
+    // (linearly in the entrance angle): a way across that no model shapes.
+    // Where no model is consistent with the data (carried on request), its
+    // disagreement with the models' belongs in the spread; an adequate
+    // model's shape between the incidences the data do not contradict.
+    let between = (anchors.len() == 2 && !adequate_carriers).then(|| anchors.iter().map(|(w, _, e)| w * e.value).sum::<f64>());
     let (lo, hi) = models
         .iter()
         .map(|m| m.value)
         .chain(between)
         .fold((value, value), |(lo, hi), v| (lo.min(v), hi.max(v)));
     let u_model = (hi - lo) / 2.0;
-    let u_params = top.covariance.as_ref().map(|c| linear_u(top_material, c, r));
+    // The parameters move the model's shape, not the level the anchors
+    // set: propagated through the scaled value, the part they share with
+    // the anchors cancels (the plate, a lobe's height), as it does in it.
+    let u_params = top.covariance.as_ref().map(|c| linear_u(top_material, c, scaled));
     // The level the anchors set is known to their own relative uncertainty.
     let u_anchor = match total > 0.0 {
         true => value * anchors.iter().map(|(w, _, e)| w / total * e.u / e.value).sum::<f64>(),
@@ -463,6 +445,49 @@ fn no_adequate_model(models: &[&Fitted]) -> String {
             crate::rounding::significant(g.p_value, 2)
         ),
         None => "the data carry no uncertainties, so no model can be shown adequate".into(),
+    }
+}
+
+/// The data where they are nearest a request the data do not hold: the
+/// same geometry at the measured incidences about it, each with its weight
+/// and the data's value there, which scale a model's value to them.
+struct Anchored {
+    anchors: Vec<(f64, Request, Estimate)>,
+    total: f64,
+}
+
+impl Anchored {
+    fn of(support: &Support, r: &Request) -> Anchored {
+        let anchors: Vec<(f64, Request, Estimate)> = anchors(support, r)
+            .into_iter()
+            .filter(|(_, a)| {
+                support
+                    .classify(&a.geometry.directions(), a.apertures.widest())
+                    .provenance
+                    .on_data()
+            })
+            .map(|(w, a)| (w, a, carried(support, &a, interpolate(&support.points, &a))))
+            .filter(|(_, _, e)| e.value > 0.0)
+            .collect();
+        let total = anchors.iter().map(|(w, _, _)| w).sum();
+        Anchored { anchors, total }
+    }
+
+    /// The model's value at `r` times its ratio to the data at the anchors.
+    fn scaled(&self, m: &Material, r: &Request) -> f64 {
+        let at_q = model_value(m, r);
+        if self.total <= 0.0 {
+            return at_q;
+        }
+        let ratio: f64 = self
+            .anchors
+            .iter()
+            .map(|(w, a, e)| {
+                let at_anchor = model_value(m, a);
+                w / self.total * if at_anchor > 0.0 { e.value / at_anchor } else { 1.0 }
+            })
+            .sum();
+        at_q * ratio
     }
 }
 
@@ -566,7 +591,7 @@ fn averaged(f_r: impl Fn(&Directions) -> f64, r: &Request) -> f64 {
 
 /// `sqrt(gᵀ C g)`, `g` the coefficient's gradient in the parameters by
 /// central differences of a small fraction of each standard error.
-fn linear_u(m: &Material, c: &DMatrix<f64>, r: &Request) -> f64 {
+fn linear_u(m: &Material, c: &DMatrix<f64>, value: impl Fn(&Material) -> f64) -> f64 {
     let n = m.params.len();
     let g = DVector::from_fn(n, |i, _| {
         let sd = c[(i, i)].max(0.0).sqrt();
@@ -577,7 +602,7 @@ fn linear_u(m: &Material, c: &DMatrix<f64>, r: &Request) -> f64 {
         let at = |s: f64| {
             let mut p = m.clone();
             p.params[i] += s * h;
-            model_value(&p, r)
+            value(&p)
         };
         (at(1.0) - at(-1.0)) / (2.0 * h)
     });
