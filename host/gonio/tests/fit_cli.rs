@@ -317,6 +317,62 @@ fn compare_lists_every_model() {
         html.contains("fewest terms that passes through every sample"),
         "the rational row is explained"
     );
+    // Another instrument's file without σ: adequacy is not judged, no
+    // value rests on a model, and nothing of this head is claimed for it.
+    assert!(html.contains("<b>Adequacy cannot be judged</b>"), "{html}");
+    assert!(html.contains("whose apertures are not known") && html.contains("the data do not state"));
+    assert!(!html.contains("0.39°") && !html.contains("633 nm") && !html.contains("<small>extrapolated ("));
+    let fit_json = report.join("fits").join("retro-phong.json");
+    let c: Value = serde_json::from_slice(
+        &gonio(&[
+            "coefficients",
+            "--fit",
+            fit_json.to_str().unwrap(),
+            "--set",
+            "astm-e810",
+            "--rl",
+            "--json",
+        ])
+        .stdout,
+    )
+    .unwrap();
+    assert_eq!(c["instrument"]["name"], "unknown", "{c}");
+    assert!(c["wavelength_nm"].is_null());
+    for r in c["ra"].as_array().unwrap().iter().chain([&c["rl"]]) {
+        let on_data = r["provenance"] == "measured" || r["provenance"] == "interpolated";
+        assert_eq!(r["value"].is_number(), on_data, "{r}");
+        assert!(r.get("u_aperture").is_none() || r["u_aperture"] == 0.0, "not carried: {r}");
+    }
+    // Stated, the apertures and wavelength are the file's own.
+    let o = gonio(&[
+        "fit",
+        file.to_str().unwrap(),
+        "--model",
+        "lambert",
+        "--instrument-source-deg",
+        "0.1",
+        "--instrument-receiver-deg",
+        "0.2",
+        "--instrument-wavelength-nm",
+        "550",
+        "--out",
+        dir.path().join("l.json").to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let c: Value = serde_json::from_slice(
+        &gonio(&[
+            "coefficients",
+            "--fit",
+            dir.path().join("l.json").to_str().unwrap(),
+            "--rl",
+            "--json",
+        ])
+        .stdout,
+    )
+    .unwrap();
+    assert_eq!(c["wavelength_nm"].as_f64(), Some(550.0), "{c}");
+    assert_eq!(c["instrument"]["apertures"]["receiver_deg"].as_f64(), Some(0.2));
     // Best first.
     let models = &html[html.find("<h2>Models</h2>").unwrap()..];
     let first_row = models.find("<td class=\"l\">").map(|i| &models[i..i + 40]).unwrap();
