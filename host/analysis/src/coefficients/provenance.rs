@@ -318,13 +318,25 @@ impl Support {
         let Some(at) = self.incidence(ti) else {
             let list: Vec<String> = self.incidences_deg.iter().map(|t| format!("{t:.4}°")).collect();
             let held = format!("the data hold θi {}", list.join(", "));
-            return match spacing_check(ti, &self.incidences_deg) {
-                Ok(()) => Basis::new(
-                    Provenance::Extrapolated,
-                    format!("θi {ti:.2}° was not measured ({held}), but lies within their spacing"),
-                ),
-                Err(why) => beyond(format!("θi {ti:.2}° was not measured ({held}): {why} in θi")),
-            };
+            if let Err(why) = spacing_check(ti, &self.incidences_deg) {
+                return beyond(format!("θi {ti:.2}° was not measured ({held}): {why} in θi"));
+            }
+            // The measured incidences about it anchor a model's value: each
+            // must hold this observation angle within its own spacing.
+            let below = self.incidences_deg.iter().copied().filter(|t| *t < ti).fold(f64::NAN, f64::max);
+            let above = self.incidences_deg.iter().copied().filter(|t| *t > ti).fold(f64::NAN, f64::min);
+            for t in [below, above].into_iter().filter(|t| !t.is_nan()) {
+                if let Err(why) = spacing_check(alpha, &self.alphas_at(t)) {
+                    return beyond(format!(
+                        "θi {ti:.2}° was not measured ({held}), and at θi {t:.2}° the observation angle α {}°: {why} in α",
+                        figure(alpha)
+                    ));
+                }
+            }
+            return Basis::new(
+                Provenance::Extrapolated,
+                format!("θi {ti:.2}° was not measured ({held}), but lies within their spacing"),
+            );
         };
         let views = self.views_near(at, want.v);
         let Some(&(_, nearest)) = views.first() else {
@@ -435,11 +447,11 @@ mod tests {
     use super::*;
     use gonio_shared::LobePatterns;
 
-    /// The reference rings at 15° and 30°, and the retro point, as a scan holds them.
+    /// The reference rings at 15°, 30° and 60°, and the retro point, as a scan holds them.
     fn ring_support() -> Support {
         let p = LobePatterns::cea();
         let mut points = Vec::new();
-        for ti in [15.0f32, 30.0] {
+        for ti in [15.0f32, 30.0, 60.0] {
             points.push(point([ti as f64, ti as f64, 0.0], 1.0, 0.01, 0.0));
             for k in 0..p.retro.count().unwrap() {
                 let g = p.point(ti, k).unwrap();
@@ -504,9 +516,15 @@ mod tests {
         assert_eq!(b.provenance, Provenance::NotMeasured, "{}", b.why);
         assert!(b.why.contains("28.76° beyond the nearest measured (60°)"), "{}", b.why);
         assert_eq!(b.measure.as_deref(), Some("gonio scan --theta-i 88.76 --retro-rings 1.05"));
-        // 60° is held, but no sample about its retro direction.
+        // 60° held without a sample about its retro direction: nothing
+        // there, and nothing to anchor 45° above.
+        let mut s = ring_support();
+        s.points.retain(|p| p.angles_deg[0] < 59.0);
         let b = s.classify(&cie(0.2, 60.0), REACH);
         assert_eq!(b.provenance, Provenance::NotMeasured);
+        let b = s.classify(&cie(0.2, 45.0), REACH);
+        assert_eq!(b.provenance, Provenance::NotMeasured, "{}", b.why);
+        assert!(b.why.contains("at θi 60.00°") && b.why.contains("in α"), "{}", b.why);
     }
 
     #[test]
