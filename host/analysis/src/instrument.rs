@@ -26,6 +26,8 @@ pub enum Instrument {
 /// `gonio convert` writes it and a laboratory may add to its own files:
 /// `instrument source_aperture_deg=0 receiver_aperture_deg=0.39 wavelength_nm=633`.
 pub const HEADER: &str = "instrument";
+/// The header's word for this head's own data.
+pub const THIS_HEAD: &str = "this_head";
 
 impl Instrument {
     /// The apertures a measured value is the average over; `None` where
@@ -76,11 +78,17 @@ impl Instrument {
         }
     }
 
-    /// The header line's words after [`HEADER`].
+    /// The header line's words after [`HEADER`] (this head's marked
+    /// [`THIS_HEAD`], so that a converted file stays this head's).
     pub fn header_text(&self) -> Option<String> {
         let a = self.apertures()?;
+        let mark = if self.is_this_head() {
+            format!(" {THIS_HEAD}")
+        } else {
+            String::new()
+        };
         let mut t = format!(
-            "{HEADER} source_aperture_deg={} receiver_aperture_deg={}",
+            "{HEADER}{mark} source_aperture_deg={} receiver_aperture_deg={}",
             a.source_deg, a.receiver_deg
         );
         if let Some(nm) = self.wavelength_nm() {
@@ -89,13 +97,21 @@ impl Instrument {
         Some(t)
     }
 
-    /// The instrument a header line states (`None`: the line is not one).
+    /// The instrument a header line states (`None`: the line is not one,
+    /// such as a laboratory's `# instrument Zeiss GK311`: every word of the
+    /// header is `key=value` or [`THIS_HEAD`]).
     pub fn from_header(line: &str) -> Option<Result<Instrument>> {
         let rest = line.trim().strip_prefix(HEADER)?.strip_prefix(' ')?;
+        if !rest.split_whitespace().all(|w| w.contains('=') || w == THIS_HEAD) {
+            return None;
+        }
         Some(Self::from_words(rest))
     }
 
     fn from_words(words: &str) -> Result<Instrument> {
+        if words.split_whitespace().any(|w| w == THIS_HEAD) {
+            return Ok(Instrument::ThisHead);
+        }
         let (mut source, mut receiver, mut wavelength) = (None, None, None);
         for w in words.split_whitespace() {
             let Some((k, v)) = w.split_once('=') else {
@@ -165,11 +181,11 @@ mod tests {
         assert_eq!(
             Instrument::from_header(&Instrument::ThisHead.header_text().unwrap())
                 .unwrap()
-                .unwrap()
-                .apertures(),
-            Some(head_apertures())
+                .unwrap(),
+            Instrument::ThisHead
         );
         assert!(Instrument::from_header("converted by gonio").is_none());
+        assert!(Instrument::from_header("instrument Zeiss GK311").is_none());
         let e = Instrument::from_header("instrument source_aperture_deg=0.1").unwrap().unwrap_err();
         assert!(e.to_string().contains("both"), "{e}");
         assert!(Instrument::from_header("instrument colour=red").unwrap().is_err());

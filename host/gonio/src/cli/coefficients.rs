@@ -76,6 +76,9 @@ pub struct CoefficientsArgs {
 
 impl CoefficientsArgs {
     fn source(&self) -> Result<Source> {
+        if self.data.is_none() && self.instrument.stated()?.is_some() {
+            bail!("--instrument-* state what measured a data file: with --data here, or when fitting it (`gonio fit FILE --instrument-…`), whose fit file keeps it");
+        }
         if !self.fit.is_empty() {
             return Ok(fits_source(&self.fit)?.extrapolating(self.extrapolate));
         }
