@@ -277,7 +277,7 @@ impl Source {
                 covariance: Some(c),
             } => (material, c, None),
             Source::Measured { fits, support, .. } => {
-                let (best, material) = best(fits)?;
+                let (best, material) = carrier(fits)?;
                 (material, best.covariance.as_ref()?, Some(Anchored::of(support, r)))
             }
             _ => return None,
@@ -310,6 +310,16 @@ impl Fitted {
             FittedBrdf::Rational(_) => None,
         }
     }
+}
+
+/// The model that carries a value beyond the data: the adequate one with
+/// the lowest AIC, else (asked to extrapolate) the lowest AIC of all.
+fn carrier(fits: &[Fitted]) -> Option<(&Fitted, &Material)> {
+    fits.iter()
+        .filter(|f| Adequacy::of(f.goodness.as_ref()) == Adequacy::Adequate)
+        .filter_map(|f| Some((f, f.material()?)))
+        .min_by(|a, b| a.0.aic.total_cmp(&b.0.aic))
+        .or_else(|| best(fits))
 }
 
 /// The model fit with the lowest AIC, and its material (`None`: only the
@@ -348,7 +358,7 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
         return refused(basis);
     }
     if adequate.is_empty() {
-        let why = no_adequate_model(&models);
+        let why = no_adequate_model(&models, support.points.iter().any(|p| p.sigma > 0.0));
         if !extrapolate {
             basis.provenance = Provenance::NotMeasured;
             basis.why = format!("{}; {why}, to carry it", basis.why);
@@ -433,7 +443,7 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
 
 /// Why no model may carry a value beyond the data: the best one's χ², or
 /// data without uncertainties to judge any by.
-fn no_adequate_model(models: &[&Fitted]) -> String {
+fn no_adequate_model(models: &[&Fitted], sigma_given: bool) -> String {
     let best = models
         .iter()
         .filter_map(|f| Some((f.goodness?, f.material()?.model.name())))
@@ -444,6 +454,9 @@ fn no_adequate_model(models: &[&Fitted]) -> String {
             crate::rounding::significant(g.reduced_chi2, 3),
             crate::rounding::significant(g.p_value, 2)
         ),
+        None if models.iter().all(|f| f.goodness.is_none()) && sigma_given => {
+            "the fit files hold no χ² (an earlier gonio wrote them): fit again to judge the models".into()
+        }
         None => "the data carry no uncertainties, so no model can be shown adequate".into(),
     }
 }

@@ -112,13 +112,8 @@ pub fn read(path: &Path) -> Result<FitFile> {
         covariance,
         rmse: v["rmse"].as_f64(),
         aic: v["aic"].as_f64(),
-        goodness: match &v["goodness"] {
-            Value::Null => None,
-            g => Some(
-                serde_json::from_value(g.clone())
-                    .with_context(|| format!("{}: `goodness` is not χ², dof, reduced χ² and p", path.display()))?,
-            ),
-        },
+        // A χ² an earlier gonio could not write (null) is not known.
+        goodness: serde_json::from_value(v["goodness"].clone()).ok(),
         support,
     })
 }

@@ -388,17 +388,20 @@ pub fn evaluate(material: &Material, data: &Dataset) -> Metrics {
 fn covariance(problem: &Problem, x: &[f64]) -> Spread {
     let n = problem.template.len();
     let (r, mut j) = problem.residuals_and_jacobian(x);
+    let names = problem.model.param_names();
+    if r.iter().any(|v| !v.is_finite()) {
+        return Spread {
+            covariance: None,
+            undetermined: problem.free.iter().map(|&i| (names[i], NO_VALUE)).collect(),
+        };
+    }
     // A lobe far from its peak overflows its power (`(1 + b(1 − c))^c` of
     // the ABC lobes at c ≈ 300): its value is 0 and so is its derivative,
-    // which the arithmetic leaves as ∞/∞. Such a row moves nothing.
-    for (k, rk) in r.iter().enumerate() {
-        if rk.is_finite() {
-            for v in j.row_mut(k).iter_mut().filter(|v| !v.is_finite()) {
-                *v = 0.0;
-            }
-        }
+    // which the arithmetic leaves as ∞/∞ = NaN. Such an entry moves
+    // nothing; an infinite one is a derivative that diverges.
+    for v in j.iter_mut().filter(|v| v.is_nan()) {
+        *v = 0.0;
     }
-    let names = problem.model.param_names();
     let mut undetermined = Vec::new();
     let mut kept = Vec::new();
     for (a, &i) in problem.free.iter().enumerate() {
@@ -448,6 +451,7 @@ fn covariance(problem: &Problem, x: &[f64]) -> Spread {
 /// Why a free parameter has no standard error (`Fit::undetermined`).
 const NOT_FINITE: &str = "the model's derivative in it is not finite at the optimum (on its bound): held there";
 const NO_EFFECT: &str = "the data do not depend on it at the optimum: held there";
+const NO_VALUE: &str = "the model has no finite value at some sample";
 const NO_DOF: &str = "no degrees of freedom are left (as many free parameters as samples)";
 const SINGULAR: &str = "the data do not determine the parameters separately (their normal matrix is singular)";
 
