@@ -243,7 +243,8 @@ fn reachable(cfg: &HeadConfig, record: &ScanRecord) -> Result<()> {
         // f32 as the scan holds them, and as the user wrote them.
         let lit = record.spec.theta_i_deg.iter().copied();
         let monitor = record.monitor.map(|m| m.at.theta_i_deg);
-        for t in lit.chain(monitor) {
+        let learning = record.detector.learn_at.map(|g| g.theta_i_deg);
+        for t in lit.chain(monitor).chain(learning) {
             let lost = 1.0 - footprint::on_sample(t as f64, beam, side);
             if lost > footprint::LOST_MAX {
                 bail!(
