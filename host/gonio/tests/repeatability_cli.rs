@@ -5,37 +5,32 @@
 mod common;
 use common::{gonio, text};
 
-#[test]
-fn repeats_scatter_as_the_budget_predicts() {
-    let dir = tempfile::tempdir().unwrap();
-    let scans: Vec<String> = (1..=4)
+/// `n` scans of the simulated sample with `grid`, seeds 1 to `n`, each
+/// with its own plate scan, calibrated: their directories.
+fn repeats(dir: &std::path::Path, n: u64, grid: &[&str]) -> Vec<String> {
+    (1..=n)
         .map(|seed| {
-            let out = dir.path().join(format!("run{seed}"));
-            let o = out.to_str().unwrap().to_string();
+            let o = dir.join(format!("run{seed}")).to_str().unwrap().to_string();
             let seed = seed.to_string();
-            let s = gonio(&[
-                "scan",
-                "--sim",
-                "--reference-plate",
-                "--out",
-                &o,
-                "--seed",
-                &seed,
-                "--theta-i",
-                "30",
-                "--theta-o",
-                "0:60:6",
-                "--dphi",
-                "0:180:45",
-                "--no-patterns",
-                "--json",
-            ]);
+            let mut args = vec!["scan", "--sim", "--reference-plate", "--out", &o, "--seed", &seed, "--json"];
+            args.extend_from_slice(grid);
+            let s = gonio(&args);
             assert!(s.status.success(), "{}", text(&s));
             let c = gonio(&["calibrate", &o, "--json"]);
             assert!(c.status.success(), "{}", text(&c));
             o
         })
-        .collect();
+        .collect()
+}
+
+#[test]
+fn repeats_scatter_as_the_budget_predicts() {
+    let dir = tempfile::tempdir().unwrap();
+    let scans = repeats(
+        dir.path(),
+        4,
+        &["--theta-i", "30", "--theta-o", "0:60:6", "--dphi", "0:180:45", "--no-patterns"],
+    );
     let (plots, csv) = (dir.path().join("plots"), dir.path().join("rep.csv"));
     let mut args: Vec<&str> = vec!["repeatability"];
     args.extend(scans.iter().map(String::as_str));
@@ -67,27 +62,7 @@ fn repeats_scatter_as_the_budget_predicts() {
 #[test]
 fn five_repeats_meet_the_budget_at_the_peaks_too() {
     let dir = tempfile::tempdir().unwrap();
-    let scans: Vec<String> = (1..=5)
-        .map(|seed| {
-            let o = dir.path().join(format!("run{seed}")).to_str().unwrap().to_string();
-            let seed = seed.to_string();
-            let s = gonio(&[
-                "scan",
-                "--sim",
-                "--reference-plate",
-                "--out",
-                &o,
-                "--seed",
-                &seed,
-                "--theta-i",
-                "30",
-                "--json",
-            ]);
-            assert!(s.status.success(), "{}", text(&s));
-            assert!(gonio(&["calibrate", &o, "--json"]).status.success());
-            o
-        })
-        .collect();
+    let scans = repeats(dir.path(), 5, &["--theta-i", "30"]);
     let mut args: Vec<&str> = vec!["repeatability", "--json"];
     args.extend(scans.iter().map(String::as_str));
     let o = gonio(&args);
