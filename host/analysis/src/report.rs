@@ -102,11 +102,7 @@ fn adequacy_paragraph(fits: &[ComparedFit]) -> String {
 /// picture of R_A against α per β.
 fn coefficients_section(fits: &[ComparedFit], support: Support, dir: &Path) -> Result<String> {
     let all = fitted(fits);
-    let adequate: Vec<Fitted> = all
-        .iter()
-        .filter(|f| Adequacy::of(f.goodness.as_ref()) == Adequacy::Adequate)
-        .cloned()
-        .collect();
+    let adequate: Vec<Fitted> = all.iter().filter(|f| f.is_adequate()).cloned().collect();
     let carrier = coefficients::best(&adequate).map_or("none: no model is adequate, so such values are not given", |(_, m)| m.model.name());
     let models: Vec<&ComparedFit> = fits.iter().filter(|f| matches!(f, ComparedFit::Model(_))).collect();
     let instrument = support.instrument;

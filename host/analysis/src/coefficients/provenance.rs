@@ -323,9 +323,8 @@ impl Support {
             }
             // The measured incidences about it anchor a model's value: each
             // must hold this observation angle within its own spacing.
-            let below = self.incidences_deg.iter().copied().filter(|t| *t < ti).fold(f64::NAN, f64::max);
-            let above = self.incidences_deg.iter().copied().filter(|t| *t > ti).fold(f64::NAN, f64::min);
-            for t in [below, above].into_iter().filter(|t| !t.is_nan()) {
+            let (below, above) = self.about(ti);
+            for t in [below, above].into_iter().flatten() {
                 if let Err(why) = spacing_check(alpha, &self.alphas_at(t)) {
                     return beyond(format!(
                         "θi {ti:.2}° was not measured ({held}), and at θi {t:.2}° the observation angle α {}°: {why} in α",
@@ -369,6 +368,15 @@ impl Support {
             ),
             Err(why) => beyond(format!("at θi {at:.2}° the observation angle α {}°: {why} in α", figure(alpha))),
         }
+    }
+
+    /// The measured incidences nearest `theta_i_deg` at or below it and at
+    /// or above it (degrees): what a model's value there is anchored to.
+    pub fn about(&self, theta_i_deg: f64) -> (Option<f64>, Option<f64>) {
+        let inc = self.incidences_deg.iter().copied();
+        let below = inc.clone().filter(|t| *t <= theta_i_deg).max_by(f64::total_cmp);
+        let above = inc.filter(|t| *t >= theta_i_deg).min_by(f64::total_cmp);
+        (below, above)
     }
 
     /// The distinct observation angles (light–view angles, degrees) of the

@@ -303,6 +303,11 @@ impl Source {
 }
 
 impl Fitted {
+    /// Whether its χ² is consistent with the data's σ ([`Adequacy`]).
+    pub fn is_adequate(&self) -> bool {
+        Adequacy::of(self.goodness.as_ref()) == Adequacy::Adequate
+    }
+
     /// The model fitted, `None` for the rational function.
     pub fn material(&self) -> Option<&Material> {
         match &self.brdf {
@@ -312,14 +317,28 @@ impl Fitted {
     }
 }
 
-/// The model that carries a value beyond the data: the adequate one with
-/// the lowest AIC, else (asked to extrapolate) the lowest AIC of all.
+/// The models that may carry a value beyond the data, and whether they are
+/// adequate: the adequate ones; where none is (an extrapolation asked for),
+/// those whose RMSE is within [`COMPARABLE_RMSE_RATIO`] of the best one's.
+fn carriers(fits: &[Fitted]) -> (Vec<&Fitted>, bool) {
+    let models = fits.iter().filter(|f| f.material().is_some());
+    let adequate: Vec<&Fitted> = models.clone().filter(|f| f.is_adequate()).collect();
+    if !adequate.is_empty() {
+        return (adequate, true);
+    }
+    let best_rmse = models.clone().map(|f| f.rmse).fold(f64::INFINITY, f64::min);
+    (models.filter(|f| f.rmse <= COMPARABLE_RMSE_RATIO * best_rmse).collect(), false)
+}
+
+/// The model that carries a value: the lowest AIC among [`carriers`].
 fn carrier(fits: &[Fitted]) -> Option<(&Fitted, &Material)> {
+    lowest_aic(&carriers(fits).0)
+}
+
+fn lowest_aic<'a>(fits: &[&'a Fitted]) -> Option<(&'a Fitted, &'a Material)> {
     fits.iter()
-        .filter(|f| Adequacy::of(f.goodness.as_ref()) == Adequacy::Adequate)
-        .filter_map(|f| Some((f, f.material()?)))
+        .filter_map(|f| Some((*f, f.material()?)))
         .min_by(|a, b| a.0.aic.total_cmp(&b.0.aic))
-        .or_else(|| best(fits))
 }
 
 /// The model fit with the lowest AIC, and its material (`None`: only the
@@ -342,11 +361,6 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
         };
     }
     let models: Vec<&Fitted> = fits.iter().filter(|f| f.material().is_some()).collect();
-    let adequate: Vec<&Fitted> = models
-        .iter()
-        .copied()
-        .filter(|f| Adequacy::of(f.goodness.as_ref()) == Adequacy::Adequate)
-        .collect();
     let refused = |basis: Basis| Estimate {
         value: f64::NAN,
         u: f64::NAN,
@@ -357,7 +371,8 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
         // Only a rational function, which says nothing beyond its data.
         return refused(basis);
     }
-    if adequate.is_empty() {
+    let (carriers, adequate) = carriers(fits);
+    if !adequate {
         let why = no_adequate_model(&models, support.points.iter().any(|p| p.sigma > 0.0));
         if !extrapolate {
             basis.provenance = Provenance::NotMeasured;
@@ -375,22 +390,7 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
         basis.why = format!("{}: extrapolated on request", basis.why);
     }
     basis.provenance = Provenance::Extrapolated;
-    let adequate_carriers = !adequate.is_empty();
-    let carriers: Vec<&Fitted> = if adequate.is_empty() {
-        let best_rmse = models.iter().map(|f| f.rmse).fold(f64::INFINITY, f64::min);
-        models
-            .iter()
-            .copied()
-            .filter(|f| f.rmse <= COMPARABLE_RMSE_RATIO * best_rmse)
-            .collect()
-    } else {
-        adequate
-    };
-    let Some((top, top_material)) = carriers
-        .iter()
-        .filter_map(|f| Some((*f, f.material()?)))
-        .min_by(|a, b| a.0.aic.total_cmp(&b.0.aic))
-    else {
+    let Some((top, top_material)) = lowest_aic(&carriers) else {
         return refused(basis);
     };
     let anchored = Anchored::of(support, r);
@@ -413,7 +413,7 @@ fn measured(fits: &[Fitted], support: &Support, r: &Request, extrapolate: bool) 
     // Where no model is consistent with the data (carried on request), its
     // disagreement with the models' belongs in the spread; an adequate
     // model's shape between the incidences the data do not contradict.
-    let between = (anchors.len() == 2 && !adequate_carriers).then(|| anchors.iter().map(|(w, _, e)| w * e.value).sum::<f64>());
+    let between = (anchors.len() == 2 && !adequate).then(|| anchors.iter().map(|(w, _, e)| w * e.value).sum::<f64>());
     let (lo, hi) = models
         .iter()
         .map(|m| m.value)
@@ -521,17 +521,14 @@ fn anchors(support: &Support, r: &Request) -> Vec<(f64, Request)> {
         };
         (w, Request { geometry, ..*r })
     };
-    let inc = &support.incidences_deg;
-    let below = inc.iter().copied().filter(|t| *t <= beta).fold(f64::NAN, f64::max);
-    let above = inc.iter().copied().filter(|t| *t >= beta).fold(f64::NAN, f64::min);
-    match (below.is_nan(), above.is_nan()) {
-        (false, false) if above > below => {
+    match support.about(beta) {
+        (Some(below), Some(above)) if above > below => {
             let w = (beta - below) / (above - below);
             vec![at(below, 1.0 - w), at(above, w)]
         }
-        (false, _) => vec![at(below, 1.0)],
-        (true, false) => vec![at(above, 1.0)],
-        (true, true) => Vec::new(),
+        (Some(below), _) => vec![at(below, 1.0)],
+        (None, Some(above)) => vec![at(above, 1.0)],
+        (None, None) => Vec::new(),
     }
 }
 
