@@ -146,7 +146,7 @@ fn coefficients_of_a_fitted_scan_hold_the_truth() {
     let o = gonio(&["convert", csv.to_str().unwrap(), dat.to_str().unwrap()]);
     assert!(o.status.success(), "{}", text(&o));
     assert!(std::fs::read_to_string(&dat).unwrap().contains("#VS 2"));
-    let (a, b) = (formats::load(&csv).unwrap(), formats::load(&dat).unwrap());
+    let (a, b) = (formats::load(&csv, None).unwrap(), formats::load(&dat, None).unwrap());
     for (x, y) in a.observations.iter().zip(&b.observations) {
         let (sx, sy) = (x.sigma.unwrap(), y.sigma.unwrap());
         assert!((sx - sy).abs() <= 1e-9 * sx, "{sx} vs {sy}");

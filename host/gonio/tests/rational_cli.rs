@@ -53,7 +53,7 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     let saved: Value = serde_json::from_str(&std::fs::read_to_string(&out).unwrap()).unwrap();
     assert!(saved["support"].is_object(), "the fit file says what it rests on");
     let r = function_of(&saved).unwrap();
-    let data = formats::load(&csv).unwrap();
+    let data = formats::load(&csv, None).unwrap();
     let fitted = data.filter(|o| theta_in(o.theta_i, &[30.0]));
     assert_eq!(v["samples"].as_u64().unwrap() as usize, fitted.observations.len());
     for o in &fitted.observations {

@@ -221,7 +221,7 @@ fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<Fitted> {
     let (outcome, _) = rt.block_on(demo_scan(sim, spec, dir.path(), &quiet, &Default::default()))?;
     let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
     let blind = (SimConfig::default().machine.optics.blind_max_deg as f64).to_radians();
-    let mut data = gonio_analysis::formats::load(&calibrated.csv)?.filter(|o| {
+    let mut data = gonio_analysis::formats::load(&calibrated.csv, None)?.filter(|o| {
         let d = o.directions();
         gonio_brdf::frame::angle_between(d.l, d.v) > blind
     });

@@ -34,13 +34,12 @@ pub struct Observation {
 }
 
 /// Refuses angles no measurement has (radians): incidence and view in the
-/// sample's front hemisphere, [0°, 90°], and Δφ within [−360°, 360°]. What
-/// a reader says of a row it cannot take; the file's own words are its
-/// caller's (line numbers).
-pub fn check_angles(theta_i: f64, theta_o: f64, dphi: f64) -> Result<(), String> {
-    // A direction computed on the horizon may land a rounding off it.
-    const SLACK: f64 = 1e-9;
-    let front = |t: f64| (-SLACK..=std::f64::consts::FRAC_PI_2 + SLACK).contains(&t);
+/// sample's front hemisphere, [0°, 90°], and Δφ within [−360°, 360°]; gives
+/// them back with what lies within [`ANGLE_SLACK`] of the hemisphere
+/// brought into it. What a reader says of a row it cannot take; the file's
+/// own words are its caller's (line numbers).
+pub fn check_angles(theta_i: f64, theta_o: f64, dphi: f64) -> Result<(f64, f64, f64), String> {
+    let front = |t: f64| (-ANGLE_SLACK..=std::f64::consts::FRAC_PI_2 + ANGLE_SLACK).contains(&t);
     let deg = |x: f64| format!("{}°", (x.to_degrees() * 1e4).round() / 1e4);
     if !front(theta_i) {
         return Err(format!("θi = {} is not an incidence angle (0° to 90°)", deg(theta_i)));
@@ -48,11 +47,17 @@ pub fn check_angles(theta_i: f64, theta_o: f64, dphi: f64) -> Result<(), String>
     if !front(theta_o) {
         return Err(format!("θo = {} is not a view angle (0° to 90°)", deg(theta_o)));
     }
-    if dphi.abs() > 2.0 * std::f64::consts::PI + SLACK {
+    if dphi.abs() > 2.0 * std::f64::consts::PI + ANGLE_SLACK {
         return Err(format!("Δφ = {} is outside −360° to 360°", deg(dphi)));
     }
-    Ok(())
+    let hemisphere = |t: f64| t.clamp(0.0, std::f64::consts::FRAC_PI_2);
+    Ok((hemisphere(theta_i), hemisphere(theta_o), dphi))
 }
+
+/// How far beyond the hemisphere an angle may be written (radians, 0.006°):
+/// files print radians rounded, 90° as `1.5708` is 4·10⁻⁶ beyond it, and a
+/// direction computed on the horizon may land a rounding off it.
+pub const ANGLE_SLACK: f64 = 1e-4;
 
 impl Observation {
     pub fn directions(&self) -> Directions {
@@ -119,10 +124,15 @@ impl Dataset {
         let mut out = self.clone();
         out.units = units;
         for o in &mut out.observations {
-            let k = o.unit_factor(units) / o.unit_factor(self.units);
-            if !k.is_finite() {
-                bail!("θo = {:.3}° is grazing: cannot convert to {units:?}", o.theta_o.to_degrees());
+            let from = o.unit_factor(self.units);
+            if from < super::settle::GRAZING_DEG.to_radians().cos() {
+                bail!(
+                    "θo = {:.3}° is beyond {}°: its f_r·cosθo cannot give f_r",
+                    o.theta_o.to_degrees(),
+                    super::settle::GRAZING_DEG
+                );
             }
+            let k = o.unit_factor(units) / from;
             o.value *= k;
             o.sigma = o.sigma.map(|s| s * k);
             o.shared = o.shared.map(|s| s * k);

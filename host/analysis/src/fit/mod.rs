@@ -13,6 +13,7 @@ pub mod goodness;
 mod local;
 pub mod metrics;
 mod problem;
+pub mod settle;
 pub mod transform;
 
 pub use data::{Dataset, Observation, Units};

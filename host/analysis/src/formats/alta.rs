@@ -33,6 +33,7 @@
 //! [`ENDS_NOTE`], and are read as they were written. The writer uses `#VS 2`
 //! when every value has an uncertainty.
 
+use super::guard::{self, MAX_ROWS};
 use crate::fit::data::check_angles;
 use crate::fit::{Dataset, Observation, Units};
 use crate::instrument::Instrument;
@@ -41,6 +42,7 @@ use anyhow::{anyhow, bail, Context, Result};
 use gonio_brdf::frame::dot;
 use gonio_brdf::Directions;
 use std::fmt::Write;
+use std::io::BufRead;
 
 /// The note gonio's writer put in files whose `#VS 2` columns are the
 /// interval's lower and upper ends, not ALTA's distances to them.
@@ -161,9 +163,14 @@ struct Header {
     vs: usize,
 }
 
-/// Parses an ALTA text file; errors name the line (1-based) and what was
-/// expected; what was assumed is in the data set's warnings.
+/// Parses ALTA text held in memory.
 pub fn parse(text: &str) -> Result<Dataset> {
+    read(text.as_bytes())
+}
+
+/// Reads an ALTA text file as it streams; errors name the line (1-based)
+/// and what was expected; what was assumed is in the data set's warnings.
+pub fn read(input: impl BufRead) -> Result<Dataset> {
     let mut h = Header::default();
     let mut metadata = Vec::new();
     let mut warnings = Vec::new();
@@ -171,8 +178,9 @@ pub fn parse(text: &str) -> Result<Dataset> {
     // Settled at the first data line: inputs, outputs, units, and whether
     // `#VS 2` holds the interval's ends (`ENDS_NOTE`).
     let mut layout: Option<(ParamIn, usize, Option<Units>, bool)> = None;
-    for (i, raw) in text.split('\n').enumerate() {
+    for (i, raw) in input.lines().enumerate() {
         let n = i + 1;
+        let raw = raw.map_err(|e| guard::line_error(e, n))?;
         let line = raw.trim();
         let err = |msg: String| anyhow!("line {n}: {msg}");
         if line.is_empty() {
@@ -278,7 +286,7 @@ pub fn parse(text: &str) -> Result<Dataset> {
         }
         let (l, v) = p.directions(&x);
         let (theta_i, theta_o, dphi) = angles(l, v).ok_or_else(|| err("a direction of length zero".into()))?;
-        check_angles(theta_i, theta_o, dphi).map_err(err)?;
+        let (theta_i, theta_o, dphi) = check_angles(theta_i, theta_o, dphi).map_err(err)?;
         let value = x[d];
         let conf = &x[d + outputs..];
         let sigma = match h.vs {
@@ -301,6 +309,9 @@ pub fn parse(text: &str) -> Result<Dataset> {
         // The writer puts k·σ below and above; their sum must be a number too.
         if sigma.is_some_and(|s| !(2.0 * K_COVERAGE * s).is_finite()) {
             return Err(err("the confidence interval is wider than a number holds".into()));
+        }
+        if observations.len() == MAX_ROWS {
+            return Err(guard::too_many_rows());
         }
         observations.push(Observation {
             theta_i,

@@ -8,18 +8,39 @@
 //! left out when a `usable` column says `false`. A file with this head's
 //! raw columns is this head's; any other, of an instrument not known.
 
+use super::guard::{self, MAX_ROWS};
 use crate::fit::data::check_angles;
 use crate::fit::{Dataset, Observation, Units};
 use crate::instrument::Instrument;
 use crate::uncertainty::SHARED;
-use anyhow::{anyhow, bail, Context, Result};
+use anyhow::{anyhow, bail, Result};
+use std::io::Read;
 
+/// Parses the CSV held in memory.
 pub fn parse(text: &str) -> Result<Dataset> {
-    if text.trim().is_empty() {
+    read(text.as_bytes())
+}
+
+/// What the CSV reader met, with the line it met it on.
+fn csv_error(e: csv::Error) -> anyhow::Error {
+    let line = e.position().map_or(1, |p| p.line() as usize);
+    match e.into_kind() {
+        csv::ErrorKind::Io(e) => guard::line_error(e, line),
+        csv::ErrorKind::Utf8 { .. } => anyhow!("line {line}: not UTF-8 text"),
+        csv::ErrorKind::UnequalLengths { expected_len, len, .. } => {
+            anyhow!("line {line}: {len} fields where the header has {expected_len}")
+        }
+        _ => anyhow!("line {line}: malformed CSV"),
+    }
+}
+
+/// Reads the CSV as it streams.
+pub fn read(input: impl Read) -> Result<Dataset> {
+    let mut reader = csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(input);
+    let header = reader.headers().map_err(csv_error)?.clone();
+    if header.iter().all(str::is_empty) {
         bail!("line 1: the file is empty");
     }
-    let mut reader = csv::ReaderBuilder::new().trim(csv::Trim::All).from_reader(text.as_bytes());
-    let header = reader.headers().context("line 1: cannot read the CSV header")?.clone();
     let col = |name: &str| header.iter().position(|h| h == name);
     let need = |name: &str| col(name).ok_or_else(|| anyhow!("line 1: missing column `{name}`"));
     let (ti, to, dp) = (need("theta_i_deg")?, need("theta_o_deg")?, need("dphi_deg")?);
@@ -32,7 +53,7 @@ pub fn parse(text: &str) -> Result<Dataset> {
     let shared = SHARED.map(|n| col(&format!("shift_{n}_sr")));
     let mut observations = Vec::new();
     for record in reader.records() {
-        let record = record.context("malformed CSV")?;
+        let record = record.map_err(csv_error)?;
         let line = record.position().map(|p| p.line()).unwrap_or(0);
         let num = |i: usize| -> Result<f64> {
             let f = record.get(i).unwrap_or("");
@@ -49,7 +70,10 @@ pub fn parse(text: &str) -> Result<Dataset> {
             continue;
         }
         let (theta_i, theta_o, dphi) = (num(ti)?.to_radians(), num(to)?.to_radians(), num(dp)?.to_radians());
-        check_angles(theta_i, theta_o, dphi).map_err(|e| anyhow!("line {line}: {e}"))?;
+        let (theta_i, theta_o, dphi) = check_angles(theta_i, theta_o, dphi).map_err(|e| anyhow!("line {line}: {e}"))?;
+        if observations.len() == MAX_ROWS {
+            return Err(guard::too_many_rows());
+        }
         observations.push(Observation {
             theta_i,
             theta_o,

@@ -107,27 +107,16 @@ impl Command {
     }
 }
 
-/// Reads a data file for a command. Where the file does not say what its
-/// values are (ALTA's `UNKNOWN_OUTPUT`), `units` says it, or they are read
-/// as `f_r` with a warning; what the reader assumed or doubts goes to stderr.
+/// Reads a data file for a command (`formats::load`), with the instrument
+/// the user stated; what the reader assumed or doubts goes to stderr.
 pub(crate) fn load_data(
     path: &std::path::Path,
     units: Option<gonio_analysis::fit::Units>,
     instrument: &instrument::InstrumentArgs,
 ) -> Result<gonio_analysis::fit::Dataset> {
-    let mut data = gonio_analysis::formats::load(path)?;
+    let mut data = gonio_analysis::formats::load(path, units)?;
     if let Some(i) = instrument.stated()? {
         data.instrument = i;
-    }
-    if !data.units_stated {
-        match units {
-            Some(u) => data.units = u,
-            None => data.warnings.push(
-                "the file does not say what its values are (no #PARAM_OUT): read as f_r (sr⁻¹); give --units fr-cos if they are f_r·cosθo"
-                    .into(),
-            ),
-        }
-        data.units_stated = true;
     }
     data.warnings.extend(data.doubts());
     for w in &data.warnings {
