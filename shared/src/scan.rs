@@ -252,7 +252,7 @@ impl ScanSpec {
         };
         // Bounded so every index fits in u32 with room to spare (a sweep
         // scan's with its θo span counted too: one bound for every scan).
-        if (n_ti as u64) * ((n_to as u64) * (n_dp as u64) + n_pat as u64) > 10_000_000 {
+        if (n_ti as u64) * ((n_to as u64) * (n_dp as u64) + n_pat as u64) > Self::POSITIONS_MAX as u64 {
             return bad;
         }
         if self.sweep.is_none() {
@@ -271,6 +271,10 @@ impl ScanSpec {
             n_pat,
         })
     }
+
+    /// The most positions one scan holds (a grid's points and its
+    /// patterns', over every incidence).
+    pub const POSITIONS_MAX: u32 = 10_000_000;
 
     /// Checks the grid and the start position; returns the number of
     /// positions (points, or a sweep scan's retro points and rows).

@@ -95,6 +95,28 @@ impl Scene {
     }
 }
 
+/// Why the renderer did not draw, from its stderr: the module `python3`
+/// lacks, by the name pip installs it under, or Python's last line.
+fn not_rendered(stderr: &str) -> String {
+    let last = stderr.lines().last().unwrap_or("no message");
+    let missing = stderr
+        .lines()
+        .rev()
+        .find_map(|l| l.split("No module named '").nth(1))
+        .and_then(|rest| rest.split(['\'', '.']).next());
+    match missing {
+        Some(module) => {
+            let package = match module {
+                "mitsuba" | "drjit" => "mitsuba",
+                "PIL" => "pillow",
+                other => other,
+            };
+            format!("Mitsuba 3 did not render: python3 has no module `{module}` (pip install {package})")
+        }
+        None => format!("Mitsuba 3 did not render: {last}"),
+    }
+}
+
 /// What Mitsuba drew: its version and each picture's mean radiance.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rendered {
@@ -113,9 +135,7 @@ pub fn with_mitsuba(file: &Path, scenes: &[Scene], png_dir: Option<&Path>) -> Re
         .output()
         .context("cannot run python3 (needed, with Mitsuba 3, to render)")?;
     if !out.status.success() {
-        let err = String::from_utf8_lossy(&out.stderr);
-        let last = err.lines().last().unwrap_or("no message");
-        bail!("Mitsuba 3 did not render (pip install mitsuba): {last}");
+        bail!("{}", not_rendered(&String::from_utf8_lossy(&out.stderr)));
     }
     let v: Value = serde_json::from_slice(&out.stdout).context("the renderer's answer is not JSON")?;
     let means = v["means"]
@@ -136,6 +156,22 @@ pub fn with_mitsuba(file: &Path, scenes: &[Scene], png_dir: Option<&Path>) -> Re
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_hint_names_the_module_python_lacks() {
+        let numpy =
+            "Traceback (most recent call last):\n  File \"<string>\", line 19, in <module>\nModuleNotFoundError: No module named 'numpy'";
+        assert_eq!(
+            not_rendered(numpy),
+            "Mitsuba 3 did not render: python3 has no module `numpy` (pip install numpy)"
+        );
+        let drjit = "ModuleNotFoundError: No module named 'drjit.llvm'";
+        assert!(not_rendered(drjit).ends_with("no module `drjit` (pip install mitsuba)"));
+        assert_eq!(
+            not_rendered("RuntimeError: bad tensor"),
+            "Mitsuba 3 did not render: RuntimeError: bad tensor"
+        );
+    }
 
     #[test]
     fn a_lambertian_plane_gives_the_inverse_square_law() {

@@ -9,7 +9,7 @@ use crate::coefficients::{self, Estimate, Fitted, Kind, Provenance, Source, Supp
 use crate::fit::compared::ComparedFit;
 use crate::fit::file::{self as fit_file, FittedBrdf};
 use crate::fit::goodness::{Adequacy, Goodness, ADEQUATE_P};
-use crate::fit::{Dataset, Metrics, Units};
+use crate::fit::{Dataset, Metrics};
 use crate::formats::{brdf_explorer, rgl};
 use crate::plot;
 use crate::render;
@@ -376,10 +376,7 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         "<tr><th class=\"l\">samples fitted</th><td class=\"l\">{} (residuals in {})</td></tr>\n\
          <tr><th class=\"l\">measured by</th><td class=\"l\">{}, at {}</td></tr>\n</table>",
         r.data.observations.len(),
-        match r.data.units {
-            Units::Fr => "f_r, sr⁻¹",
-            Units::FrCos => "f_r·cosθo, sr⁻¹",
-        },
+        r.data.units.label(),
         escape(&r.data.instrument.apertures_text()),
         escape(&r.data.instrument.wavelength_text())
     );

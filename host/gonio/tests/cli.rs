@@ -29,6 +29,13 @@ fn every_command_has_help() {
         assert!(o.status.success(), "{cmd:?}: {}", text(&o));
         assert!(text(&o).contains("Usage"), "{cmd:?}");
     }
+    // What a command writes is in its first line, for `gonio --help`.
+    for help in [gonio(&["export", "--help"]), gonio(&["--help"])] {
+        let said = text(&help);
+        for format in [".brdf", ".bsdf", ".binary"] {
+            assert!(said.contains(format), "{said}");
+        }
+    }
 }
 
 #[test]
@@ -79,6 +86,18 @@ fn user_mistakes_are_errors_not_panics() {
         (vec!["scan", "--resume", out, "--integration-s", "1"], "cannot be used with"),
         (vec!["scan", "--resume", out, "--material", "lambert"], "cannot be used with"),
         (vec!["calibrate", "/nonexistent"], "/nonexistent is not a scan directory"),
+        (
+            vec!["scan", "--sim", "--out", out, "--integration-s", "-1"],
+            "--integration-s -1 s: a point's integration time must be longer than 0 s",
+        ),
+        (
+            vec!["scan", "--sim", "--out", out, "--theta-o", "0:80:0.0001"],
+            "positions: more than the 10000000 a scan holds",
+        ),
+        (
+            vec!["fit", "/dev/null", "--model", "glitter"],
+            "five-param, or `rational` (the rational function)",
+        ),
     ] {
         let o = gonio(&args);
         assert!(!o.status.success(), "{args:?}");

@@ -186,7 +186,11 @@ impl DetectorChoice {
     /// Refuses what the head cannot do, in the command line's words.
     pub fn check(self) -> Result<Self> {
         if !(self.integration_s.is_finite() && self.integration_s > 0.0 && self.integration_s <= DetectionSettings::INTEGRATION_MAX_S) {
-            bail!("--integration-s must be in (0, {}] s", DetectionSettings::INTEGRATION_MAX_S);
+            bail!(
+                "--integration-s {} s: a point's integration time must be longer than 0 s and at most {} s",
+                self.integration_s,
+                DetectionSettings::INTEGRATION_MAX_S
+            );
         }
         if self.reference == Reference::Matched && self.learn_at.is_none() {
             bail!("--reference matched needs --learn-at TI,TO,DPHI");

@@ -19,6 +19,16 @@ pub enum Units {
     FrCos,
 }
 
+impl Units {
+    /// The quantity and its unit, for people.
+    pub fn label(self) -> &'static str {
+        match self {
+            Units::Fr => "f_r, sr⁻¹",
+            Units::FrCos => "f_r·cosθo, sr⁻¹",
+        }
+    }
+}
+
 /// One measured value.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Observation {

@@ -24,7 +24,7 @@ pub struct DetectorArgs {
     #[arg(long, value_name = "TI,TO,DPHI", allow_hyphen_values = true)]
     pub learn_at: Option<String>,
     /// Integration time per point (s), rounded to whole chop periods.
-    #[arg(long, default_value_t = 0.1)]
+    #[arg(long, default_value_t = 0.1, allow_negative_numbers = true)]
     pub integration_s: f32,
 }
 
@@ -56,6 +56,27 @@ impl DetectorArgs {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[derive(clap::Parser)]
+    struct Detector {
+        #[command(flatten)]
+        detector: DetectorArgs,
+    }
+
+    #[test]
+    fn a_negative_integration_time_gets_a_sentence() {
+        use clap::Parser;
+        for t in ["-1", "0", "11"] {
+            let d = Detector::try_parse_from(["detector", "--integration-s", t]).unwrap();
+            let e = d.detector.checked().unwrap_err().to_string();
+            assert!(
+                e.contains(&format!(
+                    "--integration-s {t} s: a point's integration time must be longer than 0 s and at most 10 s"
+                )),
+                "{e}"
+            );
+        }
+    }
 
     #[test]
     fn the_demo_options_check() {

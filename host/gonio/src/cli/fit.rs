@@ -247,7 +247,8 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
             a.model
         );
     }
-    let model = ModelId::parse(&a.model)?;
+    let model = ModelId::parse(&a.model)
+        .map_err(|e| anyhow::anyhow!("{e}, or `{}` (the rational function)", gonio_analysis::rational::file::MODEL))?;
     let d = domain(&a.file, &a.options)?;
     let (f, holdout) = run_one(model, &a.fix, &a.options, &d, false)?;
     let mut v = fit::file::to_json(&f, d.train.units, holdout.as_ref());
@@ -433,9 +434,9 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
         return Ok(());
     }
     println!(
-        "{} samples ({:?}); best first by RMSE, with the ranks by AIC and BIC (which charge each coefficient)",
+        "{} samples ({}); best first by RMSE, with the ranks by AIC and BIC (which charge each coefficient)",
         d.train.observations.len(),
-        d.train.units
+        d.train.units.label()
     );
     println!(
         "{:<18} {:>6} {:>12} {:>12} {:>9} {:>13} {:>13} {:>4} {:>4} {:>8} {:>8}  at bound",

@@ -210,6 +210,18 @@ impl GridArgs {
             patterns: self.patterns.patterns()?,
         };
         measure_for(&mut spec, &self.for_sets)?;
+        if spec.sweep.is_none() {
+            let (n_to, n_dp) = (u64::from(o.count().unwrap_or(0)), u64::from(p.count().unwrap_or(0)));
+            let n_pat = u64::from(spec.patterns.as_ref().and_then(|q| q.count()).unwrap_or(0));
+            let n = spec.theta_i_deg.len() as u64 * (n_to * n_dp + n_pat);
+            if n > u64::from(ScanSpec::POSITIONS_MAX) {
+                bail!(
+                    "{} incidences × ({n_to} θo × {n_dp} Δφ + {n_pat} pattern points) = {n} positions: more than the {} a scan holds; take larger steps",
+                    spec.theta_i_deg.len(),
+                    ScanSpec::POSITIONS_MAX
+                );
+            }
+        }
         spec.validate().map_err(|f| anyhow::anyhow!("grid refused: {f}"))?;
         Ok(spec)
     }
@@ -297,6 +309,10 @@ mod tests {
         refused(&["--theta-o", "0:95:5"], "beyond the view angles");
         refused(&["--theta-o", "-5:60:5"], "beyond the view angles");
         refused(&["--dphi", "200:400:10"], "beyond −360° to 360°");
+        refused(
+            &["--theta-o", "0:80:0.0001", "--no-patterns"],
+            "3 incidences × (800001 θo × 37 Δφ + 0 pattern points) = 88800111 positions: more than the 10000000 a scan holds",
+        );
     }
 
     /// Every value of both sets lies on a pattern point of the scan `--for`

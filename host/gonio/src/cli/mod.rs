@@ -61,7 +61,9 @@ pub enum Command {
     Plot(plot::PlotArgs),
     /// Write a data file (ALTA .dat or calibrated CSV) as ALTA text.
     Convert(convert::ConvertArgs),
-    /// Write a fit (FIT.json) as a Disney BRDF Explorer .brdf shader.
+    /// Write a fit (FIT.json) or a simulated material for another tool: a
+    /// BRDF Explorer .brdf shader, an RGL .bsdf for Mitsuba 3 and pbrt-v4,
+    /// or a MERL .binary table.
     Export(export::ExportArgs),
     /// Evaluate a model at one geometry.
     Eval(model_eval::EvalArgs),
