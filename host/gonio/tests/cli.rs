@@ -609,9 +609,10 @@ fn a_scan_pauses_and_continues_from_another_terminal() {
     assert!(p.status.success(), "{}", text(&p));
     let v: serde_json::Value = serde_json::from_slice(&p.stdout).unwrap();
     assert_eq!(v["request"], "pause", "{v}");
-    let url: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&live).unwrap()).unwrap();
+    let served: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(&live).unwrap()).unwrap();
     let state = || -> serde_json::Value {
-        let text = ureq::get(format!("{}api/state", url["url"].as_str().unwrap()))
+        let text = ureq::get(format!("{}/api/state", served["origin"].as_str().unwrap()))
+            .header("X-Gonio-Token", served["token"].as_str().unwrap())
             .call()
             .unwrap()
             .body_mut()

@@ -77,7 +77,7 @@ fn binary_and_oversized_files_are_refused_by_what_they_are() {
     let zeros = vec![0u8; 1 << 20];
     assert!(run("zeros.dat", &zeros).contains("byte 0 is NUL: binary content"));
     assert!(run("zeros.csv", &zeros).contains("byte 0 is NUL: binary content"));
-    let mut late = b"theta_i_deg,theta_o_deg,dphi_deg,brdf_sr\n".repeat(1);
+    let mut late = b"theta_i_deg,theta_o_deg,dphi_deg,brdf_sr\n".to_vec();
     late.extend(b"10,20,30,1\n".repeat(200));
     late.push(0);
     assert!(run("late.csv", &late).contains("line 202: byte 2241 is NUL"));

@@ -59,7 +59,17 @@ pub struct Live {
     updates: broadcast::Sender<Update>,
     seen: Arc<Mutex<Seen>>,
     /// Where its page is served, once it is.
-    url: Option<String>,
+    served: Option<Served>,
+}
+
+/// Where a live scan's page is served and the token that admits its user.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Served {
+    /// The page, with its token: what the user opens.
+    pub url: String,
+    /// `http://127.0.0.1:PORT`, the page's origin, where the requests go.
+    pub origin: String,
+    pub token: String,
 }
 
 /// What a page joining late needs: every sample, the last progress and state.
@@ -76,32 +86,38 @@ impl Default for Live {
             requests: watch::channel(Request::Run).0,
             updates: broadcast::channel(UPDATES).0,
             seen: Arc::default(),
-            url: None,
+            served: None,
         }
     }
 }
 
 impl Live {
-    /// The same live scan, its page served at `url`.
-    pub fn served_at(mut self, url: String) -> Live {
-        self.url = Some(url);
+    /// The same live scan, its page served as `served` says.
+    pub fn served_at(mut self, served: Served) -> Live {
+        self.served = Some(served);
         self
     }
 
-    pub fn url(&self) -> Option<&str> {
-        self.url.as_deref()
-    }
-
-    /// Writes where the page is into the scan directory (`ScanDir::live`)
-    /// until the returned guard is dropped, the scan over.
+    /// Writes where the page is, and its token, into the scan directory
+    /// (`ScanDir::live`), readable by the user alone, until the returned
+    /// guard is dropped, the scan over.
     pub fn announce(&self, dir: &std::path::Path) -> anyhow::Result<Announced> {
         use anyhow::Context;
+        use std::io::Write;
         let path = gonio_scan_dir::ScanDir::new(dir).live();
-        if let Some(url) = &self.url {
-            let text = serde_json::json!({ "url": url, "pid": std::process::id() }).to_string();
-            std::fs::write(&path, text).with_context(|| format!("writing {}", path.display()))?;
+        if let Some(served) = &self.served {
+            let mut text = serde_json::to_value(served)?;
+            text["pid"] = std::process::id().into();
+            let mut options = std::fs::OpenOptions::new();
+            options.write(true).create(true).truncate(true);
+            #[cfg(unix)]
+            std::os::unix::fs::OpenOptionsExt::mode(&mut options, 0o600);
+            options
+                .open(&path)
+                .and_then(|mut f| f.write_all(text.to_string().as_bytes()))
+                .with_context(|| format!("writing {}", path.display()))?;
         }
-        Ok(Announced(self.url.as_ref().map(|_| path)))
+        Ok(Announced(self.served.as_ref().map(|_| path)))
     }
 
     /// Publishes an update to every page.

@@ -55,11 +55,13 @@ pub fn control_cmd(what: Request, a: ControlArgs) -> Result<()> {
         )
     })?;
     let announced: Value = serde_json::from_str(&text).with_context(|| format!("{} is not a live-view record", file.display()))?;
-    let Some(url) = announced["url"].as_str() else {
-        bail!("{} names no address", file.display());
+    let (Some(url), Some(token)) = (announced["origin"].as_str(), announced["token"].as_str()) else {
+        bail!("{} names no address and token (a scan of an earlier gonio?)", file.display());
     };
-    let body = ureq::post(format!("{url}{}", what.path()))
-        .send_empty()
+    let body = ureq::post(format!("{url}/{}", what.path()))
+        .header(crate::live::TOKEN_HEADER, token)
+        .content_type("application/json")
+        .send("{}")
         .map_err(|e| {
             anyhow::anyhow!(
                 "the scan in {} does not answer at {url} ({e}): it ended without removing {} (killed?); resume it with `gonio scan --resume {}`",

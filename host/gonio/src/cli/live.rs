@@ -30,9 +30,9 @@ pub async fn start(a: &LiveArgs, operator: Operator) -> Result<Live> {
         );
     }
     let live = Live::default();
-    let url = live::serve(live.clone(), a.live_addr).await?;
+    let served = live::serve(live.clone(), a.live_addr).await?;
     if a.live {
-        operator.notice(format_args!("live view: {url}"));
+        operator.notice(format_args!("live view: {}", served.url));
     }
-    Ok(live.served_at(url))
+    Ok(live.served_at(served))
 }

@@ -42,6 +42,12 @@ pub struct SimHeadArgs {
     /// off its certificate, drawn from --seed.
     #[arg(long)]
     pub imperfect: bool,
+    /// Wall-clock seconds per second of the simulated head's work: 1 runs
+    /// it at the reference head's own pace (moves, settling, integrations),
+    /// to try the live page, pause and continue without hardware; 0 (the
+    /// default) as fast as this machine can.
+    #[arg(long, value_name = "FACTOR", default_value_t = 0.0)]
+    pub pace: f32,
 }
 
 /// A simulated head's material by name: `glass-beads` (no parameters: a
@@ -71,10 +77,17 @@ impl SimHeadArgs {
         if !(self.clock_start_s.is_finite() && self.clock_start_s >= 0.0) {
             bail!("--clock-start-s must be a finite time ≥ 0");
         }
+        if !(self.pace.is_finite() && (0.0..=100.0).contains(&self.pace)) {
+            bail!(
+                "--pace {}: wall-clock seconds per simulated second, from 0 (as fast as it can) to 100",
+                self.pace
+            );
+        }
         let mut cfg = SimConfig {
             material,
             seed: self.seed,
             clock_start_s: self.clock_start_s,
+            pace: self.pace,
             ..SimConfig::default()
         };
         cfg.photodiode.laser_drift = self.laser_drift;

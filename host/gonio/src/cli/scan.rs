@@ -250,7 +250,7 @@ pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &Out
     };
     scan_into(
         &record,
-        simulated::target(&record.head, sim.faults),
+        simulated::target(&record.head, sim.faults, sim.pace),
         to,
         Operator::for_json(output.json),
         live,
@@ -311,7 +311,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
 /// view served, stoppable with Ctrl-C, and prints the summary.
 async fn scan_and_summarise(record: &ScanRecord, faults: Faults, to: Destination<'_>, a: &ScanArgs) -> Result<()> {
     let operator = Operator::for_json(a.output.json);
-    let target = simulated::target(&record.head, faults);
+    let target = simulated::target(&record.head, faults, a.sim_head.pace);
     let live = super::live::start(&a.live, operator).await?;
     let (outcome, samples) = scan_into(record, target, to, operator, &live, interrupt::requested()).await?;
     summarise(&record.spec, &outcome, &samples, a.output.json)

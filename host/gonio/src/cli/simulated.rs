@@ -12,11 +12,16 @@ use gonio_sim::faults::Faults;
 use gonio_sim::{spawn_in_process, SimConfig};
 use std::sync::Arc;
 
-/// The head a scan's record names; a simulated one suffers `faults` (not
-/// part of the record: they act on one run).
-pub fn target(head: &RecordedHead, faults: Faults) -> Arc<dyn Target> {
+/// The head a scan's record names; a simulated one suffers `faults` and
+/// works at `pace` (`SimConfig::pace`; neither is part of the record: they
+/// act on one run).
+pub fn target(head: &RecordedHead, faults: Faults, pace: f32) -> Arc<dyn Target> {
     match head {
-        RecordedHead::Sim(h) => Arc::new(Simulated(SimConfig { faults, ..h.config() })),
+        RecordedHead::Sim(h) => Arc::new(Simulated(SimConfig {
+            faults,
+            pace,
+            ..h.config()
+        })),
         RecordedHead::Port { path } => Arc::new(Port(path.clone())),
     }
 }
