@@ -1,17 +1,25 @@
-//! `render-check`: the `.bsdf` export read by Mitsuba 3 itself (issue #34).
-//! For every model (at the parameters `fit-bench` recovers), the narrow tape
-//! the defaults are sized for and the glass-bead material (none of the
-//! models), it writes the RGL file, then has `tests/render/mitsuba_check.py`
-//! load it with Mitsuba's `measured` plugin (`scalar_spectral`) and evaluate
-//! it at 2 000 direction pairs and the retro peak, and has Mitsuba render it
-//! in the report's two scenes (`gonio_analysis::render`: a plane lit by a
-//! point light beside an orthographic camera, and from the side). Each is
-//! compared with our own model: the pairs with `f·cos θo`, the images' mean
-//! radiance with our integration of the same scene.
+//! `render-check`: the `.bsdf` export read by Mitsuba 3 itself (issues #34,
+//! #60). For every model (at the parameters `fit-bench` recovers), retro
+//! lobes from broad (`cos^10`, both parametrizations) to narrow (`cos^10000`),
+//! and the glass-bead material (none of the models), it writes the RGL file,
+//! then has `tests/render/mitsuba_check.py` load it with Mitsuba's
+//! `measured` plugin (`scalar_spectral`) and evaluate it at 2 000 direction
+//! pairs (`rgl::pairs`: the viewer, and half the lights, drawn in
+//! proportion to cos θ up to 80°; a quarter of the lights within 3° of the
+//! retro direction, a quarter of the mirror) and the retro peak, and has
+//! Mitsuba render it in the report's two scenes (`gonio_analysis::render`).
+//! Each is compared with our own model, `f(l, v)·cos θl` with Mitsuba's
+//! `si.wi` the viewer `v` and `wo` the light `l` (the file's convention:
+//! a render puts the camera at `si.wi`), the images' mean radiance with our
+//! integration of the same scene.
 //!
-//! Bars: median relative error ≤ 2 %, 95th percentile ≤ 10 %, retro peak
-//! within 5 %, each image's mean within 5 %. Prints one JSON object; exits
-//! non-zero when a bar is missed or Mitsuba cannot be run (`pip install
+//! Two sets of bars. The gate, which fails the run: median relative error
+//! ≤ 2 %, 95th percentile ≤ 10 %, retro peak within 5 % (`rgl::TOLERANCE`),
+//! each image's mean within 5 %, for every model, the 1 000 tape and the
+//! beads. The renderer's bars of issue #60, reported per material with
+//! the worst pair's region: median ≤ 0.5 %, p95 ≤ 3 %, no pair beyond 10 %;
+//! narrow lobes miss them (docs/render.md). Prints one JSON object; exits
+//! non-zero when the gate is missed or Mitsuba cannot be run (`pip install
 //! mitsuba==3.9.1`).
 
 use anyhow::{bail, ensure, Context, Result};
@@ -26,19 +34,47 @@ use std::process::Command;
 const PAIRS: usize = 2000;
 const LOBE_DEG: f64 = 3.0;
 const IMAGE_TOLERANCE: f64 = 0.05;
+/// The renderer's bars (median, 95th percentile, largest relative error).
+const RENDER_BARS: [f64; 3] = [0.005, 0.03, 0.10];
 
-fn materials() -> Vec<(String, Specimen)> {
-    let mut out: Vec<(String, Specimen)> = ModelId::ALL
+/// The materials, each with whether the gate holds it.
+fn materials() -> Vec<(String, Specimen, bool)> {
+    let mut out: Vec<(String, Specimen, bool)> = ModelId::ALL
         .iter()
-        .map(|&m| (m.name().to_string(), Specimen::Model(reference(m))))
+        .map(|&m| (m.name().to_string(), Specimen::Model(reference(m)), true))
         .collect();
-    let narrow = Material {
+    // A broad retro lobe (the road marking's) and a tape's, narrow to narrower.
+    let retro_phong = |n: f64, param: Param, tape: bool| Material {
         model: ModelId::RetroPhong,
-        params: vec![0.05, 1000.0, 0.8, 0.1, 0.02, 3.0],
-        param: Param::View,
+        params: if tape {
+            vec![0.05, n, 0.8, 0.1, 0.02, 3.0]
+        } else {
+            vec![0.62, n, 0.158, 0.0415, 0.00133, 5.47]
+        },
+        param,
     };
-    out.push(("narrow-tape".into(), Specimen::Model(narrow)));
-    out.push(("glass-beads".into(), Specimen::default()));
+    out.push((
+        "broad-10-view".into(),
+        Specimen::Model(retro_phong(10.0, Param::View, false)),
+        false,
+    ));
+    out.push((
+        "broad-10-back".into(),
+        Specimen::Model(retro_phong(10.0, Param::Back, false)),
+        false,
+    ));
+    out.push(("narrow-tape".into(), Specimen::Model(retro_phong(1000.0, Param::View, true)), true));
+    out.push((
+        "narrow-10000-view".into(),
+        Specimen::Model(retro_phong(1e4, Param::View, true)),
+        false,
+    ));
+    out.push((
+        "narrow-10000-back".into(),
+        Specimen::Model(retro_phong(1e4, Param::Back, true)),
+        false,
+    ));
+    out.push(("glass-beads".into(), Specimen::default(), true));
     out
 }
 
@@ -58,7 +94,7 @@ fn run() -> Result<bool> {
     let retro = rgl::retro_directions();
     let scenes = scenes();
     let mut cases = Vec::new();
-    for (name, specimen) in materials() {
+    for (name, specimen, gated) in materials() {
         let eval = |d: &Directions| specimen.eval(d);
         // The beads' 0.6° ring needs slices 0.125° apart (docs/render.md).
         let options = match specimen {
@@ -73,6 +109,7 @@ fn run() -> Result<bool> {
         std::fs::write(&file, table.bytes())?;
         cases.push(json!({
             "name": name,
+            "gated": gated,
             "file": file,
             "pairs": drawn,
             "ours": drawn.iter().map(|&(wi, wo)| rgl::fr_cos(&eval, wi, wo)).collect::<Vec<_>>(),
@@ -108,6 +145,7 @@ fn run() -> Result<bool> {
 
 fn compare(cases: &[Value], got: &Value) -> Result<bool> {
     let [median_bar, p95_bar, peak_bar] = rgl::TOLERANCE;
+    let drawn = rgl::pairs(PAIRS, LOBE_DEG.to_radians(), 2026);
     let mut rows = Vec::new();
     let mut all_ok = true;
     for case in cases {
@@ -121,7 +159,9 @@ fn compare(cases: &[Value], got: &Value) -> Result<bool> {
                 .collect()
         };
         let (evals, retro, images) = (floats(&g["pairs"])?, floats(&g["retro"])?, floats(&case["mitsuba_images"])?);
-        let errors = rgl::relative_errors(evals.iter().copied(), floats(&case["ours"])?.into_iter());
+        let ours_pairs = floats(&case["ours"])?;
+        let (max, worst) = rgl::worst(&drawn, &evals, &ours_pairs);
+        let errors = rgl::relative_errors(evals.iter().copied(), ours_pairs.into_iter());
         let peak = rgl::relative_errors(retro.iter().copied(), floats(&case["ours_retro"])?.into_iter());
         let peak = peak.last().copied().unwrap_or(f64::NAN);
         let ours = floats(&case["images"])?;
@@ -130,12 +170,18 @@ fn compare(cases: &[Value], got: &Value) -> Result<bool> {
         }
         let image_errors: Vec<f64> = images.iter().zip(&ours).map(|(m, o)| (m - o).abs() / o).collect();
         let (median, p95) = (rgl::quantile(&errors, 0.5), rgl::quantile(&errors, 0.95));
+        let gated = case["gated"].as_bool().unwrap_or(true);
         let ok = median <= median_bar && p95 <= p95_bar && peak <= peak_bar && image_errors.iter().all(|&e| e <= IMAGE_TOLERANCE);
-        all_ok &= ok;
+        let within_render_bars = median <= RENDER_BARS[0] && p95 <= RENDER_BARS[1] && max <= RENDER_BARS[2];
+        all_ok &= ok || !gated;
         eprintln!(
-            "{name:<20} median {:6.3} %  p95 {:6.3} %  retro peak {:6.3} %  images {}  {}",
+            "{name:<20} median {:6.3} %  p95 {:6.3} %  max {:7.1} % at θi {:.1}°, θo {:.1}°, Δφ {:.1}°  retro peak {:6.3} %  images {}  {}{}",
             100.0 * median,
             100.0 * p95,
+            100.0 * max,
+            worst[0],
+            worst[1],
+            worst[2],
             100.0 * peak,
             images
                 .iter()
@@ -143,16 +189,24 @@ fn compare(cases: &[Value], got: &Value) -> Result<bool> {
                 .map(|(m, o)| format!("{m:.4} vs {o:.4}"))
                 .collect::<Vec<_>>()
                 .join(", "),
-            if ok { "ok" } else { "MISSED" }
+            match (gated, ok) {
+                (false, _) => "not gated",
+                (true, true) => "gate ok",
+                (true, false) => "gate MISSED",
+            },
+            if within_render_bars { ", within the renderer's bars" } else { ", beyond the renderer's bars" }
         );
-        rows.push(json!({"material": name, "pairs": errors.len(), "median": median, "p95": p95, "retro_peak": peak,
+        rows.push(json!({"material": name, "pairs": errors.len(), "median": median, "p95": p95, "max": max,
+                         "worst": {"theta_i_deg": worst[0], "theta_o_deg": worst[1], "dphi_deg": worst[2]}, "retro_peak": peak,
                          "images": scenes().iter().zip(images.iter().zip(&ours)).map(|(s, (m, o))| json!({"scene": s.name, "mitsuba": m, "ours": o, "error": (m - o).abs() / o})).collect::<Vec<_>>(),
-                         "ok": ok}));
+                         "gated": gated, "gate_ok": ok, "within_render_bars": within_render_bars}));
     }
     println!(
         "{}",
-        json!({"mitsuba": got["version"], "variant": got["variant"], "bars": {"median": median_bar, "p95": p95_bar, "retro_peak": peak_bar, "image": IMAGE_TOLERANCE},
-               "materials": rows, "all_within_bars": all_ok})
+        json!({"mitsuba": got["version"], "variant": got["variant"],
+               "gate": {"median": median_bar, "p95": p95_bar, "retro_peak": peak_bar, "image": IMAGE_TOLERANCE},
+               "render_bars": {"median": RENDER_BARS[0], "p95": RENDER_BARS[1], "max": RENDER_BARS[2]},
+               "materials": rows, "gate_ok": all_ok})
     );
     Ok(all_ok)
 }

@@ -171,12 +171,14 @@ pub fn write_bsdf(brdf: &dyn Fn(&Directions) -> f64, name: &str, origin: &str, o
 /// The warning for a table outside the tolerance, with its measured errors.
 pub fn coarse_warning(acc: &Accuracy) -> Option<String> {
     let [median, p95, peak] = rgl::TOLERANCE;
+    let [ti, to, dphi] = acc.worst_deg;
     (!acc.within_tolerance()).then(|| {
         format!(
-            "warning: the table is too coarse for this material (median {:.2} %, 95th percentile {:.2} %, retro peak {:.2} %; tolerance {} %, {} %, {} %); raise --grid or --warp-grid, or lower --theta-step (gonio export)",
+            "warning: the table is too coarse for this material (median {:.2} %, 95th percentile {:.2} %, retro peak {:.2} %, largest {:.1} % at θi {ti:.1}°, θo {to:.1}°, Δφ {dphi:.1}°; tolerance {} %, {} %, {} %); raise --grid or --warp-grid, or lower --theta-step (gonio export)",
             100.0 * acc.median,
             100.0 * acc.p95,
             100.0 * acc.retro_peak,
+            100.0 * acc.max,
             100.0 * median,
             100.0 * p95,
             100.0 * peak
@@ -202,10 +204,14 @@ fn report_bsdf(json: bool, name: &str, output: &Path, w: &Written) {
         w.incidences
     );
     eprintln!(
-        "read back as a renderer reads it, at {} direction pairs: median error {:.2} %, 95th percentile {:.2} %, retro peak {:.2} %",
+        "read back as a renderer reads it, at {} direction pairs: median error {:.2} %, 95th percentile {:.2} %, largest {:.1} % (at θi {:.1}°, θo {:.1}°, Δφ {:.1}°), retro peak {:.2} %",
         acc.pairs,
         100.0 * acc.median,
         100.0 * acc.p95,
+        100.0 * acc.max,
+        acc.worst_deg[0],
+        acc.worst_deg[1],
+        acc.worst_deg[2],
         100.0 * acc.retro_peak
     );
     if let Some(w) = coarse_warning(acc) {

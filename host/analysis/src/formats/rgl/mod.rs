@@ -474,14 +474,20 @@ fn fields(
 pub struct Accuracy {
     /// Pairs compared (half drawn near the retro or the mirror direction).
     pub pairs: usize,
-    /// Median and 95th percentile of `|table − f|/f` over them.
+    /// Median, 95th percentile and largest `|table − f|/f` over them.
     pub median: f64,
     pub p95: f64,
+    pub max: f64,
+    /// Where the largest is, as `models.md` says a geometry: the light's
+    /// `θi`, the viewer's `θo` and `Δφ` (degrees).
+    pub worst_deg: [f64; 3],
     /// The largest `|table − f|/f` exactly at retroreflection, over incidences 0°–80°.
     pub retro_peak: f64,
 }
 
-/// The tolerances of a usable table (median, 95th percentile, retro peak).
+/// The tolerances of a usable table (median, 95th percentile, retro peak),
+/// under which export warns. The renderer's bars of `render-check` are
+/// tighter, and narrow lobes miss them (docs/render.md).
 pub const TOLERANCE: [f64; 3] = [0.02, 0.10, 0.05];
 /// Pairs a written table is checked at, and the radius (degrees) of the
 /// retro and mirror neighbourhoods a quarter of them each are drawn in.
@@ -489,14 +495,15 @@ pub const CHECK_PAIRS: usize = 4000;
 pub const CHECK_LOBE_DEG: f64 = 3.0;
 
 /// The file's `description`: where the values come from, at which
-/// wavelengths, and what is assumed.
+/// wavelengths, what is assumed, and which direction is the light (a
+/// retroreflector's models are not reciprocal: docs/render.md).
 pub fn description(origin: &str, spectrum: Spectrum) -> String {
     let values = match spectrum {
         Spectrum::Laser => format!("values at the head's laser wavelength, {LASER_NM} nm, held for every wavelength"),
         Spectrum::Visible => format!("values measured at {LASER_NM} nm and assumed grey over 360-830 nm"),
         Spectrum::Rgb => format!("values measured at {LASER_NM} nm and assumed grey in red, green and blue"),
     };
-    format!("gonio: {origin}; {values}; isotropic")
+    format!("gonio: {origin}; {values}; isotropic; the viewer at the incidence (si.wi), the light at wo: f(l, v), not reciprocal")
 }
 
 impl Accuracy {
@@ -524,23 +531,38 @@ fn near(rng: &mut impl Rng, w: [f64; 3], radius: f64) -> [f64; 3] {
     }
 }
 
-/// `n` direction pairs `(ωi, ωo)` drawn from `seed`: a quarter with `ωo`
-/// within `lobe` (radians) of the retro direction `ωi`, a quarter within it
-/// of the mirror direction, the rest uniform over the hemisphere up to 88.2°.
+/// The largest polar angle of the pairs a table is judged at (degrees):
+/// beyond it a renderer sees the material edge-on, where the table's
+/// slices end ([`THETA_I_MAX_DEG`]) and `f·cos θ` vanishes.
+pub const CHECK_THETA_MAX_DEG: f64 = 80.0;
+
+/// A direction drawn in proportion to `cos θ` over `θ ≤ theta_max`.
+fn cosine_weighted(rng: &mut impl Rng, theta_max: f64) -> [f64; 3] {
+    let sin_t = (rng.random::<f64>()).sqrt() * theta_max.sin();
+    unit(sin_t.asin(), rng.random::<f64>() * 2.0 * PI)
+}
+
+/// `n` direction pairs `(ωi, ωo)` drawn from `seed`, both within
+/// [`CHECK_THETA_MAX_DEG`] of the normal, `ωi` in proportion to `cos θ`:
+/// half with `ωo` drawn so too, over the whole hemisphere, as a renderer
+/// meets them; a quarter within `lobe` (radians) of the retro direction
+/// `ωi`, a quarter within it of the mirror direction.
 pub fn pairs(n: usize, lobe: f64, seed: u64) -> Vec<([f64; 3], [f64; 3])> {
     let mut rng = rand::rngs::StdRng::seed_from_u64(seed);
-    let up = |rng: &mut rand::rngs::StdRng| near(rng, [0.0, 0.0, 1.0], FRAC_PI_2 * 0.98);
-    (0..n)
-        .map(|k| {
-            let wi = up(&mut rng);
-            let wo = match k % 4 {
-                0 => near(&mut rng, wi, lobe),
-                1 => near(&mut rng, [-wi[0], -wi[1], wi[2]], lobe),
-                _ => up(&mut rng),
-            };
-            (wi, wo)
-        })
-        .collect()
+    let theta_max = CHECK_THETA_MAX_DEG.to_radians();
+    let mut out = Vec::with_capacity(n);
+    while out.len() < n {
+        let wi = cosine_weighted(&mut rng, theta_max);
+        let wo = match out.len() % 4 {
+            0 => near(&mut rng, wi, lobe),
+            1 => near(&mut rng, [-wi[0], -wi[1], wi[2]], lobe),
+            _ => cosine_weighted(&mut rng, theta_max),
+        };
+        if elevation(wo) <= theta_max {
+            out.push((wi, wo));
+        }
+    }
+    out
 }
 
 /// `|got − truth| / truth` sorted, where the truth is positive.
@@ -564,14 +586,21 @@ pub fn retro_directions() -> Vec<[f64; 3]> {
     (0..=1280).map(|k| unit((k as f64 * 0.0625).to_radians(), 0.3)).collect()
 }
 
+/// The geometry of a pair, as `models.md` says it: `(θi, θo, Δφ)` of the
+/// light `ωo` and the viewer `ωi` (degrees).
+pub fn geometry_deg(wi: [f64; 3], wo: [f64; 3]) -> [f64; 3] {
+    let (l, v, dphi) = Directions::in_frame([0.0, 0.0, 1.0], wo, wi, [1.0, 0.0, 0.0]).angles();
+    [l.to_degrees(), v.to_degrees(), dphi.to_degrees()]
+}
+
 /// Compares the table, read as the plugin reads it, with `brdf` at
 /// [`pairs`] and at the retro peak.
 pub fn accuracy(table: &Table, brdf: &dyn Fn(&Directions) -> f64, n: usize, lobe: f64) -> Accuracy {
     let drawn = pairs(n, lobe, 34);
-    let errors = relative_errors(
-        drawn.iter().map(|&(wi, wo)| table.eval(wi, wo)),
-        drawn.iter().map(|&(wi, wo)| fr_cos(brdf, wi, wo)),
-    );
+    let got: Vec<f64> = drawn.iter().map(|&(wi, wo)| table.eval(wi, wo)).collect();
+    let truth: Vec<f64> = drawn.iter().map(|&(wi, wo)| fr_cos(brdf, wi, wo)).collect();
+    let worst = worst(&drawn, &got, &truth);
+    let errors = relative_errors(got.into_iter(), truth.into_iter());
     let retro_peak = retro_directions()
         .into_iter()
         .map(|w| {
@@ -583,8 +612,21 @@ pub fn accuracy(table: &Table, brdf: &dyn Fn(&Directions) -> f64, n: usize, lobe
         pairs: errors.len(),
         median: quantile(&errors, 0.5),
         p95: quantile(&errors, 0.95),
+        max: worst.0,
+        worst_deg: worst.1,
         retro_peak,
     }
+}
+
+/// The largest `|got − truth|/truth` of `pairs` and the geometry it is at.
+pub fn worst(pairs: &[([f64; 3], [f64; 3])], got: &[f64], truth: &[f64]) -> (f64, [f64; 3]) {
+    pairs
+        .iter()
+        .zip(got.iter().zip(truth))
+        .filter(|(_, (_, &t))| t > 0.0)
+        .map(|(&(wi, wo), (&g, &t))| ((g - t).abs() / t, geometry_deg(wi, wo)))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .unwrap_or((f64::NAN, [f64::NAN; 3]))
 }
 
 #[cfg(test)]
