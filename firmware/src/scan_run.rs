@@ -5,7 +5,7 @@
 //! serve loop's watch) and does the moving and measuring; this says *what
 //! comes next*, in a few integer steps per operation.
 
-use crate::sweep::run::Sweeping;
+use crate::sweep::sweeping::Sweeping;
 use gonio_shared::{Fault, Field, Reply, SampleFlags, ScanEvent, ScanSpec, Visit, VisitChunk, VisitsQueued, VISIT_QUEUE};
 use heapless::Deque;
 

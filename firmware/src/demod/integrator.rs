@@ -108,7 +108,7 @@ impl<'r> Integrator<'r> {
 
 #[cfg(test)]
 mod tests {
-    use super::super::reference::MAX_M;
+    use super::super::learned::MAX_M;
     use super::*;
     use gonio_shared::Reference as Kind;
 

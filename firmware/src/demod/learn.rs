@@ -2,30 +2,10 @@
 //! chop-period waveform (with the offset drift removed), its phase against
 //! the square and sine references, and the matched reference built from it.
 
+use super::learned::{Learned, MAX_M};
 use super::nuisance::Nuisance;
-use super::reference::{Reference, MAX_M};
+use super::reference::Reference;
 use gonio_shared::Reference as Kind;
-
-/// What learning found, valid for one number of samples per period.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Learned {
-    m: usize,
-    /// Mean period waveform, zero-mean, in codes.
-    waveform: [f64; MAX_M],
-    /// Phase of the waveform against the square and the sine (radians).
-    pub phase_square: f64,
-    pub phase_sine: f64,
-}
-
-impl Learned {
-    pub fn samples_per_period(&self) -> usize {
-        self.m
-    }
-
-    pub fn waveform(&self) -> &[f64] {
-        &self.waveform[..self.m]
-    }
-}
 
 /// Accumulates periods to learn from.
 pub struct Learner {

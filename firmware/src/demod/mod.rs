@@ -24,10 +24,12 @@
 
 mod integrator;
 mod learn;
+mod learned;
 mod nuisance;
 mod reference;
 
 pub use integrator::{Estimate, Integrator};
-pub use learn::{Learned, Learner};
+pub use learn::Learner;
+pub use learned::{Learned, MAX_M};
 pub use nuisance::Design;
-pub use reference::{Period, Reference, MAX_M};
+pub use reference::{Period, Reference};

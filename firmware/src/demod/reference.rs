@@ -1,12 +1,9 @@
 //! Reference waveforms over one chop period, and the per-period correlation
 //! (the only code that touches every sample).
 
-use super::learn::Learned;
+use super::learned::{Learned, MAX_M};
 use gonio_shared::Reference as Kind;
 
-/// Largest supported samples per period: the settings' own limit, so a
-/// validated setting always fits the tables.
-pub const MAX_M: usize = gonio_shared::DetectionSettings::SAMPLES_PER_PERIOD_MAX as usize;
 /// Scale of sine and matched tables (Q14).
 const FULL: f64 = 16383.0;
 

@@ -7,5 +7,6 @@
 
 pub mod plan;
 pub(crate) mod run;
+pub(crate) mod sweeping;
 
 pub use plan::{check, check_path, limits, row_ends, row_levels, row_plan, row_speed, tag, RowPlan};

@@ -3,10 +3,11 @@
 //! between the serve loop's turns ([`Head::sweep_turn`]).
 
 use super::plan as sweep;
+use super::sweeping::Sweeping;
 use crate::head::Head;
 use crate::hw::{Board, Clock, StepTimer};
 use crate::kinematics;
-use crate::motion::{self, Running};
+use crate::motion;
 use crate::scan_run::ScanRun;
 use crate::state::{self, Event};
 use crate::units;
@@ -22,30 +23,6 @@ pub(crate) enum SweepTurn {
     Sample(SweptSample),
     /// The row's last sample, and how many it made.
     Last(SweptSample, u32),
-}
-
-/// A sweep under way, between two of its samples: its move in flight and
-/// where the next sample begins (the design of its samples is the
-/// detector's). A scan keeps it
-/// across the serve loop's turns (one sample each).
-pub(crate) struct Sweeping {
-    pub(crate) run: Running,
-    /// The sweep scan's row, if it is one.
-    pub(crate) scan: Option<ScanPosition>,
-    /// When the move started (µs).
-    pub(crate) t0: u64,
-    /// Steps emitted and head time where the next sample begins.
-    pub(crate) first: [u32; 3],
-    pub(crate) start_us: u64,
-    /// False once the move is over (its last sample taken).
-    pub(crate) moving: bool,
-    /// The detector sees through the beam splitter all along (a path
-    /// cannot cross the blind zone between it and the open view,
-    /// [`super::check_path`]).
-    pub(crate) splitter: bool,
-    /// Some sample so far rose above the noise.
-    pub(crate) lit: bool,
-    pub(crate) samples: u32,
 }
 
 impl<B: Board> Head<B> {

@@ -27,7 +27,8 @@
 //! (default 100, 20 and 500).
 
 use gonio::cli::calibrate::{self, CalibrateArgs, Calibrated};
-use gonio::cli::fit::{compare, domain, FitOptions};
+use gonio::cli::fit::compare;
+use gonio::cli::fitting::{domain, FitOptions};
 use gonio::cli::scan::{demo_scan, OutputArgs};
 use gonio_analysis::calibration;
 use gonio_analysis::coefficients::{self, Cie, Fitted, Provenance, Request, Source, Support};
@@ -359,7 +360,7 @@ fn support_holds(data: &fit::Dataset, theta_i_deg: f64) -> bool {
 }
 
 /// The name of the fit with the lowest AIC.
-fn source_best(outcomes: &[gonio::cli::fit::Outcome]) -> &'static str {
+fn source_best(outcomes: &[gonio::cli::fitting::Outcome]) -> &'static str {
     outcomes
         .iter()
         .min_by(|a, b| a.fit.criteria().aic.total_cmp(&b.fit.criteria().aic))

@@ -5,7 +5,7 @@
 //! known to be possible; Ctrl-C stops the head and says how to resume.
 
 use super::live::Live;
-use super::progress::Progress;
+use super::progress::{hms, Progress};
 use super::run;
 use crate::operator::Operator;
 use crate::plate;
@@ -316,12 +316,6 @@ fn lower_bound_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> Op
         ..spec.clone()
     };
     lower_bound(cfg, &grid, settle, acquire).map(|(t, _)| t.total_s())
-}
-
-/// Seconds as h:mm:ss.
-pub fn hms(s: f64) -> String {
-    let s = s.round() as u64;
-    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }
 
 /// What a scan's visit positions are called: a grid's points, or a sweep

@@ -67,10 +67,8 @@ impl Progress {
     pub fn update(&self, next: u32, spent_s: f64, measured: u32, unreachable: u32) {
         let left_s = self.left_s(next, spent_s);
         self.bar.set_position(next.saturating_sub(self.first) as u64);
-        self.bar.set_message(format!(
-            "{measured} measured, {unreachable} unreachable, {} left",
-            super::directory::hms(left_s)
-        ));
+        self.bar
+            .set_message(format!("{measured} measured, {unreachable} unreachable, {} left", hms(left_s)));
         self.live.publish(Update::Progress {
             done: next,
             of: self.first + self.left_s.len().saturating_sub(1) as u32,
@@ -104,6 +102,12 @@ impl Progress {
     pub fn finish(&self) {
         self.bar.finish_and_clear();
     }
+}
+
+/// Seconds as h:mm:ss.
+pub fn hms(s: f64) -> String {
+    let s = s.round() as u64;
+    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }
 
 #[cfg(test)]

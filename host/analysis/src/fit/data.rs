@@ -64,6 +64,14 @@ pub fn check_angles(theta_i: f64, theta_o: f64, dphi: f64) -> Result<(f64, f64, 
     Ok((hemisphere(theta_i), hemisphere(theta_o), dphi))
 }
 
+/// Beyond this view angle (degrees) a value stored as `f_r·cosθo` is not
+/// turned into `f_r`: cosθo < 0.0018 would multiply its value, and its
+/// noise, by more than 570. Measured tapes store rows at θo = 90°, where
+/// cos 90° = 6·10⁻¹⁷ in floating point made `f_r` ≈ 10¹³; readers drop
+/// them (`settle.rs`). The head's own most grazing view (EN 1436's
+/// θo = 87.71°) is well inside it.
+pub const GRAZING_DEG: f64 = 89.9;
+
 /// How far beyond the hemisphere an angle may be written (radians, 0.006°):
 /// files print radians rounded, 90° as `1.5708` is 4·10⁻⁶ beyond it, and a
 /// direction computed on the horizon may land a rounding off it.
@@ -135,11 +143,10 @@ impl Dataset {
         out.units = units;
         for o in &mut out.observations {
             let from = o.unit_factor(self.units);
-            if from < super::settle::GRAZING_DEG.to_radians().cos() {
+            if from < GRAZING_DEG.to_radians().cos() {
                 bail!(
-                    "θo = {:.3}° is beyond {}°: its f_r·cosθo cannot give f_r",
-                    o.theta_o.to_degrees(),
-                    super::settle::GRAZING_DEG
+                    "θo = {:.3}° is beyond {GRAZING_DEG}°: its f_r·cosθo cannot give f_r",
+                    o.theta_o.to_degrees()
                 );
             }
             let k = o.unit_factor(units) / from;

@@ -3,15 +3,8 @@
 //! than once made one sample. Each is said in a warning, with how many
 //! rows and why.
 
-use super::data::{Dataset, Observation, Units};
+use super::data::{Dataset, Observation, Units, GRAZING_DEG};
 use std::collections::HashMap;
-
-/// Beyond this view angle (degrees) a value stored as `f_r·cosθo` is not
-/// turned into `f_r`: cosθo < 0.0018 would multiply its value, and its
-/// noise, by more than 570. Measured tapes store rows at θo = 90°, where
-/// cos 90° = 6·10⁻¹⁷ in floating point made `f_r` ≈ 10¹³. The head's own
-/// most grazing view (EN 1436's θo = 87.71°) is well inside it.
-pub const GRAZING_DEG: f64 = 89.9;
 
 /// Angles closer than this (radians) are one geometry.
 const SAME_RAD: f64 = 1e-6;

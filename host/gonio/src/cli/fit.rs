@@ -1,178 +1,18 @@
 //! `gonio fit` and `gonio compare`: models fitted to a data file (ALTA `.dat`
 //! or the calibrated sample CSV).
 
-use super::rational::RationalArgs;
+use super::fitting::{domain, write_drawn, CompareArgs, Domain, FitArgs, FitOptions, Outcome};
 use anyhow::{bail, Context, Result};
 use gonio_analysis::coefficients::{Coefficient, Source, Support};
 use gonio_analysis::fit::compared::ComparedFit;
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::goodness::Goodness;
-use gonio_analysis::fit::{self, data::theta_in, Dataset, Fit, FitSpec, Units, Weighting};
+use gonio_analysis::fit::{self, Dataset, Fit, FitSpec};
 use gonio_analysis::rational::RationalSpec;
 use gonio_analysis::rounding::{figure, significant};
-use gonio_brdf::{ModelId, Param};
+use gonio_brdf::ModelId;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-/// Which samples a fit sees, and how they are weighed.
-#[derive(Debug, Clone, clap::Args)]
-pub struct FitOptions {
-    /// Cosine of the retro lobes: `back` (cos_B) or `view` (cos_R = l·v).
-    #[arg(long, value_enum, default_value = "view")]
-    pub param: ParamArg,
-    /// Fit the retro half-space only (|Δφ| ≤ 90°).
-    #[arg(long)]
-    pub retro_only: bool,
-    /// Fit only these incidence angles (degrees, comma-separated).
-    #[arg(long, value_delimiter = ',')]
-    pub theta_i: Vec<f64>,
-    /// Leave these incidence angles (degrees) out of the fit and report how
-    /// well the fit predicts them (cross-validation, as Zhang et al.).
-    #[arg(long, value_delimiter = ',')]
-    pub holdout_theta_i: Vec<f64>,
-    /// Sample weights in the least-squares sum.
-    #[arg(long, value_enum, default_value = "uniform")]
-    pub weights: Weighting,
-    /// Units the residuals are taken in (default: the file's own); for a file
-    /// that does not say what its values are (ALTA without #PARAM_OUT), also
-    /// what they are.
-    #[arg(long, value_enum)]
-    pub units: Option<Units>,
-    /// Seed of the global search.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Search boxes replacing the defaults, NAME=LO:HI,... (in `compare`,
-    /// each model takes the names it has).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "NAME=LO:HI")]
-    pub bounds: Vec<String>,
-    #[command(flatten)]
-    pub instrument: super::instrument::InstrumentArgs,
-    /// Print one JSON object (errors too: `{"error", "kind"}`).
-    #[arg(long)]
-    pub json: bool,
-}
-
-impl Default for FitOptions {
-    /// The command line's defaults: the whole data set, uniform weights,
-    /// the view cosine, the file's units.
-    fn default() -> Self {
-        FitOptions {
-            param: ParamArg::View,
-            retro_only: false,
-            theta_i: Vec::new(),
-            holdout_theta_i: Vec::new(),
-            weights: Weighting::Uniform,
-            units: None,
-            seed: 1,
-            bounds: Vec::new(),
-            instrument: Default::default(),
-            json: false,
-        }
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ParamArg {
-    Back,
-    View,
-}
-
-impl From<ParamArg> for Param {
-    fn from(p: ParamArg) -> Param {
-        match p {
-            ParamArg::Back => Param::Back,
-            ParamArg::View => Param::View,
-        }
-    }
-}
-
-#[derive(Debug, clap::Args)]
-pub struct FitArgs {
-    /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
-    pub file: PathBuf,
-    /// Model id (models.md): lambert, retro-phong, abc-retro, abc-retro-per-lobe, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param,
-    /// or `rational` (a rational function through every sample's segment; its plane is --param: back or view, the light-view plane).
-    #[arg(long)]
-    pub model: String,
-    #[command(flatten)]
-    pub rational: RationalArgs,
-    /// Hold a parameter at a value, NAME=V (repeatable).
-    #[arg(long)]
-    pub fix: Vec<String>,
-    /// Write the fit as JSON to this file as well.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Write the fit as a Disney BRDF Explorer shader (.brdf) as well.
-    #[arg(long)]
-    pub brdf: Option<PathBuf>,
-    /// Write the fit as an RGL .bsdf for Mitsuba 3 and pbrt-v4 as well, at
-    /// `gonio export`'s default resolution (a warning on stderr if too coarse).
-    #[arg(long)]
-    pub bsdf: Option<PathBuf>,
-    /// Draw the data and the fit into this directory (PNG and SVG).
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    #[command(flatten)]
-    pub options: FitOptions,
-}
-
-#[derive(Debug, clap::Args)]
-pub struct CompareArgs {
-    /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
-    pub file: PathBuf,
-    /// Write DIR/report.html: the comparison table, every fit as JSON and
-    /// BRDF Explorer shader (DIR/fits), pictures of the best fits (DIR/plots).
-    #[arg(long, value_name = "DIR")]
-    pub report: Option<PathBuf>,
-    /// Overwrite a report already in the --report directory.
-    #[arg(long, requires = "report")]
-    pub force: bool,
-    /// The rational function's row (its segments: the samples' σ unless
-    /// --segments says otherwise; where none holds them all, a note says why).
-    #[command(flatten)]
-    pub rational: RationalArgs,
-    #[command(flatten)]
-    pub options: FitOptions,
-}
-
-/// The data a fit sees (domain restriction applied), and the held-out part.
-pub struct Domain {
-    pub(super) train: Dataset,
-    pub(super) holdout: Option<Dataset>,
-}
-
-pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
-    let data = super::load_data(path, o.units, &o.instrument)?;
-    // What the file holds, for the messages below: the restrictions may
-    // leave nothing to name.
-    let held = degrees(&data.incidence_angles_deg());
-    let data = data.filter(|s| (!o.retro_only || s.on_retro_side()) && (o.theta_i.is_empty() || theta_in(s.theta_i, &o.theta_i)));
-    let (train, holdout) = if o.holdout_theta_i.is_empty() {
-        (data, None)
-    } else {
-        let h = data.filter(|s| theta_in(s.theta_i, &o.holdout_theta_i));
-        if h.observations.is_empty() {
-            bail!(
-                "no samples to hold out at θi = {}: {} holds θi = {held}",
-                degrees(&o.holdout_theta_i),
-                path.display()
-            );
-        }
-        (data.filter(|s| !theta_in(s.theta_i, &o.holdout_theta_i)), Some(h))
-    };
-    if train.observations.is_empty() {
-        bail!(
-            "no samples left to fit after the restrictions (--theta-i, --retro-only, --holdout-theta-i): {} holds θi = {held}",
-            path.display()
-        );
-    }
-    Ok(Domain { train, holdout })
-}
-
-/// `15°, 30°, 60°`.
-fn degrees(angles: &[f64]) -> String {
-    angles.iter().map(|a| format!("{a}°")).collect::<Vec<_>>().join(", ")
-}
 
 /// `--bounds` for one model: `(index, lo, hi)`. With `every_model`
 /// (`compare`), names the model lacks are skipped, unless no model has them.
@@ -215,13 +55,6 @@ fn spec(model: ModelId, fixes: &[String], o: &FitOptions, data: &Dataset, every_
         seed: o.seed,
         ..FitSpec::new(model)
     })
-}
-
-/// One fit of a comparison, its held-out metrics and its fit file's JSON.
-pub struct Outcome {
-    pub fit: ComparedFit,
-    pub holdout: Option<fit::Metrics>,
-    pub json: Value,
 }
 
 /// Every fit of a comparison, and the fits it tried and could not make.
@@ -300,26 +133,6 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
 
 /// |ρ| beyond which two parameters are named as correlated.
 const STRONG_CORRELATION: f64 = 0.95;
-
-/// What `--brdf`, `--bsdf` and `--plot` ask of a fit: its shader, its
-/// renderer's file, its pictures over `data`.
-pub fn write_drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<()> {
-    let origin = format!("a fit to {}", a.file.display());
-    if let Some(out) = &a.brdf {
-        super::export::write_brdf(fitted, &origin, out)?;
-    }
-    if let Some(out) = &a.bsdf {
-        let opt = gonio_analysis::formats::rgl::Options::default();
-        let written = super::export::write_bsdf(&|d| fitted.eval(d), fitted.name(), &origin, out, &opt)?;
-        if let Some(w) = super::export::coarse_warning(&written.accuracy) {
-            eprintln!("{w}");
-        }
-    }
-    if let Some(dir) = &a.plot {
-        gonio_analysis::plot::render(data, std::slice::from_ref(fitted), dir, &Default::default())?;
-    }
-    Ok(())
-}
 
 /// χ² in words: its degrees of freedom, the reduced value against its 99 %
 /// interval for a right model with right σ, and the p-value.

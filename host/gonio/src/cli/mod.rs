@@ -9,6 +9,7 @@ mod devices;
 mod export;
 pub mod failure;
 pub mod fit;
+pub mod fitting;
 pub mod grid;
 pub mod instrument;
 pub mod interrupt;
@@ -54,9 +55,9 @@ pub enum Command {
     /// Coefficients of retroreflection R_A and R_L (CIE 54.2, ASTM E810, EN 1436) with uncertainties.
     Coefficients(coefficients::CoefficientsArgs),
     /// Fit one model to a data file (ALTA .dat or calibrated CSV), no starting point needed.
-    Fit(fit::FitArgs),
+    Fit(fitting::FitArgs),
     /// Fit every model to a data file and compare them (RMSE, NRMSE, NCC).
-    Compare(fit::CompareArgs),
+    Compare(fitting::CompareArgs),
     /// Pictures of a data file and fits: incidence-plane, hemisphere and residual plots.
     Plot(plot::PlotArgs),
     /// Write a data file (ALTA .dat or calibrated CSV) as ALTA text.

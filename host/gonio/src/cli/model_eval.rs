@@ -1,7 +1,7 @@
 //! `gonio eval` and `gonio dhr`: a model with given parameters at one
 //! geometry, and its directional-hemispherical reflectance.
 
-use super::fit::ParamArg;
+use super::fitting::ParamArg;
 use super::material;
 use anyhow::{bail, Result};
 use gonio_analysis::fit::file::FittedBrdf;

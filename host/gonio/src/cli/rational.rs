@@ -2,7 +2,7 @@
 //! sample's segment (`gonio_analysis::rational`), as text or JSON, and its
 //! fit file.
 
-use super::fit::{domain, Domain, FitArgs, Outcome, ParamArg};
+use super::fitting::{domain, Domain, FitArgs, Outcome};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
 use gonio_analysis::coefficients::Support;
@@ -11,45 +11,8 @@ use gonio_analysis::fit::criteria::Criteria;
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::goodness::Goodness;
 use gonio_analysis::fit::{self, Units, Weighting};
-use gonio_analysis::moments::Parametrization;
 use gonio_analysis::rational::{self, RationalFit, RationalSpec};
 use gonio_analysis::rounding::significant;
-
-/// The rational function's options, in `fit --model rational` and `compare`.
-#[derive(Debug, Clone, Default, clap::Args)]
-pub struct RationalArgs {
-    /// With the rational function: each sample's segment, `sigma` (value ± 2σ: the calibrated CSV's k = 2 interval, ALTA's #VS),
-    /// `abs:WIDTH` (value ± WIDTH, in f_r, sr⁻¹, whatever the file's units) or `rel:WIDTH` (value × (1 ± WIDTH)).
-    #[arg(long, value_name = "SOURCE")]
-    pub segments: Option<String>,
-    /// With the rational function: the highest total degree of numerator and denominator tried (8: 330 coefficients).
-    #[arg(long, value_name = "D")]
-    pub max_degree: Option<usize>,
-    /// With the rational function: fit P/Q alone, without the paper's cosθi·cosθo factor (ALTA's
-    /// rational_function_legendre; often fewer coefficients for absolute segments).
-    #[arg(long)]
-    pub no_cosine: bool,
-}
-
-impl RationalArgs {
-    /// Whether any option was given.
-    pub fn given(&self) -> bool {
-        self.segments.is_some() || self.max_degree.is_some() || self.no_cosine
-    }
-
-    /// The fit these options ask for, in the plane `--param` names.
-    pub fn spec(&self, param: ParamArg) -> Result<RationalSpec> {
-        Ok(RationalSpec {
-            parametrization: match param {
-                ParamArg::Back => Parametrization::Back,
-                ParamArg::View => Parametrization::LightView,
-            },
-            segments: self.segments.as_deref().unwrap_or("sigma").parse()?,
-            max_degree: self.max_degree.unwrap_or(RationalSpec::MAX_DEGREE),
-            cosine: !self.no_cosine,
-        })
-    }
-}
 
 /// The rational function fitted to `d`'s samples, with a progress bar
 /// over the coefficients tried.
@@ -105,7 +68,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     if let Some(out) = &a.out {
         fit::file::write_with_support(out, &v, &Support::of(&d.train)?)?;
     }
-    super::fit::write_drawn(&FittedBrdf::Rational(f.function.clone()), &a, &d.train)?;
+    super::fitting::write_drawn(&FittedBrdf::Rational(f.function.clone()), &a, &d.train)?;
     if o.json {
         println!("{v}");
         return Ok(());

@@ -2,15 +2,17 @@
 
 use super::calibrate;
 use super::detector::DetectorArgs;
-use super::fit::{self, FitOptions};
+use super::fit;
+use super::fitting::{self, FitOptions};
 use super::grid::{GridArgs, LobeArgs};
 use super::live::LiveArgs;
 use super::material::SimHeadArgs;
 use super::{interrupt, simulated};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
-use gonio_acquire::scan::directory::{hms, positions, resume_from, scan_into, Destination};
+use gonio_acquire::scan::directory::{positions, resume_from, scan_into, Destination};
 use gonio_acquire::scan::live::Live;
+use gonio_acquire::scan::progress::hms;
 use gonio_analysis::coefficients::Set;
 use gonio_analysis::rounding::{figure, significant, with_uncertainty};
 use gonio_scan_dir::record::{parse_geometry, Monitor, RecordedHead, ScanRecord};
@@ -143,8 +145,8 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         json,
         ..FitOptions::default()
     };
-    let domain = fit::domain(&calibrated.csv, &options)?;
-    let rational = super::rational::RationalArgs::default().spec(options.param)?;
+    let domain = fitting::domain(&calibrated.csv, &options)?;
+    let rational = fitting::RationalArgs::default().spec(options.param)?;
     let comparison = fit::compare(&domain, &options, Some(&rational))?;
     let mut facts = vec![
         ("head".to_string(), "simulated (gonio demo)".to_string()),
