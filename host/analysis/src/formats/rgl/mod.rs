@@ -22,7 +22,10 @@
 //! ([`Options::retro_share`]) is a bump about `m = ωi`. The warp is only a
 //! change of variables (both renderers compute densities from the table
 //! itself), so this moves grid points into the retro lobe without changing
-//! what is evaluated. From 3° of incidence on, the retro point then sits
+//! what is evaluated. Half of each warp ([`Options::curvature_share`])
+//! follows the tabulated function itself, where it curves, so that a
+//! narrow lobe's skirt does not fall between two columns whatever lobe it
+//! is. From 3° of incidence on, the retro point then sits
 //! at the same node of the warped square at every incidence, so
 //! interpolating between incidences keeps the peak.
 //!
@@ -98,6 +101,10 @@ pub struct Options {
     pub mirror_share: f64,
     /// Angular radius (standard deviation, degrees) of the bumps, in the half vector.
     pub bump_width_deg: f64,
+    /// Share of each warp placed where the tabulated function curves,
+    /// whatever its lobes (`curvature_axes`); the bumps and the visible
+    /// normals share the rest.
+    pub curvature_share: f64,
     pub spectrum: Spectrum,
 }
 
@@ -111,6 +118,7 @@ impl Default for Options {
             retro_share: 0.4,
             mirror_share: 0.2,
             bump_width_deg: 1.5,
+            curvature_share: 0.5,
             spectrum: Spectrum::Laser,
         }
     }
@@ -207,6 +215,10 @@ impl Table {
             "the retro and mirror shares must be ≥ 0 and leave some of the warp to the visible normals"
         );
         ensure!(opt.bump_width_deg > 0.0, "the bumps' width must be positive");
+        ensure!(
+            (0.0..=1.0).contains(&opt.curvature_share),
+            "the curvature's share must be in [0, 1]"
+        );
         let theta_i = incidences(opt.theta_i_step_deg);
         let mut bad = None;
         let micro = Microfacet::from_retro(|t| {
@@ -241,7 +253,7 @@ impl Table {
 
         let mut vndf_values = Vec::with_capacity(theta_i.len() * v * v);
         for &ti in &theta_i {
-            vndf_values.extend(warp_slice(&micro, ti, v, opt));
+            vndf_values.extend(warp_slice(brdf, &micro, &ndf, ti, v, opt));
         }
         let vndf = Marginal::new(&vndf_values, v, v, &theta_i);
 
@@ -333,14 +345,29 @@ impl Table {
 }
 
 /// One incidence's warp density over the half-vector square (`x` = θm, `y`
-/// = φm − φi), as a product `g(x)·h(y)`: the marginals of the visible
+/// = φm − φi), as a product `g(x)·h(y)`: a share
+/// [`Options::curvature_share`] placed where the function curves
+/// ([`curvature_axes`]), the rest in [`bump_axes`]; then centred on the
+/// retro direction ([`centred`]). A product keeps every row's conditional
+/// the same, so that neighbouring rows of the warped grid stand for the
+/// same polar angles and interpolating between them does not mix the
+/// inside of a lobe with its outside.
+fn warp_slice(brdf: &dyn Fn(&Directions) -> f64, micro: &Microfacet, ndf: &Grid, theta_i: f64, v: usize, opt: &Options) -> Vec<f32> {
+    let (gb, hb) = bump_axes(micro, theta_i, v, opt);
+    let (gc, hc) = curvature_axes(brdf, ndf, theta_i, v);
+    let share = opt.curvature_share;
+    let g = mix(&[(&gb, 1.0 - share), (&gc, share)]);
+    let h = mix(&[(&hb, 1.0 - share), (&hc, share)]);
+    let target = 0.5 * (theta_i / (2.0 * opt.bump_width_deg.to_radians())).min(1.0);
+    let g = centred(&g, theta2u(theta_i), target);
+    h.iter().flat_map(|&hy| g.iter().map(move |&gx| (gx * hy) as f32)).collect()
+}
+
+/// The fixed part of a warp, per axis: the marginals of the visible
 /// normals `⟨ωi·m⟩ D(m)/σ(ωi)`, mixed in `g` with bumps about the retro
 /// (`θm = θi`) and the mirror (`θm = 0`) half vectors and in `h` with one
-/// about the retro azimuth (`φm = φi`). A product keeps every row's
-/// conditional the same, so that neighbouring rows of the warped grid stand
-/// for the same polar angles and interpolating between them does not mix
-/// the inside of a lobe with its outside.
-fn warp_slice(micro: &Microfacet, theta_i: f64, v: usize, opt: &Options) -> Vec<f32> {
+/// about the retro azimuth (`φm = φi`) and an even share.
+fn bump_axes(micro: &Microfacet, theta_i: f64, v: usize, opt: &Options) -> (Vec<f64>, Vec<f64>) {
     let wi = unit(theta_i, 0.0);
     let width = opt.bump_width_deg.to_radians();
     let bump = |d: f64, w: f64| (-(d / w).powi(2) / 2.0).exp();
@@ -365,14 +392,78 @@ fn warp_slice(micro: &Microfacet, theta_i: f64, v: usize, opt: &Options) -> Vec<
         (&g_retro, opt.retro_share),
         (&g_mirror, opt.mirror_share),
     ]);
-    let target = 0.5 * (theta_i / (2.0 * width)).min(1.0);
-    let g = centred(&g, theta2u(theta_i), target);
     let h = mix(&[
         (&h_vis, 1.0 - opt.retro_share - AZIMUTH_FLAT_SHARE),
         (&h_retro, opt.retro_share),
         (&vec![1.0; v], AZIMUTH_FLAT_SHARE),
     ]);
-    h.iter().flat_map(|&hy| g.iter().map(move |&gx| (gx * hy) as f32)).collect()
+    (g, h)
+}
+
+/// Share of [`curvature_axes`]' density spread evenly over the square.
+const CURVATURE_FLOOR: f64 = 0.15;
+
+/// One incidence's warp density along each axis from what the renderer
+/// interpolates, `F = f·cos θo / D(m)` over the half-vector square: a node
+/// spacing that evens out the relative error of linear interpolation,
+/// `Δ ∝ (|F''|/F)^-½` along each axis (the largest over the other axis, so
+/// that one product `g(x)·h(y)` serves every row), with a share
+/// [`CURVATURE_FLOOR`] spread evenly. Views within 3° of the horizon,
+/// where `f·cos θo` bends to zero, take none.
+fn curvature_axes(brdf: &dyn Fn(&Directions) -> f64, ndf: &Grid, theta_i: f64, v: usize) -> (Vec<f64>, Vec<f64>) {
+    // The function is sampled four times as finely as the warp's nodes.
+    let fine = 4 * (v - 1) + 1;
+    let wi = unit(theta_i, 0.0);
+    let step = 1.0 / (fine - 1) as f64;
+    let d: Vec<f64> = (0..fine).map(|i| ndf.eval([i as f64 * step, 0.0], 0.0)).collect();
+    let mut f = vec![0.0; fine * fine];
+    let mut lit = vec![false; fine * fine];
+    for j in 0..fine {
+        for i in 0..fine {
+            let m = unit(u2theta(i as f64 * step), u2phi(j as f64 * step));
+            let c = dot(wi, m);
+            let wo = [2.0 * c * m[0] - wi[0], 2.0 * c * m[1] - wi[1], 2.0 * c * m[2] - wi[2]];
+            if wo[2] > 0.0 {
+                f[j * fine + i] = fr_cos(brdf, wi, wo).max(0.0) / d[i];
+                lit[j * fine + i] = wo[2] > 3f64.to_radians().sin();
+            }
+        }
+    }
+    let mean = f.iter().sum::<f64>() / f.len() as f64;
+    let floor = 1e-3 * mean.max(1e-300);
+    let (mut g, mut h) = (vec![0.0f64; fine], vec![0.0f64; fine]);
+    for (j, hj) in h.iter_mut().enumerate().take(fine - 1).skip(1) {
+        for (i, gi) in g.iter_mut().enumerate().take(fine - 1).skip(1) {
+            let k = j * fine + i;
+            if !lit[k] {
+                continue;
+            }
+            let fk = f[k] + floor;
+            let ex = ((f[k + 1] - 2.0 * f[k] + f[k - 1]).abs() / fk).sqrt();
+            let ey = ((f[k + fine] - 2.0 * f[k] + f[k - fine]).abs() / fk).sqrt();
+            *gi = gi.max(ex);
+            *hj = hj.max(ey);
+        }
+    }
+    let pool = |a: &[f64]| -> Vec<f64> {
+        let at = |n: usize| n * (fine - 1) / (v - 1);
+        let cells: Vec<f64> = (0..v - 1)
+            .map(|n| a[at(n)..=at(n + 1)].iter().copied().fold(0.0, f64::max))
+            .collect();
+        let nodes: Vec<f64> = (0..v).map(|n| cells[n.saturating_sub(1)].max(cells[n.min(v - 2)])).collect();
+        let mean = nodes.iter().sum::<f64>() / v as f64;
+        nodes
+            .iter()
+            .map(|x| {
+                if mean > 0.0 {
+                    (1.0 - CURVATURE_FLOOR) * x / mean + CURVATURE_FLOOR
+                } else {
+                    1.0
+                }
+            })
+            .collect()
+    };
+    (pool(&g), pool(&h))
 }
 
 /// `g` with an even density added on the side of `u*` that holds less
