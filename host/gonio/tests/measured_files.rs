@@ -108,3 +108,32 @@ fn repeated_geometries_are_merged_with_their_spread() {
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["samples"], 30);
 }
+
+/// The rational function through every ±0.5 sr⁻¹ segment of the measured
+/// tape: refused before (the grazing rows, then no function held by
+/// single precision's margin up to degree 8), it is found held in double
+/// precision, and said so.
+#[test]
+fn the_rational_function_passes_through_a_measured_tape() {
+    let o = gonio(&[
+        "fit",
+        tape().to_str().unwrap(),
+        "--model",
+        "rational",
+        "--segments",
+        "abs:0.5",
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["worst_violation"], 0.0, "{v}");
+    assert_eq!(v["precision"], "double", "{v}");
+    assert!(v["coefficients"].as_u64().unwrap() <= 330, "{v}");
+    let attempts = v["attempts"].as_array().unwrap();
+    assert!(
+        attempts
+            .iter()
+            .any(|a| a["single_precision"] == true && a["coefficients"] == 330 && a["feasible"] == false),
+        "single precision was tried to the top first: {v}"
+    );
+}

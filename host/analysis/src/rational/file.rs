@@ -31,6 +31,7 @@ pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, goodness: Opt
         "segments": f.segments,
         "shifted_segments": f.shifted,
         "worst_violation": f.worst_violation,
+        "precision": if f.single_precision { "single" } else { "double" },
         "rmse": f.metrics.rmse, "nrmse": f.metrics.nrmse, "ncc": f.metrics.ncc, "l2": f.metrics.l2,
         "linf": f.linf,
         "samples": f.samples, "seconds": f.seconds, "units": units,

@@ -46,6 +46,8 @@ pub struct Attempt {
     /// The programme's margin (values over the largest segment end, rows
     /// and coefficients of unit norm); `None` where no function held.
     pub margin: Option<f64>,
+    /// Whether the margin asked for was single precision's (else double's).
+    pub single_precision: bool,
     pub seconds: f64,
 }
 
@@ -67,6 +69,11 @@ pub struct RationalFit {
     /// Why the most terms tried are what they are, when fewer than the
     /// spec's: more coefficients than samples interpolate anything.
     pub capped: Option<String>,
+    /// Whether its margin holds every segment in single precision too
+    /// (`qp::SINGLE_MARGIN`), as shaders and renderers evaluate it; else
+    /// in double only: the fewest terms that held nothing by that margin
+    /// up to the highest count tried.
+    pub single_precision: bool,
     pub attempts: Vec<Attempt>,
 }
 
@@ -154,11 +161,11 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
     // The function of `terms` terms if it holds every segment (checked on
     // the function itself, not taken from the solver), else the sample
     // most in conflict.
-    let mut attempt = |terms: usize| -> Result<std::result::Result<(Rational, f64), usize>> {
+    let mut attempt = |terms: usize, min_margin: f64| -> Result<std::result::Result<(Rational, f64), usize>> {
         trying(2 * terms);
         let t = Instant::now();
         let basis = Basis::with_terms(terms);
-        let (held, margin) = match qp::solve(&basis, &rows)? {
+        let (held, margin) = match qp::solve(&basis, &rows, min_margin)? {
             Outcome::Solved { p, q, margin } => {
                 let f = Rational {
                     parametrization: spec.parametrization,
@@ -179,6 +186,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
             coefficients: 2 * basis.len(),
             feasible: held.is_ok(),
             margin,
+            single_precision: min_margin >= qp::SINGLE_MARGIN,
             seconds: t.elapsed().as_secs_f64(),
         });
         Ok(held)
@@ -187,13 +195,41 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
     // that hold within a factor of two, so the costliest programme solved
     // has at most twice the answer's terms; a bisection inside the bracket
     // then finds it, to one term, as ALTA's walk does. Counts below `lo`
-    // do not hold (none is below one term).
-    let mut lo = 1;
-    let mut n = 1;
-    let mut best = loop {
-        match attempt(n)? {
-            Ok(held) => break held,
-            Err(worst) if n == top => bail!(
+    // do not hold (none is below one term). `Err` names the sample most in
+    // conflict at `top`.
+    let mut search = |min_margin: f64| -> Result<std::result::Result<(Rational, f64), usize>> {
+        let mut lo = 1;
+        let mut n = 1;
+        let mut best = loop {
+            match attempt(n, min_margin)? {
+                Ok(held) => break held,
+                Err(worst) if n == top => return Ok(Err(worst)),
+                Err(_) => {
+                    lo = n + 1;
+                    n = (2 * n).min(top);
+                }
+            }
+        };
+        let mut hi = n;
+        while lo < hi {
+            let mid = lo + (hi - lo) / 2;
+            match attempt(mid, min_margin)? {
+                Ok(held) => {
+                    best = held;
+                    hi = mid;
+                }
+                Err(_) => lo = mid + 1,
+            }
+        }
+        Ok(Ok(best))
+    };
+    // A function that holds in single precision, as shaders and renderers
+    // evaluate it; else one that holds in double only, said so.
+    let (best, single_precision) = match search(qp::SINGLE_MARGIN)? {
+        Ok(best) => (best, true),
+        Err(_) => match search(qp::DOUBLE_MARGIN)? {
+            Ok(best) => (best, false),
+            Err(worst) => bail!(
                 "no rational function of degree {} ({} coefficients) passes through every segment; the sample most in conflict with the others is {}, segment [{}, {}]: widen the segments{}",
                 Basis::degree_of(top),
                 2 * top,
@@ -202,23 +238,8 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
                 segs.segments[worst].hi,
                 if capped.is_some() { " or measure more samples" } else { " or raise --max-degree" }
             ),
-            Err(_) => {
-                lo = n + 1;
-                n = (2 * n).min(top);
-            }
-        }
+        },
     };
-    let mut hi = n;
-    while lo < hi {
-        let mid = lo + (hi - lo) / 2;
-        match attempt(mid)? {
-            Ok(held) => {
-                best = held;
-                hi = mid;
-            }
-            Err(_) => lo = mid + 1,
-        }
-    }
     let (function, worst_violation) = best;
     // The figures in the data's own units, as every other fit reports them.
     let (metrics, linf) = function.against(data);
@@ -232,6 +253,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         linf,
         worst_violation,
         capped,
+        single_precision,
         attempts,
     })
 }

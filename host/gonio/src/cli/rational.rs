@@ -92,7 +92,11 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let tried: Vec<String> = f
         .attempts
         .iter()
-        .map(|t| format!("{} ({})", t.coefficients, if t.feasible { "held" } else { "not held" }))
+        .map(|t| {
+            let held = if t.feasible { "held" } else { "not held" };
+            let precision = if t.single_precision { "" } else { " in double" };
+            format!("{} ({held}{precision})", t.coefficients)
+        })
         .collect();
     println!("  coefficients tried: {}", tried.join(", "));
     println!("  {}  L∞ {}", f.metrics.summary(), significant(f.linf, 4));
@@ -107,6 +111,13 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     }
     if let Some(c) = &f.capped {
         eprintln!("note: {c}");
+    }
+    if !f.single_precision {
+        eprintln!(
+            "note: no function of up to {} coefficients holds every segment by the margin single precision needs ({:e}): this one holds them in double precision only, and a shader or renderer evaluating it in single precision may leave some",
+            f.attempts.iter().map(|t| t.coefficients).max().unwrap_or(0),
+            gonio_analysis::rational::qp::SINGLE_MARGIN
+        );
     }
     Ok(())
 }
