@@ -37,7 +37,7 @@ pub use safety::SafetySettings;
 pub use sample::{Sample, SampleFlags, Signal};
 pub use sanity::{SanityConfig, SanityKind, SanityModel};
 pub use scan::{
-    AngleRange, ScanAccepted, ScanEvent, ScanSpec, SweepRow, SweepScan, Visit, VisitChunk, VisitsQueued, VISIT_CHUNK, VISIT_QUEUE,
+    AngleRange, Asked, ScanAccepted, ScanEvent, ScanSpec, SweepRow, SweepScan, Visit, VisitChunk, VisitsQueued, VISIT_CHUNK, VISIT_QUEUE,
 };
 pub use status::{HeadState, Status};
 pub use sweep::{SweepLobe, SweepReport, SweepRequest, SweptSample};

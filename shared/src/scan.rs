@@ -182,6 +182,25 @@ pub enum Visit {
     Row(SweepRow),
 }
 
+/// What a scan asks for before any bound: its incidences, its θo and Δφ
+/// values, and the pattern points of each incidence.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Asked {
+    pub incidences: u32,
+    pub theta_o: u32,
+    pub dphi: u32,
+    pub pattern_points: u32,
+}
+
+impl Asked {
+    /// `incidences × (θo × Δφ + pattern points)`: a grid's positions (a
+    /// sweep scan's with its θo span counted too), held to
+    /// [`ScanSpec::POSITIONS_MAX`].
+    pub fn positions(&self) -> u64 {
+        u64::from(self.incidences) * (u64::from(self.theta_o) * u64::from(self.dphi) + u64::from(self.pattern_points))
+    }
+}
+
 /// The shape of a validated grid: per incidence, `n_to × n_dp` grid
 /// positions (a sweep scan's: its retro point and its rows, `1 × (rows + 1)`)
 /// and then `n_pat` pattern points.
@@ -234,25 +253,33 @@ impl ScanSpec {
         }
     }
 
-    fn dims(&self) -> Result<Dims, Fault> {
-        let bad = Err(Fault::InvalidValue(Field::ScanRange));
+    /// What the scan asks for; `None` for no incidence, one not finite, or
+    /// a malformed range or pattern.
+    pub fn asked(&self) -> Option<Asked> {
         if self.theta_i_deg.is_empty() || self.theta_i_deg.iter().any(|t| !t.is_finite()) {
-            return bad;
+            return None;
         }
-        let (Some(n_to), Some(n_dp)) = (self.theta_o.count(), self.dphi.count()) else {
-            return bad;
-        };
-        let n_ti = self.theta_i_deg.len() as u32;
-        let n_pat = match &self.patterns {
-            Some(p) => match p.count() {
-                Some(n) => n,
-                None => return bad,
-            },
+        let pattern_points = match &self.patterns {
+            Some(p) => p.count()?,
             None => 0,
         };
+        Some(Asked {
+            incidences: self.theta_i_deg.len() as u32,
+            theta_o: self.theta_o.count()?,
+            dphi: self.dphi.count()?,
+            pattern_points,
+        })
+    }
+
+    fn dims(&self) -> Result<Dims, Fault> {
+        let bad = Err(Fault::InvalidValue(Field::ScanRange));
+        let Some(asked) = self.asked() else {
+            return bad;
+        };
+        let (n_ti, n_to, n_dp, n_pat) = (asked.incidences, asked.theta_o, asked.dphi, asked.pattern_points);
         // Bounded so every index fits in u32 with room to spare (a sweep
         // scan's with its θo span counted too: one bound for every scan).
-        if (n_ti as u64) * ((n_to as u64) * (n_dp as u64) + n_pat as u64) > Self::POSITIONS_MAX as u64 {
+        if asked.positions() > u64::from(Self::POSITIONS_MAX) {
             return bad;
         }
         if self.sweep.is_none() {

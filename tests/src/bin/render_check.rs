@@ -140,12 +140,11 @@ fn run() -> Result<bool> {
         let png = std::fs::read(dir.path().join(format!("{}.png", s.name))).with_context(|| format!("{}.png", s.name))?;
         ensure!(png.starts_with(b"\x89PNG"), "{}.png is not a PNG", s.name);
     }
-    compare(&cases, &got)
+    compare(&cases, &got, &drawn)
 }
 
-fn compare(cases: &[Value], got: &Value) -> Result<bool> {
+fn compare(cases: &[Value], got: &Value, drawn: &[([f64; 3], [f64; 3])]) -> Result<bool> {
     let [median_bar, p95_bar, peak_bar] = rgl::TOLERANCE;
-    let drawn = rgl::pairs(PAIRS, LOBE_DEG.to_radians(), 2026);
     let mut rows = Vec::new();
     let mut all_ok = true;
     for case in cases {
@@ -160,7 +159,7 @@ fn compare(cases: &[Value], got: &Value) -> Result<bool> {
         };
         let (evals, retro, images) = (floats(&g["pairs"])?, floats(&g["retro"])?, floats(&case["mitsuba_images"])?);
         let ours_pairs = floats(&case["ours"])?;
-        let (max, worst) = rgl::worst(&drawn, &evals, &ours_pairs);
+        let (max, worst) = rgl::worst(drawn, &evals, &ours_pairs);
         let errors = rgl::relative_errors(evals.iter().copied(), ours_pairs.into_iter());
         let peak = rgl::relative_errors(retro.iter().copied(), floats(&case["ours_retro"])?.into_iter());
         let peak = peak.last().copied().unwrap_or(f64::NAN);

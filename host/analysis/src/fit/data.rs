@@ -94,6 +94,12 @@ impl Observation {
         }
     }
 
+    /// Whether its value in `units` cannot give `f_r`: `f_r·cosθo` beyond
+    /// [`GRAZING_DEG`].
+    pub fn too_grazing_for(&self, units: Units) -> bool {
+        units == Units::FrCos && self.theta_o.to_degrees() > GRAZING_DEG
+    }
+
     /// In the retro half-space `cosΔφ ≥ 0` (`Δφ = 0` is the retro half-plane).
     pub fn on_retro_side(&self) -> bool {
         self.dphi.cos() >= 0.0
@@ -142,14 +148,13 @@ impl Dataset {
         let mut out = self.clone();
         out.units = units;
         for o in &mut out.observations {
-            let from = o.unit_factor(self.units);
-            if from < GRAZING_DEG.to_radians().cos() {
+            if o.too_grazing_for(self.units) {
                 bail!(
                     "θo = {:.3}° is beyond {GRAZING_DEG}°: its f_r·cosθo cannot give f_r",
                     o.theta_o.to_degrees()
                 );
             }
-            let k = o.unit_factor(units) / from;
+            let k = o.unit_factor(units) / o.unit_factor(self.units);
             o.value *= k;
             o.sigma = o.sigma.map(|s| s * k);
             o.shared = o.shared.map(|s| s * k);

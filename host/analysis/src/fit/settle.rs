@@ -3,7 +3,7 @@
 //! than once made one sample. Each is said in a warning, with how many
 //! rows and why.
 
-use super::data::{Dataset, Observation, Units, GRAZING_DEG};
+use super::data::{Dataset, Observation, GRAZING_DEG};
 use std::collections::HashMap;
 
 /// Angles closer than this (radians) are one geometry.
@@ -13,17 +13,16 @@ impl Dataset {
     /// Drops the rows too grazing for their units ([`GRAZING_DEG`]) and
     /// merges repeated geometries ([`Dataset::merge_repeats`]).
     pub fn settle(&mut self) {
-        if self.units == Units::FrCos {
-            let n = self.observations.len();
-            self.observations.retain(|o| o.theta_o.to_degrees() <= GRAZING_DEG);
-            let dropped = n - self.observations.len();
-            if dropped > 0 {
-                self.warnings.push(format!(
-                    "{dropped} of {n} rows dropped: their θo is beyond {GRAZING_DEG}°, where the file's f_r·cosθo cannot give f_r (cosθo < {:.4} would multiply the value and its noise by more than {:.0})",
-                    GRAZING_DEG.to_radians().cos(),
-                    1.0 / GRAZING_DEG.to_radians().cos()
-                ));
-            }
+        let n = self.observations.len();
+        let units = self.units;
+        self.observations.retain(|o| !o.too_grazing_for(units));
+        let dropped = n - self.observations.len();
+        if dropped > 0 {
+            self.warnings.push(format!(
+                "{dropped} of {n} rows dropped: their θo is beyond {GRAZING_DEG}°, where the file's f_r·cosθo cannot give f_r (cosθo < {:.4} would multiply the value and its noise by more than {:.0})",
+                GRAZING_DEG.to_radians().cos(),
+                1.0 / GRAZING_DEG.to_radians().cos()
+            ));
         }
         if let Some(w) = self.merge_repeats() {
             self.warnings.push(w);
@@ -128,6 +127,7 @@ fn merged(rows: &[Observation]) -> Observation {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::fit::Units;
 
     fn row(ti: f64, to: f64, dphi: f64, value: f64, sigma: Option<f64>) -> Observation {
         Observation {

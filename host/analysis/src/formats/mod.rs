@@ -23,12 +23,13 @@ use std::path::Path;
 /// (`Dataset::settle`), each said in a warning.
 pub fn load(path: &Path, units: Option<Units>) -> Result<Dataset> {
     let context = || format!("{}", path.display());
-    let mut file = std::fs::File::open(path).with_context(|| format!("cannot read {}", path.display()))?;
+    let unreadable = || format!("cannot read {}", path.display());
+    let mut file = std::fs::File::open(path).with_context(unreadable)?;
     let mut head = Vec::with_capacity(guard::SNIFF_BYTES);
     (&mut file)
         .take(guard::SNIFF_BYTES as u64)
         .read_to_end(&mut head)
-        .with_context(|| format!("cannot read {}", path.display()))?;
+        .with_context(unreadable)?;
     guard::sniff(&head).with_context(context)?;
     let input = BufReader::new(guard::Guarded::new(std::io::Cursor::new(head).chain(file)));
     let mut data = match path.extension().and_then(|e| e.to_str()) {

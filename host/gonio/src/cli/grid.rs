@@ -210,17 +210,19 @@ impl GridArgs {
             patterns: self.patterns.patterns()?,
         };
         measure_for(&mut spec, &self.for_sets)?;
-        if spec.sweep.is_none() {
-            let (n_to, n_dp) = (u64::from(o.count().unwrap_or(0)), u64::from(p.count().unwrap_or(0)));
-            let n_pat = u64::from(spec.patterns.as_ref().and_then(|q| q.count()).unwrap_or(0));
-            let n = spec.theta_i_deg.len() as u64 * (n_to * n_dp + n_pat);
-            if n > u64::from(ScanSpec::POSITIONS_MAX) {
-                bail!(
-                    "{} incidences × ({n_to} θo × {n_dp} Δφ + {n_pat} pattern points) = {n} positions: more than the {} a scan holds; take larger steps",
-                    spec.theta_i_deg.len(),
-                    ScanSpec::POSITIONS_MAX
-                );
-            }
+        if let Some(a) = spec
+            .asked()
+            .filter(|a| spec.sweep.is_none() && a.positions() > u64::from(ScanSpec::POSITIONS_MAX))
+        {
+            bail!(
+                "{} incidences × ({} θo × {} Δφ + {} pattern points) = {} positions: more than the {} a scan holds; take larger steps",
+                a.incidences,
+                a.theta_o,
+                a.dphi,
+                a.pattern_points,
+                a.positions(),
+                ScanSpec::POSITIONS_MAX
+            );
         }
         spec.validate().map_err(|f| anyhow::anyhow!("grid refused: {f}"))?;
         Ok(spec)

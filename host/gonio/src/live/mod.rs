@@ -51,11 +51,7 @@ pub async fn serve(live: Live, addr: SocketAddr) -> Result<Served> {
         origin: format!("http://{authority}"),
         token,
     };
-    let gate = Arc::new(Gate {
-        authority,
-        origin: served.origin.clone(),
-        token: served.token.clone(),
-    });
+    let gate = Arc::new(served.clone());
     let app = Router::new()
         .route("/", get(|| async { Html(PAGE) }))
         .route("/events", get(events))
@@ -91,20 +87,13 @@ pub async fn serve(live: Live, addr: SocketAddr) -> Result<Served> {
     Ok(served)
 }
 
-/// What a request must name to be answered.
-struct Gate {
-    /// `127.0.0.1:PORT`, as printed.
-    authority: String,
-    /// `http://127.0.0.1:PORT`, the page's own origin.
-    origin: String,
-    token: String,
-}
-
 /// Why a request is refused, or `None` to answer it (see the module's doc).
-fn admitted(gate: &Gate, method: &Method, headers: &header::HeaderMap, query: Option<&str>) -> Option<(StatusCode, String)> {
+fn admitted(gate: &Served, method: &Method, headers: &header::HeaderMap, query: Option<&str>) -> Option<(StatusCode, String)> {
     let text = |name: &str| headers.get(name).and_then(|v| v.to_str().ok());
     let forbidden = |why: String| Some((StatusCode::FORBIDDEN, why));
-    if text(header::HOST.as_str()) != Some(gate.authority.as_str()) {
+    // `127.0.0.1:PORT`, as printed.
+    let authority = gate.origin.strip_prefix("http://");
+    if text(header::HOST.as_str()) != authority {
         return forbidden(format!("this live view answers at {} only", gate.origin));
     }
     let from_header = text(TOKEN_HEADER);
@@ -130,7 +119,7 @@ fn same(a: &[u8], b: &[u8]) -> bool {
     a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
 }
 
-async fn admit(State(gate): State<Arc<Gate>>, req: Request, next: Next) -> Response {
+async fn admit(State(gate): State<Arc<Served>>, req: Request, next: Next) -> Response {
     match admitted(&gate, req.method(), req.headers(), req.uri().query()) {
         None => next.run(req).await,
         Some((status, why)) => (status, Json(serde_json::json!({ "error": why }))).into_response(),
@@ -164,9 +153,9 @@ mod tests {
     use super::*;
     use axum::http::HeaderValue;
 
-    fn gate() -> Gate {
-        Gate {
-            authority: "127.0.0.1:4000".into(),
+    fn gate() -> Served {
+        Served {
+            url: "http://127.0.0.1:4000/?token=0123456789abcdef".into(),
             origin: "http://127.0.0.1:4000".into(),
             token: "0123456789abcdef".into(),
         }

@@ -418,6 +418,7 @@ fn curvature_axes(brdf: &dyn Fn(&Directions) -> f64, ndf: &Grid, theta_i: f64, v
     let d: Vec<f64> = (0..fine).map(|i| ndf.eval([i as f64 * step, 0.0], 0.0)).collect();
     let mut f = vec![0.0; fine * fine];
     let mut lit = vec![false; fine * fine];
+    let horizon = 3f64.to_radians().sin();
     for j in 0..fine {
         for i in 0..fine {
             let m = unit(u2theta(i as f64 * step), u2phi(j as f64 * step));
@@ -425,7 +426,7 @@ fn curvature_axes(brdf: &dyn Fn(&Directions) -> f64, ndf: &Grid, theta_i: f64, v
             let wo = [2.0 * c * m[0] - wi[0], 2.0 * c * m[1] - wi[1], 2.0 * c * m[2] - wi[2]];
             if wo[2] > 0.0 {
                 f[j * fine + i] = fr_cos(brdf, wi, wo).max(0.0) / d[i];
-                lit[j * fine + i] = wo[2] > 3f64.to_radians().sin();
+                lit[j * fine + i] = wo[2] > horizon;
             }
         }
     }
@@ -715,9 +716,9 @@ pub fn worst(pairs: &[([f64; 3], [f64; 3])], got: &[f64], truth: &[f64]) -> (f64
         .iter()
         .zip(got.iter().zip(truth))
         .filter(|(_, (_, &t))| t > 0.0)
-        .map(|(&(wi, wo), (&g, &t))| ((g - t).abs() / t, geometry_deg(wi, wo)))
+        .map(|(pair, (&g, &t))| ((g - t).abs() / t, pair))
         .max_by(|a, b| a.0.total_cmp(&b.0))
-        .unwrap_or((f64::NAN, [f64::NAN; 3]))
+        .map_or((f64::NAN, [f64::NAN; 3]), |(e, &(wi, wo))| (e, geometry_deg(wi, wo)))
 }
 
 #[cfg(test)]
