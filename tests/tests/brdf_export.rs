@@ -283,6 +283,7 @@ fn rational_shaders_compile_and_equal_the_function() {
             segments: SegmentSource::Absolute(0.5),
             max_degree: 5,
             cosine,
+            densify: None,
         };
         let r = rational::fit(&data, &spec).expect("a rational fit").function;
         let name = format!("rational-{}{}", parametrization.name(), if cosine { "" } else { "-plain" });

@@ -18,6 +18,7 @@ fn fits_within(data: &Dataset, parametrization: Parametrization, max_degree: usi
         segments: SegmentSource::Absolute(half),
         max_degree,
         cosine: true,
+        densify: None,
     };
     let f = rational::fit(data, &spec).unwrap_or_else(|e| panic!("{parametrization:?}: {e:#}"));
     eprintln!(

@@ -112,7 +112,7 @@ fn repeated_geometries_are_merged_with_their_spread() {
 /// The rational function through every ±0.5 sr⁻¹ segment of the measured
 /// tape: refused before (the grazing rows, then no function held by
 /// single precision's margin up to degree 8), it is found held in double
-/// precision, and said so.
+/// precision, single precision tried up to the top, and said so.
 #[test]
 fn the_rational_function_passes_through_a_measured_tape() {
     let o = gonio(&[
@@ -127,6 +127,8 @@ fn the_rational_function_passes_through_a_measured_tape() {
     assert!(o.status.success(), "{}", text(&o));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["worst_violation"], 0.0, "{v}");
+    // In the file's own quantity, as ALTA and the paper fit it.
+    assert_eq!(v["quantity"], "fr-cos", "{v}");
     assert_eq!(v["precision"], "double", "{v}");
     assert!(v["coefficients"].as_u64().unwrap() <= 330, "{v}");
     let attempts = v["attempts"].as_array().unwrap();
@@ -134,6 +136,40 @@ fn the_rational_function_passes_through_a_measured_tape() {
         attempts
             .iter()
             .any(|a| a["single_precision"] == true && a["coefficients"] == 330 && a["feasible"] == false),
-        "single precision was tried to the top first: {v}"
+        "single precision was tried up to the top: {v}"
     );
+}
+
+/// `--densify`: the paper's path (§6.A), a grid between the samples fitted
+/// instead of them, with how many of the measured segments the function
+/// still holds; the grid is refused below its finest step.
+#[test]
+fn a_densified_tape_is_fitted_on_its_grid_and_checked_on_its_samples() {
+    let tape = tape();
+    let fit = |step: &str| {
+        gonio(&[
+            "fit",
+            tape.to_str().unwrap(),
+            "--model",
+            "rational",
+            "--segments",
+            "abs:2",
+            "--densify",
+            step,
+            "--json",
+        ])
+    };
+    let o = fit("3");
+    assert!(o.status.success(), "{}", text(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    let d = &v["densified"];
+    let measured = &d["measured"];
+    assert_eq!(d["step_deg"], 3.0, "{v}");
+    assert_eq!(v["samples"], d["points"], "the grid is what was fitted: {v}");
+    assert!(d["points"].as_u64().unwrap() > measured["of"].as_u64().unwrap(), "{v}");
+    assert!(measured["held"].as_u64().unwrap() <= measured["of"].as_u64().unwrap(), "{v}");
+    assert!(measured["worst"].as_f64().unwrap() >= 0.0, "{v}");
+    let o = fit("0.01");
+    assert!(!o.status.success());
+    assert!(text(&o).contains("at least 0.1"), "{}", text(&o));
 }

@@ -188,7 +188,7 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     fails_saying(&["fit", file, "--model", "rational", "--bounds", "kd=0:1", "--json"], &["--bounds"]);
     fails_saying(
         &["fit", file, "--model", "rational", "--max-degree", "40", "--json"],
-        &["at most 12"],
+        &["at most 14"],
     );
     fails_saying(
         &["fit", file, "--model", "lambert", "--segments", "abs:1", "--json"],

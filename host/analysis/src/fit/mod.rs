@@ -7,6 +7,7 @@ mod area;
 pub mod compared;
 pub mod criteria;
 pub mod data;
+pub mod densify;
 pub mod file;
 mod global;
 pub mod goodness;

@@ -12,6 +12,7 @@
 //! and compare it with the Rust model at many geometries. BRDF Explorer
 //! multiplies by `n·l` itself: the function returns `f_r` (sr⁻¹), grey.
 
+use crate::fit::Units;
 use crate::moments::Parametrization;
 use crate::rational::Rational;
 use gonio_brdf::{Material, ModelId, Param};
@@ -287,10 +288,12 @@ pub fn write_rational(r: &Rational, comments: &[String]) -> String {
         }
     }
     b.push_str("    if (denominator <= 0.0) {\n        return vec3(0.0);\n    }\n");
-    b.push_str(if r.cosine {
-        "    float f = cosI * cosO * numerator / denominator;\n"
-    } else {
-        "    float f = numerator / denominator;\n"
+    // `Rational::factor`, term for term.
+    b.push_str(match (r.cosine, r.quantity) {
+        (true, Units::Fr) => "    float f = cosI * cosO * numerator / denominator;\n",
+        (true, Units::FrCos) => "    float f = cosI * numerator / denominator;\n",
+        (false, Units::Fr) => "    float f = numerator / denominator;\n",
+        (false, Units::FrCos) => "    float f = numerator / denominator / cosO;\n",
     });
     document(&header, comments, "", "", &b)
 }

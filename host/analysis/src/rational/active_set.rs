@@ -69,6 +69,14 @@ pub enum Outcome {
     },
 }
 
+/// `a·b`, by nalgebra's kernel: eight sums at once, where an iterator's
+/// `sum` adds one term after another and waits on each (a dot product of
+/// the `n` columns of `J` is most of a step).
+pub fn dot(a: &[f64], b: &[f64]) -> f64 {
+    let n = a.len().min(b.len());
+    nalgebra::DVectorView::from_slice(&a[..n], n).dot(&nalgebra::DVectorView::from_slice(&b[..n], n))
+}
+
 /// Below this, a step direction is taken as zero (normals are of unit
 /// order: `qp`'s rows have unit norm).
 const TINY: f64 = 1e-13;
@@ -102,7 +110,7 @@ pub fn solve(set: &mut impl HalfSpaces, max_steps: usize, max_norm: f64) -> Outc
                 }
             }
             // The primal step that satisfies `p`.
-            let zn: f64 = z.iter().zip(&np).map(|(a, b)| a * b).sum();
+            let zn = dot(&z, &np);
             let full = if zn > TINY * TINY {
                 -set.slack(p, &s.x) / zn
             } else {
@@ -172,7 +180,7 @@ impl State {
     fn direction(&self, np: &[f64], d: &mut [f64], z: &mut [f64], r: &mut [f64]) {
         let (n, q) = (self.n, self.active.len());
         for (c, dc) in d.iter_mut().enumerate() {
-            *dc = self.col(c).iter().zip(np).map(|(a, b)| a * b).sum();
+            *dc = dot(self.col(c), np);
         }
         z.iter_mut().for_each(|v| *v = 0.0);
         for (c, &dc) in d.iter().enumerate().skip(q) {

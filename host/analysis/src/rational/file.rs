@@ -23,6 +23,7 @@ pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, goodness: Opt
         "degree": r.degree,
         "terms": r.numerator.len(),
         "cosine": r.cosine,
+        "quantity": r.quantity,
         "coefficients": r.coefficients(),
         "domain": r.domain,
         "order": r.order,
@@ -40,6 +41,9 @@ pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, goodness: Opt
     });
     if let Some(c) = &f.capped {
         v["capped"] = json!(c);
+    }
+    if let Some(d) = &f.densified {
+        v["densified"] = json!(d);
     }
     if let Some(g) = goodness {
         v["goodness"] = json!(g);
@@ -92,6 +96,7 @@ mod tests {
             parametrization: Parametrization::LightView,
             degree: 1,
             cosine: true,
+            quantity: Units::FrCos,
             domain: Domain {
                 lo: [10.0, -5.0, -1.0],
                 hi: [60.0, 5.0, 1.0],
@@ -114,8 +119,10 @@ mod tests {
         let mut old = v.clone();
         old.as_object_mut().unwrap().remove("cosine");
         old.as_object_mut().unwrap().remove("order");
+        old.as_object_mut().unwrap().remove("quantity");
         let read = function_of(&old).unwrap();
         assert!(read.cosine);
+        assert_eq!(read.quantity, Units::Fr);
         assert_eq!(read.order, TermOrder::FirstFalling);
         let mut other = v.clone();
         other["model"] = json!("lambert");

@@ -8,7 +8,8 @@ use super::basis::{coordinates, Basis, Domain};
 use super::function::Rational;
 use super::qp::{self, Outcome, Row};
 use super::segments::{sample_text, SegmentSource, Segments};
-use crate::fit::{Dataset, Metrics, Units};
+use crate::fit::densify::densify;
+use crate::fit::{Dataset, Metrics};
 use crate::moments::plane::Parametrization;
 use anyhow::{bail, Result};
 use serde::Serialize;
@@ -22,6 +23,9 @@ pub struct RationalSpec {
     pub max_degree: usize,
     /// `cosθi·cosθo·P/Q` (the paper's) or `P/Q` alone.
     pub cosine: bool,
+    /// Fit a grid of this step (degrees) interpolated between the samples
+    /// (`fit::densify`, the paper's §6.A.b) instead of the samples.
+    pub densify: Option<f64>,
 }
 
 impl RationalSpec {
@@ -29,10 +33,72 @@ impl RationalSpec {
     /// needed for their tapes at ±0.5 sr⁻¹.
     pub const MAX_DEGREE: usize = 8;
 
-    /// The highest degree a spec may ask for: 910 coefficients, about a
-    /// minute per programme on this machine's cores (each interior-point
-    /// iteration factors `rows·n²`), where degree 20 would take hours.
-    pub const HIGHEST_DEGREE: usize = 12;
+    /// The highest degree a spec may ask for: 1 360 coefficients, beyond
+    /// the 1 200 ALTA's fitter needs on a measured tape at ±0.5 sr⁻¹.
+    pub const HIGHEST_DEGREE: usize = 14;
+}
+
+/// How a function holds a data set's segments.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Held {
+    /// Segments the function passes through (within `VIOLATION_TOLERANCE`).
+    pub held: usize,
+    pub of: usize,
+    /// Samples where the function is not a number (`Q ≤ 0`, a pole).
+    pub undefined: usize,
+    /// The largest distance outside a segment where it is a number, over
+    /// the segment's width.
+    pub worst: f64,
+    /// A sample where it is not a number, else that of the worst miss.
+    #[serde(skip)]
+    pub at: usize,
+}
+
+impl Held {
+    pub fn of(f: &Rational, data: &Dataset, segs: &Segments) -> Held {
+        let mut h = Held {
+            held: 0,
+            of: segs.segments.len(),
+            undefined: 0,
+            worst: 0.0,
+            at: 0,
+        };
+        for (i, (v, s)) in f.values(data).iter().zip(&segs.segments).enumerate() {
+            if v.is_nan() {
+                h.undefined += 1;
+                h.at = i;
+                continue;
+            }
+            let out = (s.lo - v).max(v - s.hi).max(0.0) / (s.hi - s.lo);
+            if out <= VIOLATION_TOLERANCE {
+                h.held += 1;
+            }
+            if out > h.worst {
+                h.worst = out;
+                if h.undefined == 0 {
+                    h.at = i;
+                }
+            }
+        }
+        h
+    }
+
+    /// Whether every segment holds.
+    pub fn all(&self) -> bool {
+        self.held == self.of
+    }
+}
+
+/// A fit to densified data: the grid, and how the function holds the
+/// measured samples' own segments.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Densified {
+    pub step_deg: f64,
+    /// Grid points fitted.
+    pub points: usize,
+    pub measured: Held,
+    /// What the grid could not cover (`fit::densify`).
+    pub warnings: Vec<String>,
 }
 
 /// One count of terms tried.
@@ -71,17 +137,24 @@ pub struct RationalFit {
     pub capped: Option<String>,
     /// Whether its margin holds every segment in single precision too
     /// (`qp::SINGLE_MARGIN`), as shaders and renderers evaluate it; else
-    /// in double only: the fewest terms that held nothing by that margin
-    /// up to the highest count tried.
+    /// in double only: no function of up to twice its terms (or the
+    /// highest count) held by that margin.
     pub single_precision: bool,
     pub attempts: Vec<Attempt>,
+    /// Where the samples fitted were a grid between the measured ones.
+    pub densified: Option<Densified>,
 }
+
+/// A function that holds every segment: its worst miss (within rounding)
+/// and its programme's margin.
+type Found = (Rational, f64, f64);
 
 /// Misses beyond this (relative to a segment's width) reject a count's
 /// function: the margins put a solution strictly inside.
 const VIOLATION_TOLERANCE: f64 = 1e-9;
 
-/// Fits `data` (any units; segments are taken in `f_r`).
+/// Fits `data` in its own quantity (`f_r` or `f_r·cosθo`, as ALTA fits a
+/// file's numbers): the segments are of that quantity.
 pub fn fit(data: &Dataset, spec: &RationalSpec) -> Result<RationalFit> {
     fit_observed(data, spec, |_| {})
 }
@@ -98,8 +171,10 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
             2 * Basis::size(RationalSpec::HIGHEST_DEGREE)
         );
     }
-    let fr = data.in_units(Units::Fr)?;
-    let obs = &fr.observations;
+    let measured = data;
+    let grid = spec.densify.map(|step| densify(measured, step)).transpose()?;
+    let data = grid.as_ref().unwrap_or(measured);
+    let obs = &data.observations;
     let segs = Segments::new(obs, spec.segments)?;
     let points: Vec<[f64; 3]> = obs.iter().map(|o| coordinates(spec.parametrization, &o.directions())).collect();
     let domain = Domain::around(&points);
@@ -141,27 +216,11 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         r.lo /= scale;
         r.hi /= scale;
     }
-    // The largest miss of a segment, over its width (∞ for a value that is
-    // not a number), and where.
-    let worst_of = |f: &Rational| -> (f64, usize) {
-        let mut worst = (0.0, 0);
-        for (i, (v, s)) in f.values(&fr).iter().zip(&segs.segments).enumerate() {
-            let out = if v.is_nan() {
-                f64::INFINITY
-            } else {
-                (s.lo - v).max(v - s.hi).max(0.0) / (s.hi - s.lo)
-            };
-            if out > worst.0 {
-                worst = (out, i);
-            }
-        }
-        worst
-    };
     let mut attempts = Vec::new();
     // The function of `terms` terms if it holds every segment (checked on
     // the function itself, not taken from the solver), else the sample
     // most in conflict.
-    let mut attempt = |terms: usize, min_margin: f64| -> Result<std::result::Result<(Rational, f64), usize>> {
+    let mut attempt = |terms: usize, min_margin: f64| -> Result<std::result::Result<Found, usize>> {
         trying(2 * terms);
         let t = Instant::now();
         let basis = Basis::with_terms(terms);
@@ -171,13 +230,14 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
                     parametrization: spec.parametrization,
                     degree: basis.degree,
                     cosine: spec.cosine,
+                    quantity: data.units,
                     domain,
                     order: basis.order,
                     numerator: p.iter().map(|c| c * scale).collect(),
                     denominator: q,
                 };
-                let (miss, at) = worst_of(&f);
-                (if miss <= VIOLATION_TOLERANCE { Ok((f, miss)) } else { Err(at) }, Some(margin))
+                let h = Held::of(&f, data, &segs);
+                (if h.all() { Ok((f, h.worst, margin)) } else { Err(h.at) }, Some(margin))
             }
             Outcome::Infeasible { worst } => (Err(worst), None),
         };
@@ -191,22 +251,21 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         });
         Ok(held)
     };
-    // Galloping (1, 2, 4, … terms up to `top`) brackets the fewest terms
-    // that hold within a factor of two, so the costliest programme solved
-    // has at most twice the answer's terms; a bisection inside the bracket
-    // then finds it, to one term, as ALTA's walk does. Counts below `lo`
-    // do not hold (none is below one term). `Err` names the sample most in
-    // conflict at `top`.
-    let mut search = |min_margin: f64| -> Result<std::result::Result<(Rational, f64), usize>> {
-        let mut lo = 1;
-        let mut n = 1;
+    // Galloping (`first`, twice as many, … terms up to `most`) brackets the
+    // fewest terms that hold within a factor of two, so the costliest
+    // programme solved has at most twice the answer's terms; a bisection
+    // inside the bracket then finds it, to one term, as ALTA's walk does.
+    // Counts below `lo` do not hold. `Err` names the sample most in
+    // conflict at `most`.
+    let mut search = |min_margin: f64, mut lo: usize, first: usize, most: usize| -> Result<std::result::Result<Found, usize>> {
+        let mut n = first;
         let mut best = loop {
             match attempt(n, min_margin)? {
                 Ok(held) => break held,
-                Err(worst) if n == top => return Ok(Err(worst)),
+                Err(worst) if n >= most => return Ok(Err(worst)),
                 Err(_) => {
                     lo = n + 1;
-                    n = (2 * n).min(top);
+                    n = (2 * n).min(most);
                 }
             }
         };
@@ -223,26 +282,50 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         }
         Ok(Ok(best))
     };
-    // A function that holds in single precision, as shaders and renderers
-    // evaluate it; else one that holds in double only, said so.
-    let (best, single_precision) = match search(qp::SINGLE_MARGIN)? {
-        Ok(best) => (best, true),
-        Err(_) => match search(qp::DOUBLE_MARGIN)? {
-            Ok(best) => (best, false),
-            Err(worst) => bail!(
-                "no rational function of degree {} ({} coefficients) passes through every segment; the sample most in conflict with the others is {}, segment [{}, {}]: widen the segments{}",
-                Basis::degree_of(top),
-                2 * top,
-                sample_text(worst, &obs[worst]),
-                segs.segments[worst].lo,
-                segs.segments[worst].hi,
-                if capped.is_some() { " or measure more samples" } else { " or raise --max-degree" }
-            ),
-        },
+    // The fewest terms that hold in double precision; then, unless their
+    // margin already holds in single precision (as shaders and renderers
+    // evaluate), the fewest that do, up to twice as many terms: beyond, the
+    // single-precision programmes cost more than the whole search (a measured
+    // tape's 680 terms: minutes), for a function of more than twice the
+    // coefficients. Else the double one, said so.
+    let double = match search(qp::DOUBLE_MARGIN, 1, 1, top)? {
+        Ok(found) => found,
+        Err(worst) => bail!(
+            "no rational function of degree {} ({} coefficients) passes through every segment; the {} most in conflict with the others is {}, segment [{}, {}]: widen the segments{}",
+            Basis::degree_of(top),
+            2 * top,
+            if grid.is_some() { "point of the densified grid" } else { "sample" },
+            sample_text(worst, &obs[worst]),
+            segs.segments[worst].lo,
+            segs.segments[worst].hi,
+            if capped.is_some() { " or measure more samples" } else { " or raise --max-degree" }
+        ),
     };
-    let (function, worst_violation) = best;
-    // The figures in the data's own units, as every other fit reports them.
-    let (metrics, linf) = function.against(data);
+    let terms = double.0.numerator.len();
+    let most = (2 * terms).min(top);
+    let (best, single_precision) = if double.2 >= qp::SINGLE_MARGIN {
+        (double, true)
+    } else if most > terms {
+        match search(qp::SINGLE_MARGIN, terms + 1, most, most)? {
+            Ok(single) => (single, true),
+            Err(_) => (double, false),
+        }
+    } else {
+        (double, false)
+    };
+    let (function, worst_violation, _) = best;
+    let densified = match (spec.densify, &grid) {
+        (Some(step_deg), Some(g)) => Some(Densified {
+            step_deg,
+            points: g.observations.len(),
+            measured: Held::of(&function, measured, &Segments::new(&measured.observations, spec.segments)?),
+            warnings: g.warnings.clone(),
+        }),
+        _ => None,
+    };
+    // The figures against the measured samples, in their own units, as
+    // every other fit reports them.
+    let (metrics, linf) = function.against(measured);
     Ok(RationalFit {
         metrics,
         function,
@@ -255,6 +338,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         capped,
         single_precision,
         attempts,
+        densified,
     })
 }
 
@@ -262,6 +346,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
 mod tests {
     use super::*;
     use crate::fit::data::Observation;
+    use crate::fit::Units;
 
     /// Samples of `f` over three incidences and a fan of views.
     fn data(f: impl Fn(f64, f64, f64) -> f64) -> Dataset {
@@ -290,6 +375,7 @@ mod tests {
             segments,
             max_degree: RationalSpec::MAX_DEGREE,
             cosine: true,
+            densify: None,
         }
     }
 

@@ -1,13 +1,18 @@
-//! A fitted rational function as a BRDF: `f_r = cosθi · cosθo · P(u)/Q(u)`,
+//! A fitted rational function as a BRDF: `cosθi · cosθo · P(u)/Q(u)`,
 //! the cosine factor of Belcour et al. 2014 §6.B (ALTA's
 //! `rational_function_cosine`: the product of the light's and the view's
 //! cosines), which takes the fall towards grazing out of what the
 //! polynomials must follow; or `P(u)/Q(u)` alone (ALTA's
 //! `rational_function_legendre`), which on a retro lobe over a flat floor
 //! holds absolute segments with fewer terms (`fit-bench rational`).
+//!
+//! The function is of the quantity its samples held (`quantity`), as ALTA
+//! fits a file's own numbers: `f_r`, or `f_r·cosθo` for the measured tapes
+//! published in ALTA's format, whose ±0.5 segments (the paper's) are of
+//! that quantity. `eval` is `f_r` either way.
 
 use super::basis::{coordinates, Basis, Domain, TermOrder};
-use crate::fit::{Dataset, Metrics};
+use crate::fit::{Dataset, Metrics, Units};
 use crate::moments::plane::Parametrization;
 use gonio_brdf::Directions;
 use serde::{Deserialize, Serialize};
@@ -15,6 +20,11 @@ use serde::{Deserialize, Serialize};
 /// What a rational fit file without `cosine` was fitted with.
 fn cosine_factor() -> bool {
     true
+}
+
+/// The quantity of a rational fit file without `quantity`.
+fn f_r() -> Units {
+    Units::Fr
 }
 
 /// The order of a rational fit file without `order`.
@@ -33,6 +43,10 @@ pub struct Rational {
     /// existed) or `P/Q`.
     #[serde(default = "cosine_factor")]
     pub cosine: bool,
+    /// What the cosine factor times `P/Q` is: `f_r`, or `f_r·cosθo` (the
+    /// samples' quantity; files written before the choice existed: `f_r`).
+    #[serde(default = "f_r")]
+    pub quantity: Units,
     /// The coordinates' box, mapped onto [−1, 1]³.
     pub domain: Domain,
     /// The terms' order within a degree (files written before ALTA's
@@ -61,12 +75,15 @@ impl Rational {
         Basis::in_order(self.numerator.len(), self.order)
     }
 
-    /// The factor `P/Q` is multiplied by at `d`.
+    /// The factor `P/Q` is multiplied by at `d` to give `f_r`: the cosine
+    /// factor, over `cosθo` for a function of `f_r·cosθo` (which cancels
+    /// the factor's, so that it stays finite at grazing views).
     pub fn factor(&self, d: &Directions) -> f64 {
-        if self.cosine {
-            d.cos_i() * d.cos_o()
-        } else {
-            1.0
+        match (self.cosine, self.quantity) {
+            (true, Units::Fr) => d.cos_i() * d.cos_o(),
+            (true, Units::FrCos) => d.cos_i(),
+            (false, Units::Fr) => 1.0,
+            (false, Units::FrCos) => 1.0 / d.cos_o(),
         }
     }
 

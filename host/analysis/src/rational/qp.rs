@@ -187,9 +187,7 @@ impl Constraints {
     fn products(&self, point: usize, x: &[f64]) -> (f64, f64) {
         let t = self.terms_of(point);
         let (p, q) = x.split_at(self.k);
-        let tp: f64 = t.iter().zip(p).map(|(t, x)| t * x).sum();
-        let tq: f64 = t.iter().zip(q).map(|(t, x)| t * x).sum();
-        (tp, tq)
+        (active_set::dot(t, p), active_set::dot(t, q))
     }
 
     /// Every row among `rows` (pairs of a point) violated beyond

@@ -1,6 +1,7 @@
 //! The vertical segments a rational function must pass through (Pacanowski
-//! et al. 2012): an interval of `f_r` per sample, from the measurement's
-//! own uncertainty or of a width the user gives.
+//! et al. 2012): an interval per sample, from the measurement's
+//! own uncertainty or of a width the user gives, in the samples' quantity
+//! (`f_r` or `f_r·cosθo`).
 
 use crate::fit::data::Observation;
 use crate::uncertainty::K_COVERAGE;
@@ -52,14 +53,14 @@ impl fmt::Display for SegmentSource {
     }
 }
 
-/// One sample's interval of `f_r`, `0 ≤ lo < hi`.
+/// One sample's interval, `0 ≤ lo < hi`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Segment {
     pub lo: f64,
     pub hi: f64,
 }
 
-/// The segments of every sample (values in `f_r`), and how many lay wholly
+/// The segments of every sample, and how many lay wholly
 /// below zero.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Segments {
@@ -77,7 +78,7 @@ pub struct Segments {
 /// angles.
 pub fn sample_text(i: usize, o: &Observation) -> String {
     format!(
-        "sample {} (θi = {:.2}°, θo = {:.2}°, Δφ = {:.2}°, f_r = {})",
+        "sample {} (θi = {:.2}°, θo = {:.2}°, Δφ = {:.2}°, value {})",
         i + 1,
         o.theta_i.to_degrees(),
         o.theta_o.to_degrees(),
@@ -87,7 +88,7 @@ pub fn sample_text(i: usize, o: &Observation) -> String {
 }
 
 impl Segments {
-    /// The segments of `observations` (values in `f_r`), clamped to
+    /// The segments of `observations` (in their quantity), clamped to
     /// non-negative values. A value or σ that is not a number, a missing σ
     /// with `sigma`, or a segment of zero width is an error naming the
     /// sample.

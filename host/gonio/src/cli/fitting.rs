@@ -203,7 +203,7 @@ pub fn write_drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<(
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct RationalArgs {
     /// With the rational function: each sample's segment, `sigma` (value ± 2σ: the calibrated CSV's k = 2 interval, ALTA's #VS),
-    /// `abs:WIDTH` (value ± WIDTH, in f_r, sr⁻¹, whatever the file's units) or `rel:WIDTH` (value × (1 ± WIDTH)).
+    /// `abs:WIDTH` (value ± WIDTH, sr⁻¹, of the file's quantity: f_r, or f_r·cosθo as ALTA's tapes store it) or `rel:WIDTH` (value × (1 ± WIDTH)).
     #[arg(long, value_name = "SOURCE")]
     pub segments: Option<String>,
     /// With the rational function: the highest total degree of numerator and denominator tried (8: 330 coefficients).
@@ -213,12 +213,16 @@ pub struct RationalArgs {
     /// rational_function_legendre; often fewer coefficients for absolute segments).
     #[arg(long)]
     pub no_cosine: bool,
+    /// With the rational function: fit a grid of DEG degrees interpolated between the samples at each θi, as
+    /// Belcour et al. 2014 did (§6.A), and say how many of the measured samples' segments the function still holds.
+    #[arg(long, value_name = "DEG")]
+    pub densify: Option<f64>,
 }
 
 impl RationalArgs {
     /// Whether any option was given.
     pub fn given(&self) -> bool {
-        self.segments.is_some() || self.max_degree.is_some() || self.no_cosine
+        self.segments.is_some() || self.max_degree.is_some() || self.no_cosine || self.densify.is_some()
     }
 
     /// The fit these options ask for, in the plane `--param` names.
@@ -231,6 +235,7 @@ impl RationalArgs {
             segments: self.segments.as_deref().unwrap_or("sigma").parse()?,
             max_degree: self.max_degree.unwrap_or(RationalSpec::MAX_DEGREE),
             cosine: !self.no_cosine,
+            densify: self.densify,
         })
     }
 }

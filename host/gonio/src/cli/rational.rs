@@ -82,12 +82,13 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         f.seconds
     );
     println!(
-        "  {} coefficients, degree {} ({} over {}); every segment held, segments {}",
+        "  {} coefficients, degree {} ({} over {}); every segment held, segments {} of {}",
         r.coefficients(),
         r.degree,
         r.numerator.len(),
         r.denominator.len(),
-        f.segments
+        f.segments,
+        r.quantity.label()
     );
     let tried: Vec<String> = f
         .attempts
@@ -99,6 +100,25 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         })
         .collect();
     println!("  coefficients tried: {}", tried.join(", "));
+    if let Some(d) = &f.densified {
+        for w in &d.warnings {
+            eprintln!("warning: {w}");
+        }
+        let m = &d.measured;
+        println!(
+            "  fitted to {} points of a {}° grid between the samples; it holds {} of the {} measured segments (worst miss {} of a segment's width){}",
+            d.points,
+            d.step_deg,
+            m.held,
+            m.of,
+            significant(m.worst, 2),
+            if m.undefined > 0 {
+                format!(", and has a pole (Q ≤ 0) at {} of the samples", m.undefined)
+            } else {
+                String::new()
+            }
+        );
+    }
     println!("  {}  L∞ {}", f.metrics.summary(), significant(f.linf, 4));
     if let Some(h) = &holdout {
         println!("  held out θi {:?}°: {}", o.holdout_theta_i, h.summary());

@@ -112,7 +112,8 @@ const SHARED: [Shared; 2] = [
 
 /// A build of ALTA and a scratch folder for its files.
 pub struct Alta {
-    dir: PathBuf,
+    /// The build's checkout (its `documents/data` holds measured tapes).
+    pub dir: PathBuf,
     pub work: PathBuf,
 }
 

@@ -43,7 +43,9 @@
 //!   bars: RMSE ratio ≤ 1 + 1e-9, time ratio < 1); needs `ALTA_DIR`.
 //! - `rational`: the rational function through ±0.5 sr⁻¹ segments against
 //!   ALTA's rational fitter on the same samples (`rational.rs`; bars:
-//!   every segment held, coefficient and time ratios ≤ 1); needs `ALTA_DIR`.
+//!   every segment held, coefficient and time ratios ≤ 1), simulated
+//!   materials and measured tapes (`measured_rational.rs`, densified too);
+//!   needs `ALTA_DIR`.
 //!
 //! Ours evaluates the samples and the global search's candidates on every
 //! core (`threads`), as the peer's BLAS does.
@@ -54,6 +56,7 @@
 mod alta;
 mod cases;
 mod gof;
+mod measured_rational;
 mod misfit;
 mod rational;
 mod widen;
