@@ -9,7 +9,7 @@
 //! | `reference.csv`, `samples.csv.part`, `samples.csv` | [`samples`] (swept samples' geometry: [`swept`]) |
 //! | `run.json` | [`run`] |
 //! | `calibrated.csv` | [`calibrated`] |
-//! | `calibration.json` | named here; its fields are the calibration's summary, written by `gonio calibrate` |
+//! | `calibration.json` | named here; its typed summary is `gonio_analysis::calibration::directory::Summary`, whose fields are the analysis's own types |
 
 pub mod calibrated;
 pub mod record;

@@ -26,12 +26,15 @@
 //! `cargo run --release -p tests --bin coverage-bench [-- SCANS [NONMODEL_SCANS [RL_SCANS]]]`
 //! (default 100, 20 and 500).
 
-use gonio::cli::calibrate::{self, CalibrateArgs, Calibrated};
+use gonio::cli::calibrate::CalibrateArgs;
+use gonio::cli::demo::demo_scan;
 use gonio::cli::fit::compare;
-use gonio::cli::fitting::{domain, FitOptions};
-use gonio::cli::scan::{demo_scan, OutputArgs};
+use gonio::cli::fitting::FitOptions;
+use gonio::cli::scan::OutputArgs;
 use gonio_analysis::calibration;
+use gonio_analysis::calibration::directory::{calibrate, Calibrated};
 use gonio_analysis::coefficients::{self, Cie, Fitted, Provenance, Request, Source, Support};
+use gonio_analysis::fit::comparison::Row;
 use gonio_analysis::fit::{self, FitSpec, Weighting};
 use gonio_analysis::uncertainty::{HeadUncertainty, K_COVERAGE};
 use gonio_brdf::frame::angle_between;
@@ -201,7 +204,7 @@ fn provenance_coverage(rt: &tokio::runtime::Runtime, material: Specimen, scans: 
     let truth = coefficients::compute(&Source::Truth(material.clone()), &reqs)?;
     let spread_at = Cie::coplanar(0.2, -4.0, 0.0);
     let mut spec = ScanSpec::belcour_with_patterns();
-    gonio::cli::grid::measure_for(&mut spec, &[coefficients::Set::En1436])?;
+    coefficients::scan::measure_for(&mut spec, &[coefficients::Set::En1436])?;
     let mut tallies: BTreeMap<&'static str, Tally> = BTreeMap::new();
     let mut spread_over_u: f64 = 0.0;
     let mut retro_zone_min = usize::MAX;
@@ -227,7 +230,7 @@ fn provenance_coverage(rt: &tokio::runtime::Runtime, material: Specimen, scans: 
         }
         // Models only: the rational function carries no value beyond the
         // data, and within them the data carry every value themselves.
-        let outcomes = compare(&domain(&c.csv, &options)?, &options, None)?.rows;
+        let outcomes = compare(&options.select(&c.summary.file)?, &options, None)?.rows;
         let fits: Vec<Fitted> = outcomes.iter().map(|o| o.fit.fitted()).collect();
         let source = Source::measured(fits, Support::of(&data)?)?;
         let got = coefficients::compute(&source, &reqs)?;
@@ -319,7 +322,7 @@ fn imperfect_scan(
         &OutputArgs { force: false, json: true },
         &Default::default(),
     ))?;
-    let c = calibrate::calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
+    let c = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true).request()?)?;
     Ok((dir, imperfections, c))
 }
 
@@ -335,7 +338,7 @@ fn rl_coverage(rt: &tokio::runtime::Runtime, material: Specimen, scans: u64) -> 
         dphi: gonio_shared::AngleRange::new(0.0, 0.0, 1.0),
         ..ScanSpec::belcour_with_patterns()
     };
-    gonio::cli::grid::measure_for(&mut spec, &[coefficients::Set::En1436])?;
+    coefficients::scan::measure_for(&mut spec, &[coefficients::Set::En1436])?;
     let reqs = coefficients::Set::En1436.requests();
     let truth = coefficients::compute(&Source::Truth(material.clone()), &reqs)?[0].estimate.value;
     let mut tally = Tally::default();
@@ -360,7 +363,7 @@ fn support_holds(data: &fit::Dataset, theta_i_deg: f64) -> bool {
 }
 
 /// The name of the fit with the lowest AIC.
-fn source_best(outcomes: &[gonio::cli::fitting::Outcome]) -> &'static str {
+fn source_best(outcomes: &[Row]) -> &'static str {
     outcomes
         .iter()
         .min_by(|a, b| a.fit.criteria().aic.total_cmp(&b.fit.criteria().aic))

@@ -55,11 +55,13 @@
 //!   slowing down bought.
 
 use anyhow::Result;
-use gonio::cli::calibrate::{calibrate, CalibrateArgs};
+use gonio::cli::calibrate::CalibrateArgs;
+use gonio::cli::demo::{demo_scan, DEMO_SWEEP};
 use gonio::cli::grid::SWEEP_EXTENT;
-use gonio::cli::scan::{demo_scan, OutputArgs, DEMO_SWEEP};
+use gonio::cli::scan::OutputArgs;
 use gonio::cli::simulated::Simulated;
 use gonio_acquire::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
+use gonio_analysis::calibration::directory::calibrate;
 use gonio_analysis::fit::{fit, Fit, FitSpec, Weighting};
 use gonio_analysis::lobe;
 use gonio_brdf::frame::Directions;
@@ -219,9 +221,9 @@ fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<Fitted> {
     let rt = tokio::runtime::Builder::new_current_thread().enable_time().build()?;
     let quiet = OutputArgs { force: false, json: true };
     let (outcome, _) = rt.block_on(demo_scan(sim, spec, dir.path(), &quiet, &Default::default()))?;
-    let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true))?;
+    let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true).request()?)?;
     let blind = (SimConfig::default().machine.optics.blind_max_deg as f64).to_radians();
-    let mut data = gonio_analysis::formats::load(&calibrated.csv, None)?.filter(|o| {
+    let mut data = gonio_analysis::formats::load(&calibrated.summary.file, None)?.filter(|o| {
         let d = o.directions();
         gonio_brdf::frame::angle_between(d.l, d.v) > blind
     });

@@ -19,6 +19,7 @@
 //!   stage angles' errors times the local slope of the BRDF (from a smooth
 //!   model fitted to the same data: only its slope is used).
 
+pub mod directory;
 mod unblur;
 
 use crate::fit::{Dataset, Observation, Units};

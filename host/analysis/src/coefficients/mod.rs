@@ -7,7 +7,10 @@
 
 pub mod angles;
 pub mod aperture;
+pub mod fit_files;
+pub mod json;
 pub mod provenance;
+pub mod scan;
 mod source;
 
 pub use angles::Cie;
@@ -101,26 +104,6 @@ impl Set {
                 apertures: EN1436_APERTURES,
             }],
         }
-    }
-}
-
-impl Set {
-    /// What a scan must hold for every value of the set to be measured: the
-    /// incidences (degrees, ascending) and the observation angles α of the
-    /// rings about the retro direction (degrees, ascending). A coplanar view
-    /// at α lies on the ring of radius α, on the side of the laser away
-    /// from the normal (β < 0) or towards it (β > 0).
-    pub fn scan_needs(sets: &[Set]) -> (Vec<f64>, Vec<f64>) {
-        let (mut incidences, mut alphas) = (Vec::new(), Vec::new());
-        for r in sets.iter().flat_map(|s| s.requests()) {
-            incidences.push(r.geometry.sample_angles_deg()[0]);
-            alphas.push(r.geometry.alpha_deg);
-        }
-        for v in [&mut incidences, &mut alphas] {
-            v.sort_by(f64::total_cmp);
-            v.dedup_by(|a, b| (*a - *b).abs() < 1e-9);
-        }
-        (incidences, alphas)
     }
 }
 

@@ -5,6 +5,7 @@
 
 mod area;
 pub mod compared;
+pub mod comparison;
 pub mod criteria;
 pub mod data;
 pub mod densify;
@@ -14,6 +15,7 @@ pub mod goodness;
 mod local;
 pub mod metrics;
 mod problem;
+pub mod selection;
 pub mod settle;
 pub mod transform;
 

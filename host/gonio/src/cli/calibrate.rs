@@ -1,16 +1,12 @@
-//! `gonio calibrate`: a sample scan turned into BRDF values with the scale of
-//! a reference-plate scan, corrected for laser drift (`gonio_analysis::calibration`),
-//! each value with its uncertainty budget (`gonio_analysis::uncertainty`).
+//! `gonio calibrate`: its arguments as a calibration request
+//! (`gonio_analysis::calibration::directory`), and what it did, as text or
+//! JSON.
 
 use anyhow::{bail, Context, Result};
-use gonio_analysis::calibration::{self, Budget, CalibratedRow, Calibration};
-use gonio_analysis::fit::{self, FitSpec};
+use gonio_analysis::calibration::directory::{calibrate, Request, SlopeSource};
 use gonio_analysis::rounding::{significant, with_uncertainty};
 use gonio_analysis::uncertainty::HeadUncertainty;
-use gonio_brdf::{Material, ModelId, Param};
-use gonio_scan_dir::samples;
-use gonio_scan_dir::ScanDir;
-use serde_json::json;
+use gonio_brdf::ModelId;
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
@@ -113,110 +109,33 @@ impl CalibrateArgs {
     }
 }
 
-fn rows(dir: &std::path::Path) -> Result<Vec<samples::Row>> {
-    let p = ScanDir::new(dir).samples();
-    if !p.exists() {
-        bail!("{} holds no completed scan (no samples.csv)", dir.display());
+impl CalibrateArgs {
+    /// The calibration these arguments ask for.
+    pub fn request(&self) -> Result<Request> {
+        let slope = match (&self.slope_fit, self.slope_model.as_str()) {
+            (Some(path), _) => SlopeSource::File(path.clone()),
+            (None, "none") => SlopeSource::None,
+            (None, name) => SlopeSource::Fitted(ModelId::parse(name).context("--slope-model")?),
+        };
+        Ok(Request {
+            scan: self.scan.clone(),
+            reference: self.reference.clone(),
+            rho_ref: self.rho_ref,
+            u_rho_ref: self.u_rho_ref,
+            splitter: self.splitter,
+            slope,
+            head: self.head.stated()?,
+        })
     }
-    samples::read(&p)
-}
-
-/// A calibrated scan: what `gonio calibrate` wrote and reports.
-pub struct Calibrated {
-    pub cal: Calibration,
-    pub drift: calibration::Drift,
-    pub rows: Vec<CalibratedRow>,
-    pub usable: usize,
-    /// The model whose slope gave the angle component, if any.
-    pub slope: Option<Material>,
-    /// `calibration.json`'s content.
-    pub summary: serde_json::Value,
-    /// `calibrated.csv`.
-    pub csv: PathBuf,
-}
-
-/// The model whose slope gives the angle component.
-fn slope_model(a: &CalibrateArgs, first: &[CalibratedRow]) -> Result<Option<Material>> {
-    if let Some(path) = &a.slope_fit {
-        return fit::file::read_material(path).map(Some);
-    }
-    if a.slope_model == "none" {
-        return Ok(None);
-    }
-    let model = ModelId::parse(&a.slope_model).context("--slope-model")?;
-    let spec = FitSpec {
-        param: Param::View,
-        ..FitSpec::new(model)
-    };
-    let f = fit::fit(&calibration::dataset(first), &spec).with_context(|| format!("fitting {} for the BRDF's slope", model.name()))?;
-    Ok(Some(f.material))
-}
-
-/// Calibrates a scan directory: writes calibrated.csv and calibration.json.
-pub fn calibrate(a: &CalibrateArgs) -> Result<Calibrated> {
-    if !a.scan.is_dir() {
-        bail!("{} is not a scan directory (no such directory)", a.scan.display());
-    }
-    let reference = a.reference.clone().unwrap_or_else(|| ScanDir::new(&a.scan).reference());
-    let (plate, monitor) = if reference.is_dir() {
-        let all = rows(&reference).context("reading the reference plate's scan")?;
-        all.into_iter().partition(|r| r.index.is_some())
-    } else {
-        if !reference.exists() {
-            bail!(
-                "no reference plate: {} is missing (scan with --reference-plate, or give --reference)",
-                reference.display()
-            );
-        }
-        (samples::read(&reference)?, Vec::new())
-    };
-    let cal =
-        Calibration::from_plate(&plate, &monitor, a.rho_ref, a.u_rho_ref, a.splitter).context("calibrating on the reference plate")?;
-    let sample = rows(&a.scan).context("reading the sample's scan")?;
-    let mut budget = Budget {
-        head: a.head.stated()?,
-        slope: None,
-    };
-    // The slope comes from the calibrated values themselves: a first pass
-    // without the angle component, a smooth model fitted to it, a second pass.
-    let (first, _) = cal.apply(&sample, &budget);
-    budget.slope = slope_model(a, &first)?;
-    let (calibrated, drift) = cal.apply(&sample, &budget);
-    let csv = ScanDir::new(&a.scan).calibrated();
-    calibration::write_csv(&csv, &calibrated)?;
-    let (lo, hi) = drift.range();
-    let usable = calibrated.iter().filter(|r| r.usable).count();
-    let summary = json!({
-        "calibration": cal,
-        "monitor_readings": drift.readings(),
-        "laser_power_range": if drift.readings() > 0 { json!([lo, hi]) } else { json!(null) },
-        "samples": calibrated.len(),
-        "usable": usable,
-        "head_uncertainty": budget.head,
-        "slope_model": budget.slope.as_ref().map(|m| json!({"model": m.model.name(), "params": m.params_string()})),
-        "budget": calibration::budget_by_incidence(&calibrated),
-        "file": csv,
-    });
-    let path = ScanDir::new(&a.scan).calibration();
-    std::fs::write(&path, serde_json::to_string_pretty(&summary)? + "\n").with_context(|| format!("writing {}", path.display()))?;
-    Ok(Calibrated {
-        cal,
-        drift,
-        rows: calibrated,
-        usable,
-        slope: budget.slope,
-        summary,
-        csv,
-    })
 }
 
 pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
-    let c = calibrate(&a)?;
+    let c = calibrate(&a.request()?)?;
     if a.json {
-        println!("{}", c.summary);
+        println!("{}", serde_json::to_value(&c.summary)?);
         return Ok(());
     }
-    let cal = &c.cal;
+    let cal = &c.summary.calibration;
     println!(
         "scale K = {} A·sr, splitter T = {} ({}), from {} plate samples (± k = 1)",
         with_uncertainty(cal.scale_a_sr, cal.scale_a_sr * cal.scale_rel_sd),
@@ -246,7 +165,7 @@ pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
         }
         None => println!("no angle component (--slope-model none)"),
     }
-    for b in calibration::budget_by_incidence(&c.rows) {
+    for b in &c.summary.budget {
         let top: Vec<String> = b
             .components
             .iter()
@@ -260,6 +179,11 @@ pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
             top.join(", ")
         );
     }
-    println!("{} of {} samples usable; written to {}", c.usable, c.rows.len(), c.csv.display());
+    println!(
+        "{} of {} samples usable; written to {}",
+        c.summary.usable,
+        c.rows.len(),
+        c.summary.file.display()
+    );
     Ok(())
 }

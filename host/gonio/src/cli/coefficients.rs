@@ -2,12 +2,8 @@
 //! fit, a model, or measured data, with standard uncertainties.
 
 use anyhow::{bail, Context, Result};
-use gonio_analysis::coefficients::{self, Apertures, Coefficient, Fitted, Kind, Provenance, Request, Set, Source, Support};
-use gonio_analysis::fit;
-use gonio_analysis::fit::file::FittedBrdf;
-use gonio_analysis::instrument::Instrument;
+use gonio_analysis::coefficients::{self, Apertures, Kind, Provenance, Request, Set, Source};
 use gonio_brdf::{Material, ModelId};
-use serde_json::{json, Value};
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
@@ -80,7 +76,11 @@ impl CoefficientsArgs {
             bail!("--instrument-* state what measured a data file: with --data here, or when fitting it (`gonio fit FILE --instrument-…`), whose fit file keeps it");
         }
         if !self.fit.is_empty() {
-            return Ok(fits_source(&self.fit)?.extrapolating(self.extrapolate));
+            let (source, warning) = coefficients::fit_files::source(&self.fit)?;
+            if let Some(w) = warning {
+                eprintln!("warning: {w}");
+            }
+            return Ok(source.extrapolating(self.extrapolate));
         }
         if let Some(name) = &self.material {
             return Ok(Source::Truth(super::material::specimen(name, self.params.as_deref())?));
@@ -126,124 +126,13 @@ impl CoefficientsArgs {
     }
 }
 
-/// The source of `--fit FILE...`: the fits and their data's support, or
-/// (one fit of an earlier gonio, which kept no support) the model alone.
-fn fits_source(paths: &[PathBuf]) -> Result<Source> {
-    let files: Vec<fit::file::FitFile> = paths.iter().map(|p| fit::file::read(p)).collect::<Result<_>>()?;
-    if files.iter().all(|f| f.support.is_none()) && files.len() == 1 {
-        eprintln!(
-            "warning: {} keeps no support of its data (a fit of an earlier gonio): what each value rests on is not known",
-            paths[0].display()
-        );
-        let f = files.into_iter().next().context("one fit")?;
-        let FittedBrdf::Model(material) = f.brdf else {
-            bail!("{}: a rational fit without its data's support", paths[0].display());
-        };
-        return Ok(Source::Model {
-            material,
-            covariance: f.covariance,
-        });
-    }
-    let mut support: Option<Support> = None;
-    let mut fits = Vec::new();
-    for (f, path) in files.into_iter().zip(paths) {
-        // A rational function never carries a value, so it needs no AIC
-        // (files of an earlier gonio have none).
-        let aic = f.aic.or(matches!(f.brdf, FittedBrdf::Rational(_)).then_some(f64::INFINITY));
-        let (Some(s), Some(rmse), Some(aic)) = (f.support, f.rmse, aic) else {
-            bail!(
-                "{}: a fit without its data's support, RMSE and AIC cannot be weighed against the others",
-                path.display()
-            );
-        };
-        match &support {
-            Some(first) if first.points.len() != s.points.len() || first.incidences_deg != s.incidences_deg => {
-                bail!("{}: fitted to other data than {}", path.display(), paths[0].display())
-            }
-            Some(_) => {}
-            None => support = Some(s),
-        }
-        fits.push(Fitted {
-            brdf: f.brdf,
-            covariance: f.covariance,
-            rmse,
-            aic,
-            goodness: f.goodness,
-        });
-    }
-    Source::measured(fits, support.context("no fit")?)
-}
-
-/// The coefficients as JSON: `ra` (a list) and `rl` (the last R_L, or
-/// null), with the instrument the values rest on (`None`: a model's).
-pub fn to_json(values: &[Coefficient], instrument: Option<Instrument>) -> Value {
-    let entry = |c: &Coefficient| {
-        let g = &c.request.geometry;
-        let mut v = json!({
-            "alpha_deg": g.alpha_deg, "beta_deg": g.beta_deg(), "epsilon_deg": g.epsilon_deg,
-            "value": c.estimate.value, "u": c.estimate.u,
-            "theta_i_deg": c.sample_angles_deg[0], "theta_o_deg": c.sample_angles_deg[1], "dphi_deg": c.sample_angles_deg[2],
-            "source_aperture_deg": c.request.apertures.source_deg, "receiver_aperture_deg": c.request.apertures.receiver_deg,
-        });
-        if g.beta2_deg != 0.0 {
-            v["beta1_deg"] = json!(g.beta1_deg);
-            v["beta2_deg"] = json!(g.beta2_deg);
-        }
-        if !c.estimate.nearest.is_empty() {
-            v["nearest"] = json!(c.estimate.nearest);
-        }
-        let e = &c.estimate;
-        if let Some(b) = &e.basis {
-            v["provenance"] = json!(b.provenance);
-            v["basis"] = json!(b.why);
-            if let Some(m) = &b.measure {
-                v["measure_with"] = json!(m);
-            }
-        }
-        for (key, part) in [
-            ("u_params", e.u_params),
-            ("u_model", e.u_model),
-            ("u_aperture", e.u_aperture),
-            ("u_arm_zero", e.u_arm_zero),
-        ] {
-            if let Some(x) = part {
-                v[key] = json!(x);
-            }
-        }
-        if let Some(m) = e.model {
-            v["model"] = json!(m);
-            v["models"] = json!(e.models);
-        }
-        v
-    };
-    let ra: Vec<Value> = values.iter().filter(|c| c.request.kind == Kind::Ra).map(entry).collect();
-    let rl = values.iter().rev().find(|c| c.request.kind == Kind::Rl).map(|c| {
-        let mut v = entry(c);
-        if let Some(o) = v.as_object_mut() {
-            o.remove("epsilon_deg");
-        }
-        v
-    });
-    json!({
-        "ra": ra, "rl": rl,
-        "units": {"ra": Kind::Ra.unit(), "rl": Kind::Rl.unit()},
-        "wavelength_nm": instrument.and_then(|i| i.wavelength_nm()),
-        "instrument": instrument.map(|i| i.to_json()),
-        "note": format!("spectral values at {}, not photometric; u is the standard uncertainty (k = 1); \
-                 provenance: measured (a sample at the geometry), interpolated (between samples on every side within the \
-                 standard's aperture), extrapolated (within the data's spacing, an adequate model carries it: u holds the \
-                 adequate models' spread, u_model) or not measured (value null: the basis says why, measure_with the scan \
-                 that would measure it)", instrument.map_or("no instrument's wavelength (a model)".into(), |i| i.wavelength_text())),
-    })
-}
-
 pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
     let source = a.source()?;
     let requests = a.requests()?;
     let values = coefficients::compute(&source, &requests)?;
     let instrument = source.instrument();
     if a.json {
-        println!("{}", to_json(&values, instrument));
+        println!("{}", coefficients::json::to_json(&values, instrument));
         return Ok(());
     }
     match instrument {

@@ -2,14 +2,14 @@
 //! commands (`fit.rs`) and the rational function's (`rational.rs`): the
 //! options, the data a fit sees, a fit's row, and the files drawn from it.
 
-use anyhow::{bail, Result};
-use gonio_analysis::fit::compared::ComparedFit;
+use anyhow::{bail, Context, Result};
+use gonio_analysis::fit::comparison::{NamedBox, Settings};
 use gonio_analysis::fit::file::FittedBrdf;
-use gonio_analysis::fit::{self, data::theta_in, Dataset, Units, Weighting};
+use gonio_analysis::fit::selection::{select, Restriction, Selection};
+use gonio_analysis::fit::{Dataset, Units, Weighting};
 use gonio_analysis::moments::Parametrization;
 use gonio_analysis::rational::RationalSpec;
 use gonio_brdf::Param;
-use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// Which samples a fit sees, and how they are weighed.
@@ -133,50 +133,46 @@ pub struct CompareArgs {
     pub options: FitOptions,
 }
 
-/// The data a fit sees (domain restriction applied), and the held-out part.
-pub struct Domain {
-    pub(super) train: Dataset,
-    pub(super) holdout: Option<Dataset>,
-}
-
-pub fn domain(path: &Path, o: &FitOptions) -> Result<Domain> {
-    let data = super::load_data(path, o.units, &o.instrument)?;
-    // What the file holds, for the messages below: the restrictions may
-    // leave nothing to name.
-    let held = degrees(&data.incidence_angles_deg());
-    let data = data.filter(|s| (!o.retro_only || s.on_retro_side()) && (o.theta_i.is_empty() || theta_in(s.theta_i, &o.theta_i)));
-    let (train, holdout) = if o.holdout_theta_i.is_empty() {
-        (data, None)
-    } else {
-        let h = data.filter(|s| theta_in(s.theta_i, &o.holdout_theta_i));
-        if h.observations.is_empty() {
-            bail!(
-                "no samples to hold out at θi = {}: {} holds θi = {held}",
-                degrees(&o.holdout_theta_i),
-                path.display()
-            );
+impl FitOptions {
+    /// How the models are fitted, `fixes` (`NAME=VALUE`) held.
+    pub fn settings(&self, fixes: &[String]) -> Result<Settings> {
+        let mut bounds = Vec::new();
+        for g in &self.bounds {
+            let parsed = g.split_once('=').and_then(|(n, r)| {
+                let (lo, hi) = r.split_once(':')?;
+                Some((n.trim(), lo.trim().parse::<f64>().ok()?, hi.trim().parse::<f64>().ok()?))
+            });
+            let Some((name, lo, hi)) = parsed else {
+                bail!("--bounds `{g}` is not NAME=LO:HI");
+            };
+            bounds.push(NamedBox { name: name.into(), lo, hi });
         }
-        (data.filter(|s| !theta_in(s.theta_i, &o.holdout_theta_i)), Some(h))
-    };
-    if train.observations.is_empty() {
-        bail!(
-            "no samples left to fit after the restrictions (--theta-i, --retro-only, --holdout-theta-i): {} holds θi = {held}",
-            path.display()
-        );
+        let mut fixed = Vec::new();
+        for f in fixes {
+            let (name, v) = f.split_once('=').with_context(|| format!("--fix `{f}` is not NAME=VALUE"))?;
+            let v: f64 = v.trim().parse().with_context(|| format!("--fix {name}: `{v}` is not a number"))?;
+            fixed.push((name.trim().to_string(), v));
+        }
+        Ok(Settings {
+            param: self.param.into(),
+            units: self.units,
+            weighting: self.weights,
+            seed: self.seed,
+            bounds,
+            fixed,
+        })
     }
-    Ok(Domain { train, holdout })
-}
 
-/// `15°, 30°, 60°`.
-fn degrees(angles: &[f64]) -> String {
-    angles.iter().map(|a| format!("{a}°")).collect::<Vec<_>>().join(", ")
-}
-
-/// One fit of a comparison, its held-out metrics and its fit file's JSON.
-pub struct Outcome {
-    pub fit: ComparedFit,
-    pub holdout: Option<fit::Metrics>,
-    pub json: Value,
+    /// The samples of `path` these options fit, and those they hold out.
+    pub fn select(&self, path: &Path) -> Result<Selection> {
+        let data = super::load_data(path, self.units, &self.instrument)?;
+        let r = Restriction {
+            retro_only: self.retro_only,
+            theta_i_deg: self.theta_i.clone(),
+            holdout_theta_i_deg: self.holdout_theta_i.clone(),
+        };
+        select(data, &r, &path.display().to_string())
+    }
 }
 
 /// What `--brdf`, `--bsdf` and `--plot` ask of a fit: its shader, its

@@ -1,6 +1,7 @@
 //! Scan grids on the command line: `--theta-i 15,30,60 --theta-o 0:90:3 --dphi -180:180:10`.
 
 use anyhow::{bail, Context, Result};
+use gonio_analysis::coefficients::scan::measure_for;
 use gonio_analysis::coefficients::Set;
 use gonio_analysis::{fit, lobe};
 use gonio_shared::lobe_pattern::{AZIMUTHS_MAX, RADIUS_MAX_DEG, RINGS_MAX};
@@ -227,42 +228,6 @@ impl GridArgs {
         spec.validate().map_err(|f| anyhow::anyhow!("grid refused: {f}"))?;
         Ok(spec)
     }
-}
-
-/// Adds to `spec` the incidences and retro rings the coefficient `sets`
-/// need (`--for`): each set's geometries then lie on the scan's pattern
-/// points, so that their values are measured, not carried by a model.
-pub fn measure_for(spec: &mut ScanSpec, sets: &[Set]) -> Result<()> {
-    if sets.is_empty() {
-        return Ok(());
-    }
-    let (incidences, alphas) = Set::scan_needs(sets);
-    let Some(patterns) = spec.patterns.as_mut() else {
-        bail!("--for measures on the rings about the retro direction: it cannot go with --no-patterns");
-    };
-    if patterns.retro.azimuths % 2 != 0 {
-        bail!(
-            "--for needs an even --retro-azimuths ({} given): the standards' views lie on the rings' two coplanar azimuths, 0° and 180°",
-            patterns.retro.azimuths
-        );
-    }
-    for t in incidences {
-        let t = t as f32;
-        if !spec.theta_i_deg.iter().any(|h| (h - t).abs() < 0.05) && spec.theta_i_deg.push(t).is_err() {
-            bail!("--for adds θi {t}°: beyond the 8 incidence angles a scan holds; give fewer --theta-i");
-        }
-    }
-    let mut radii: Vec<f32> = patterns.retro.radii_deg.to_vec();
-    for a in alphas {
-        if !radii.iter().any(|r| (*r as f64 - a).abs() < 1e-4) {
-            radii.push(a as f32);
-        }
-    }
-    radii.sort_by(f32::total_cmp);
-    patterns.retro.radii_deg = heapless::Vec::from_slice(&radii)
-        .ok()
-        .with_context(|| format!("--for needs the retro rings {radii:?}: more than the {RINGS_MAX} a scan holds"))?;
-    Ok(())
 }
 
 #[cfg(test)]

@@ -4,6 +4,7 @@ pub mod calibrate;
 mod coefficients;
 mod control;
 mod convert;
+pub mod demo;
 mod detector;
 mod devices;
 mod export;
@@ -43,7 +44,7 @@ pub enum Command {
     /// The whole chain on the simulated head: the reference plate, the Belcour
     /// grid with its lobe rings, calibration, every model fitted, R_A and R_L;
     /// writes the scan directory, calibrated.csv, fits/, plots/ and report.html.
-    Demo(scan::DemoArgs),
+    Demo(demo::DemoArgs),
     /// Scan a grid on a head (real or simulated) and store the samples.
     Scan(scan::ScanArgs),
     /// List measurement heads found on USB.
@@ -135,7 +136,7 @@ pub fn run(cli: Cli) -> Result<()> {
         .build()
         .context("starting the async runtime")?;
     match cli.command {
-        Command::Demo(a) => rt.block_on(scan::demo(a)),
+        Command::Demo(a) => rt.block_on(demo::demo(a)),
         Command::Scan(a) => rt.block_on(scan::scan(a)),
         Command::Devices(a) => devices::devices(a),
         Command::Sim(a) => sim::sim(a),

@@ -2,46 +2,30 @@
 //! sample's segment (`gonio_analysis::rational`), as text or JSON, and its
 //! fit file.
 
-use super::fitting::{domain, Domain, FitArgs, Outcome};
-use anyhow::{bail, Context, Result};
+use super::fitting::FitArgs;
+use anyhow::{bail, Result};
 use gonio_acquire::operator::Operator;
 use gonio_analysis::coefficients::Support;
 use gonio_analysis::fit::compared::ComparedFit;
-use gonio_analysis::fit::criteria::Criteria;
+use gonio_analysis::fit::comparison::{rational_row, Row};
 use gonio_analysis::fit::file::FittedBrdf;
-use gonio_analysis::fit::goodness::Goodness;
+use gonio_analysis::fit::selection::Selection;
 use gonio_analysis::fit::{self, Units, Weighting};
-use gonio_analysis::rational::{self, RationalFit, RationalSpec};
+use gonio_analysis::rational::RationalSpec;
 use gonio_analysis::rounding::significant;
 
-/// The rational function fitted to `d`'s samples, with a progress bar
-/// over the coefficients tried.
-fn fitted(d: &Domain, spec: &RationalSpec, json: bool) -> Result<RationalFit> {
+/// The rational function through `d`'s segments as a comparison's row
+/// (its criteria in `units` under `weighting`), with a progress bar over
+/// the coefficients tried.
+pub fn row(d: &Selection, spec: &RationalSpec, units: Units, weighting: Weighting, json: bool) -> Result<Row> {
     let most = 2 * gonio_analysis::rational::basis::Basis::size(spec.max_degree);
     let bar = Operator::for_json(json).bar(most as u64, "fitting rational", "coefficients");
-    let f = rational::fit_observed(&d.train, spec, |coefficients| {
+    let row = rational_row(d, spec, units, weighting, |coefficients| {
         bar.set_position(coefficients as u64);
         bar.set_message(format!("{coefficients} coefficients"));
-    })
-    .context("fitting rational")?;
+    });
     bar.finish_and_clear();
-    Ok(f)
-}
-
-/// The rational function as one row of `compare`: its criteria in the
-/// comparison's `units` and under its `weighting`, as the models are ranked.
-pub fn compared(d: &Domain, spec: &RationalSpec, units: Units, weighting: Weighting, json: bool) -> Result<Outcome> {
-    let f = fitted(d, spec, json)?;
-    let holdout = d.holdout.as_ref().map(|h| f.function.against(h).0);
-    let criteria = Criteria::of_brdf(&d.train, units, weighting, f.function.coefficients(), |x| f.function.eval(x))?;
-    let goodness = Goodness::of_brdf(&d.train, f.function.coefficients(), |x| f.function.eval(x));
-    let fit = ComparedFit::Rational {
-        fit: f,
-        criteria,
-        goodness,
-    };
-    let json = fit.to_json(d.train.units, holdout.as_ref());
-    Ok(Outcome { fit, holdout, json })
+    row
 }
 
 pub fn fit_cmd(a: FitArgs) -> Result<()> {
@@ -50,18 +34,13 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         bail!("--fix, --bounds and --weights are options of the parametric models: a rational function has no parameters to hold or box, and no least-squares sum to weigh (its --segments say how close it must pass)");
     }
     let spec = a.rational.spec(o.param)?;
-    let d = domain(&a.file, o)?;
-    let f = fitted(&d, &spec, o.json)?;
-    let holdout = d.holdout.as_ref().map(|h| f.function.against(h).0);
-    let criteria = Criteria::of_brdf(
-        &d.train,
-        o.units.unwrap_or(d.train.units),
-        Weighting::Uniform,
-        f.function.coefficients(),
-        |x| f.function.eval(x),
-    )?;
-    let goodness = Goodness::of_brdf(&d.train, f.function.coefficients(), |x| f.function.eval(x));
-    let mut v = rational::file::to_json(&f, d.train.units, &criteria, goodness.as_ref(), holdout.as_ref());
+    let d = o.select(&a.file)?;
+    let row = row(&d, &spec, o.units.unwrap_or(d.train.units), Weighting::Uniform, o.json)?;
+    let ComparedFit::Rational { fit: f, .. } = &row.fit else {
+        bail!("the rational fit came back as a model's");
+    };
+    let holdout = row.holdout;
+    let mut v = row.json.clone();
     if !d.train.warnings.is_empty() {
         v["warnings"] = serde_json::json!(d.train.warnings);
     }

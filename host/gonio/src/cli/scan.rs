@@ -1,47 +1,20 @@
-//! `gonio demo` and `gonio scan`: connect, home, scan, store, summarise.
+//! `gonio scan`: connect, home, scan, store, summarise.
 
-use super::calibrate;
 use super::detector::DetectorArgs;
-use super::fit;
-use super::fitting::{self, FitOptions};
-use super::grid::{GridArgs, LobeArgs};
+use super::grid::GridArgs;
 use super::live::LiveArgs;
 use super::material::SimHeadArgs;
 use super::{interrupt, simulated};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::operator::Operator;
 use gonio_acquire::scan::directory::{positions, resume_from, scan_into, Destination};
-use gonio_acquire::scan::live::Live;
 use gonio_acquire::scan::progress::hms;
-use gonio_analysis::coefficients::Set;
-use gonio_analysis::rounding::{figure, significant, with_uncertainty};
 use gonio_scan_dir::record::{parse_geometry, Monitor, RecordedHead, ScanRecord};
 use gonio_scan_dir::run::ScanOutcome;
-use gonio_shared::{ScanSpec, SweepRequest, SweepScan};
+use gonio_shared::ScanSpec;
 use gonio_sim::faults::Faults;
 use gonio_sim::SimConfig;
 use std::path::{Path, PathBuf};
-
-#[derive(Debug, clap::Args)]
-pub struct DemoArgs {
-    /// Output directory.
-    #[arg(long, default_value = "gonio-demo")]
-    pub out: PathBuf,
-    /// Seed of the simulated head's noise.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Sweep the Belcour grid's rows, measuring while moving (as fast as the
-    /// axes allow, 8 chop periods per sample), instead of stopping at every
-    /// point.
-    #[arg(long)]
-    pub sweep: bool,
-    #[command(flatten)]
-    pub lobe: LobeArgs,
-    #[command(flatten)]
-    pub output: OutputArgs,
-    #[command(flatten)]
-    pub live: LiveArgs,
-}
 
 /// How results are written.
 #[derive(Debug, clap::Args)]
@@ -111,154 +84,6 @@ pub struct ScanArgs {
     pub output: OutputArgs,
     #[command(flatten)]
     pub live: LiveArgs,
-}
-
-/// The whole chain on the simulated head: the reference plate and the
-/// Belcour grid in one session, calibration, every model fitted, and
-/// `report.html` with the comparison table and the pictures.
-pub async fn demo(a: DemoArgs) -> Result<()> {
-    let sim = SimConfig {
-        seed: a.seed,
-        sample_mm: Some(SAMPLE_MM),
-        ..SimConfig::default()
-    };
-    let truth = sim.material.clone();
-    let mut belcour = ScanSpec::belcour_with_patterns();
-    super::grid::measure_for(&mut belcour, &[Set::AstmE810, Set::En1436])?;
-    let sweep = match a.sweep {
-        true => Some(SweepScan {
-            lobe: a.lobe.lobe(&belcour.theta_i_deg)?,
-            ..DEMO_SWEEP
-        }),
-        false => None,
-    };
-    let spec = ScanSpec { sweep, ..belcour };
-    let live = super::live::start(&a.live, Operator::for_json(a.output.json)).await?;
-    let (outcome, samples) = demo_scan(sim, &spec, &a.out, &a.output, &live).await?;
-    let retro = spec.retro_points();
-    let json = a.output.json;
-    if !json {
-        summarise(&spec, &outcome, &samples, false)?;
-    }
-    let calibrated = calibrate::calibrate(&calibrate::CalibrateArgs::for_scan(a.out.clone(), json))?;
-    let options = FitOptions {
-        json,
-        ..FitOptions::default()
-    };
-    let domain = fitting::domain(&calibrated.csv, &options)?;
-    let rational = fitting::RationalArgs::default().spec(options.param)?;
-    let comparison = fit::compare(&domain, &options, Some(&rational))?;
-    let mut facts = vec![
-        ("head".to_string(), "simulated (gonio demo)".to_string()),
-        ("virtual material".to_string(), truth.describe()),
-        (
-            "scan".to_string(),
-            if a.sweep {
-                format!(
-                    "{} rows of the Belcour grid swept, {} retro points and {} pattern points measured at rest: {} of them measured ({} swept samples), {} refused, {} flagged",
-                    spec.rows(),
-                    retro,
-                    spec.pattern_points(),
-                    outcome.measured,
-                    outcome.swept_samples,
-                    outcome.skipped,
-                    outcome.flagged
-                )
-            } else {
-                format!(
-                    "{} points of the Belcour grid: {} measured, {} unreachable, {} flagged",
-                    outcome.points, outcome.measured, outcome.skipped, outcome.flagged
-                )
-            },
-        ),
-        (
-            "calibration".to_string(),
-            format!(
-                "reference plate ρ = {}: K = {} A·sr, splitter {} (± k = 1)",
-                gonio_sim::PLATE_RHO,
-                with_uncertainty(calibrated.cal.scale_a_sr, calibrated.cal.scale_a_sr * calibrated.cal.scale_rel_sd),
-                with_uncertainty(calibrated.cal.splitter, calibrated.cal.splitter * calibrated.cal.splitter_rel_sd)
-            ),
-        ),
-        ("data".to_string(), calibrated.csv.display().to_string()),
-    ];
-    if let Some(bound) = outcome.lower_bound_s {
-        facts.push(("scan time".to_string(), against_bound(outcome.head_time_s, bound)));
-    }
-    let budget = gonio_analysis::calibration::budget_by_incidence(&calibrated.rows);
-    let report = fit::report(
-        &a.out,
-        format!("gonio demo: {}", truth.describe()),
-        facts,
-        &domain,
-        &comparison,
-        &budget,
-    )?;
-    let rows = &comparison.rows;
-    let best = rows
-        .iter()
-        .min_by(|x, y| x.fit.metrics().rmse.total_cmp(&y.fit.metrics().rmse))
-        .context("no model fitted")?;
-    if json {
-        let mut v = serde_json::to_value(&outcome)?;
-        v["calibration"] = calibrated.summary;
-        v["models"] = rows.iter().map(|r| r.json.clone()).collect();
-        v["material"] = truth.describe().into();
-        v["unfitted"] = serde_json::json!(comparison.unfitted);
-        v["best_model"] = best.fit.name().into();
-        v["coefficients"] = super::coefficients::to_json(
-            &fit::coefficients(&domain, rows)?,
-            Some(gonio_analysis::instrument::Instrument::ThisHead),
-        );
-        v["report"] = report.display().to_string().into();
-        println!("{}", serde_json::to_string_pretty(&v)?);
-    } else {
-        println!("material: {}", truth.describe());
-        println!(
-            "calibrated: {} of {} samples usable; best model {} (RMSE {} sr⁻¹, NCC {})",
-            calibrated.usable,
-            calibrated.rows.len(),
-            best.fit.name(),
-            significant(best.fit.metrics().rmse, 4),
-            figure(best.fit.metrics().ncc, 4)
-        );
-        for why in &comparison.unfitted {
-            println!("not fitted: {why}");
-        }
-        println!("report: {}", report.display());
-    }
-    Ok(())
-}
-
-/// How `gonio demo --sweep` sweeps: as fast as the axes allow (the arm's
-/// 30 deg/s on the reference head), 8 chop periods per sample.
-pub const DEMO_SWEEP: SweepScan = SweepScan {
-    speed_dps: 30.0,
-    periods_per_sample: SweepRequest::PERIODS_MAX,
-    lobe: None,
-};
-
-/// The demo's scan of a simulated head into `dir`: the reference plate,
-/// then `spec` (quiet with `output.json`). Returns the outcome and the
-/// samples file.
-pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &OutputArgs, live: &Live) -> Result<(ScanOutcome, PathBuf)> {
-    let mut record = ScanRecord::simulated(&sim, spec, &DetectorArgs::demo().checked()?);
-    record.reference_plate = true;
-    record.sample_size_mm = sim.sample_mm;
-    let to = Destination {
-        dir,
-        resume: None,
-        force: output.force,
-    };
-    scan_into(
-        &record,
-        simulated::target(&record.head, sim.faults, sim.pace),
-        to,
-        Operator::for_json(output.json),
-        live,
-        interrupt::requested(),
-    )
-    .await
 }
 
 pub async fn scan(a: ScanArgs) -> Result<()> {
@@ -333,7 +158,7 @@ fn positive_mm(s: &str) -> Result<f64, String> {
 }
 
 /// Head time against the lower bound, in words.
-fn against_bound(head_time_s: f64, bound_s: f64) -> String {
+pub fn against_bound(head_time_s: f64, bound_s: f64) -> String {
     format!(
         "{} of head time; no stop-and-go order of the grid's points takes less than {} (× {:.3})",
         hms(head_time_s),
@@ -342,7 +167,7 @@ fn against_bound(head_time_s: f64, bound_s: f64) -> String {
     )
 }
 
-fn summarise(spec: &ScanSpec, o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
+pub fn summarise(spec: &ScanSpec, o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
     if json {
         println!("{}", serde_json::to_string_pretty(o)?);
         return Ok(());

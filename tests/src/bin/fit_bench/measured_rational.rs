@@ -129,7 +129,11 @@ fn alta_search(alta: &Alta, file: &Path) -> Value {
     let mut seconds = 0.0;
     let found = fewest(ALTA_MOST_TERMS, |terms| {
         let (held, s) = alta_at(alta, file, terms)?;
-        eprintln!("rational ALTA {}: {terms} terms a side {} in {s:.1} s", file.display(), if held { "held" } else { "failed" });
+        eprintln!(
+            "rational ALTA {}: {terms} terms a side {} in {s:.1} s",
+            file.display(),
+            if held { "held" } else { "failed" }
+        );
         seconds += s;
         Ok(held)
     });

@@ -1,0 +1,203 @@
+//! A model comparison (`gonio compare`, the demo's report): every model of
+//! the catalogue fitted to one selection of samples, then the rational
+//! function through their segments, each row with its held-out metrics and
+//! its fit file's JSON; ranked by RMSE, AIC and BIC (Spieringhs Table 6,
+//! Belcour Table 1), with R_A and R_L from the data and the fits beyond.
+
+use super::compared::ComparedFit;
+use super::criteria::Criteria;
+use super::goodness::Goodness;
+use super::selection::Selection;
+use super::{Fit, FitSpec, Metrics, Units, Weighting};
+use crate::calibration::IncidenceBudget;
+use crate::coefficients::{self, Coefficient, Source, Support};
+use crate::rational::{self, RationalSpec};
+use anyhow::{bail, Context, Result};
+use gonio_brdf::{ModelId, Param};
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// A search box by parameter name, `name ∈ [lo, hi]`.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NamedBox {
+    pub name: String,
+    pub lo: f64,
+    pub hi: f64,
+}
+
+/// How every model of a comparison (or one fit) is fitted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    pub param: Param,
+    /// The residuals' units; the data's own where `None`.
+    pub units: Option<Units>,
+    pub weighting: Weighting,
+    /// The global search's seed.
+    pub seed: u64,
+    /// Boxes replacing the defaults: in a comparison each model takes the
+    /// names it has.
+    pub bounds: Vec<NamedBox>,
+    /// Parameters held at a value (one model's fit only).
+    pub fixed: Vec<(String, f64)>,
+}
+
+impl Default for Settings {
+    /// The command line's: the view cosine, the data's units, uniform
+    /// weights, seed 1, the default boxes.
+    fn default() -> Self {
+        Settings {
+            param: Param::View,
+            units: None,
+            weighting: Weighting::Uniform,
+            seed: 1,
+            bounds: Vec::new(),
+            fixed: Vec::new(),
+        }
+    }
+}
+
+impl Settings {
+    /// The fit of `model` to data in `units`. With `every_model` (a
+    /// comparison), a box's name the model lacks is skipped, unless no
+    /// model has it.
+    pub fn spec(&self, model: ModelId, units: Units, every_model: bool) -> Result<FitSpec> {
+        let mut bounds = Vec::new();
+        for b in &self.bounds {
+            if !(b.lo.is_finite() && b.hi.is_finite() && b.lo < b.hi) {
+                bail!("--bounds {}: the box [{}, {}] must be finite with LO < HI", b.name, b.lo, b.hi);
+            }
+            match model.param_index(&b.name) {
+                Ok(i) => bounds.push((i, b.lo, b.hi)),
+                Err(_) if every_model && ModelId::ALL.iter().any(|m| m.param_index(&b.name).is_ok()) => {}
+                Err(e) => return Err(e.context("--bounds")),
+            }
+        }
+        let fixed = self
+            .fixed
+            .iter()
+            .map(|(name, v)| Ok((model.param_index(name)?, *v)))
+            .collect::<Result<_>>()?;
+        Ok(FitSpec {
+            param: self.param,
+            units: self.units.unwrap_or(units),
+            weighting: self.weighting,
+            fixed,
+            bounds,
+            seed: self.seed,
+            ..FitSpec::new(model)
+        })
+    }
+}
+
+/// One fit of a comparison, its held-out metrics and its fit file's JSON.
+#[derive(Debug, Clone)]
+pub struct Row {
+    pub fit: ComparedFit,
+    pub holdout: Option<Metrics>,
+    pub json: Value,
+}
+
+/// `model` fitted to `s` (its held-out samples evaluated): one fit's, or
+/// with `every_model` a comparison's row.
+pub fn model_fit(s: &Selection, settings: &Settings, model: ModelId, every_model: bool) -> Result<(Fit, Option<Metrics>)> {
+    let spec = settings.spec(model, s.train.units, every_model)?;
+    let f = super::fit(&s.train, &spec).with_context(|| format!("fitting {}", model.name()))?;
+    let holdout = s.holdout.as_ref().map(|h| super::evaluate(&f.material, h));
+    Ok((f, holdout))
+}
+
+/// The rational function through `s`'s segments as a row: its criteria in
+/// `units` under `weighting`, as the models are ranked; `trying` hears of
+/// each count of coefficients tried.
+pub fn rational_row(s: &Selection, spec: &RationalSpec, units: Units, weighting: Weighting, trying: impl FnMut(usize)) -> Result<Row> {
+    let f = rational::fit_observed(&s.train, spec, trying).context("fitting rational")?;
+    let holdout = s.holdout.as_ref().map(|h| f.function.against(h).0);
+    let criteria = Criteria::of_brdf(&s.train, units, weighting, f.function.coefficients(), |x| f.function.eval(x))?;
+    let goodness = Goodness::of_brdf(&s.train, f.function.coefficients(), |x| f.function.eval(x));
+    let fit = ComparedFit::Rational {
+        fit: f,
+        criteria,
+        goodness,
+    };
+    let json = fit.to_json(s.train.units, holdout.as_ref());
+    Ok(Row { fit, holdout, json })
+}
+
+/// Every fit of a comparison, and the fits it tried and could not make.
+pub struct Comparison {
+    pub rows: Vec<Row>,
+    pub unfitted: Vec<String>,
+}
+
+impl Comparison {
+    /// Every model in catalogue order, `on_model` told of each before its
+    /// fit; a model that cannot be fitted fails the comparison.
+    pub fn of_models(s: &Selection, settings: &Settings, mut on_model: impl FnMut(ModelId)) -> Result<Comparison> {
+        let mut rows = Vec::new();
+        for model in ModelId::ALL {
+            on_model(model);
+            let (f, holdout) = model_fit(s, settings, model, true)?;
+            let fit = ComparedFit::Model(f);
+            let json = fit.to_json(s.train.units, holdout.as_ref());
+            rows.push(Row { fit, holdout, json });
+        }
+        Ok(Comparison {
+            rows,
+            unfitted: Vec::new(),
+        })
+    }
+
+    /// Each row's rank (1 = best) by RMSE, AIC and BIC.
+    pub fn ranks(&self) -> Vec<[usize; 3]> {
+        let rows = &self.rows;
+        let key = |f: &ComparedFit, c: usize| match c {
+            0 => f.metrics().rmse,
+            1 => f.criteria().aic,
+            _ => f.criteria().bic,
+        };
+        let by = |c: usize| {
+            let mut order: Vec<usize> = (0..rows.len()).collect();
+            order.sort_by(|&a, &b| key(&rows[a].fit, c).total_cmp(&key(&rows[b].fit, c)));
+            let mut rank = vec![0; rows.len()];
+            for (r, i) in order.into_iter().enumerate() {
+                rank[i] = r + 1;
+            }
+            rank
+        };
+        let (rmse, aic, bic) = (by(0), by(1), by(2));
+        (0..rows.len()).map(|i| [rmse[i], aic[i], bic[i]]).collect()
+    }
+
+    /// R_A and R_L as the report gives them: from the data where they hold
+    /// the geometry, from the fits beyond.
+    pub fn coefficients(&self, s: &Selection) -> Result<Vec<Coefficient>> {
+        let fits = self.rows.iter().map(|r| r.fit.fitted()).collect();
+        let source = Source::measured(fits, Support::of(&s.train)?)?;
+        coefficients::compute(&source, &coefficients::report_requests())
+    }
+
+    /// Writes `dir/report.html`; returns its path.
+    pub fn report(
+        &self,
+        dir: &Path,
+        title: String,
+        facts: Vec<(String, String)>,
+        s: &Selection,
+        budget: &[IncidenceBudget],
+    ) -> Result<PathBuf> {
+        let fits: Vec<ComparedFit> = self.rows.iter().map(|r| r.fit.clone()).collect();
+        let holdout: Vec<_> = self.rows.iter().map(|r| r.holdout).collect();
+        crate::report::write(
+            dir,
+            &crate::report::Report {
+                title,
+                facts,
+                data: &s.train,
+                fits: &fits,
+                unfitted: &self.unfitted,
+                holdout: &holdout,
+                budget,
+            },
+        )
+    }
+}
