@@ -11,9 +11,11 @@
 //! `cargo test`) the steps whose tool is missing are skipped and said so on
 //! stderr, while the parameter blocks and naga's check still run.
 
+use gonio_analysis::fit::Units;
 use gonio_analysis::formats::brdf_explorer;
 use gonio_analysis::moments::Parametrization;
-use gonio_analysis::rational::{self, RationalSpec, SegmentSource};
+use gonio_analysis::rational::basis::{Basis, Coordinates, Domain};
+use gonio_analysis::rational::{self, Rational, RationalSpec, SegmentSource};
 use gonio_brdf::{Directions, GlassBeads, Material, ModelId, Param};
 use gonio_tests::synthetic;
 use rand::{Rng, SeedableRng};
@@ -294,6 +296,49 @@ fn rational_shaders_compile_and_equal_the_function() {
             .map(|&(ti, to, dp)| r.eval(&Directions::from_angles(ti, to, dp)))
             .collect();
         assert!(want.iter().filter(|v| v.is_finite()).count() > geos.len() * 9 / 10, "{name}: poles");
+        check_shader(dir.path(), &name, &text, &geos, &want, RATIONAL_TOLERANCES);
+    }
+}
+
+/// Every coordinate system's shader is its function: a hand-made function
+/// of degree 3 whose denominator is positive over the whole box (its
+/// constant term outweighs the others), so that the shader's coordinates,
+/// not a fit's poles, are what is compared, in each system the fit may
+/// choose (`rational::basis::Coordinates`).
+#[test]
+fn every_coordinate_system_has_its_shader() {
+    let dir = tempfile::tempdir().unwrap();
+    let geos = geometries();
+    let basis = Basis::with_terms(20);
+    let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+    let numerator: Vec<f64> = (0..basis.len())
+        .map(|k| if k == 0 { 2.0 } else { rng.random_range(-0.1..0.1) })
+        .collect();
+    let denominator: Vec<f64> = (0..basis.len())
+        .map(|k| if k == 0 { 1.0 } else { rng.random_range(-0.04..0.04) })
+        .collect();
+    for coordinates in [Coordinates::Back, Coordinates::LightView, Coordinates::ViewProjected] {
+        let points: Vec<[f64; 3]> = geos
+            .iter()
+            .map(|&(ti, to, dp)| coordinates.of(&Directions::from_angles(ti, to, dp)))
+            .collect();
+        let r = Rational {
+            coordinates,
+            degree: basis.degree,
+            cosine: true,
+            quantity: Units::Fr,
+            domain: Domain::around(&points),
+            order: basis.order,
+            numerator: numerator.clone(),
+            denominator: denominator.clone(),
+        };
+        let name = format!("rational-made-{}", coordinates.name());
+        let text = brdf_explorer::write_rational(&r, &["test".into()]);
+        let want: Vec<f64> = geos
+            .iter()
+            .map(|&(ti, to, dp)| r.eval(&Directions::from_angles(ti, to, dp)))
+            .collect();
+        assert!(want.iter().all(|v| v.is_finite() && *v > 0.0), "{name}: a pole");
         check_shader(dir.path(), &name, &text, &geos, &want, RATIONAL_TOLERANCES);
     }
 }

@@ -226,7 +226,7 @@ fn params_cell(f: &ComparedFit) -> String {
         ComparedFit::Rational { fit, .. } => escape(&format!(
             "degree {} in the {} plane{} ({} over {} coefficients), through every segment {}; L∞ {}",
             fit.function.degree,
-            fit.function.parametrization.name(),
+            fit.function.coordinates.name(),
             if fit.function.cosine { ", times cosθi·cosθo" } else { "" },
             fit.function.numerator.len(),
             fit.function.denominator.len(),

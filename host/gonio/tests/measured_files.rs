@@ -112,7 +112,8 @@ fn repeated_geometries_are_merged_with_their_spread() {
 /// The rational function through every ±0.5 sr⁻¹ segment of the measured
 /// tape: refused before (the grazing rows, then no function held by
 /// single precision's margin up to degree 8), it is found held in double
-/// precision, single precision tried up to the top, and said so.
+/// precision with ALTA's count (126 coefficients, in ALTA's view plane),
+/// single precision tried up to twice as many, and said so.
 #[test]
 fn the_rational_function_passes_through_a_measured_tape() {
     let o = gonio(&[
@@ -130,13 +131,14 @@ fn the_rational_function_passes_through_a_measured_tape() {
     // In the file's own quantity, as ALTA and the paper fit it.
     assert_eq!(v["quantity"], "fr-cos", "{v}");
     assert_eq!(v["precision"], "double", "{v}");
-    assert!(v["coefficients"].as_u64().unwrap() <= 330, "{v}");
+    let coefficients = v["coefficients"].as_u64().unwrap();
+    assert!(coefficients <= 126, "{v}");
     let attempts = v["attempts"].as_array().unwrap();
     assert!(
         attempts
             .iter()
-            .any(|a| a["single_precision"] == true && a["coefficients"] == 330 && a["feasible"] == false),
-        "single precision was tried up to the top: {v}"
+            .any(|a| a["single_precision"] == true && a["coefficients"] == (2 * coefficients).min(330) && a["feasible"] == false),
+        "single precision was tried up to twice the count: {v}"
     );
 }
 

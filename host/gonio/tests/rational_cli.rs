@@ -32,7 +32,8 @@ fn a_glass_bead_scan_is_held_within_its_segments_and_mistakes_are_named() {
     assert!(o.status.success(), "{}", text(&o));
     let v: Value = serde_json::from_slice(&o.stdout).unwrap();
     assert_eq!(v["model"], "rational");
-    assert_eq!(v["parametrization"], "back");
+    // The --param plane or ALTA's view plane, whichever held first.
+    assert!(v["parametrization"] == "back" || v["parametrization"] == "view-projected", "{v}");
     assert_eq!(v["segments"], serde_json::json!({"kind": "absolute", "width": 0.5}));
     assert_eq!(v["worst_violation"], 0.0);
     let terms = v["terms"].as_u64().unwrap() as usize;

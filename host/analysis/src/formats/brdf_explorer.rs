@@ -13,7 +13,7 @@
 //! multiplies by `n·l` itself: the function returns `f_r` (sr⁻¹), grey.
 
 use crate::fit::Units;
-use crate::moments::Parametrization;
+use crate::rational::basis::Coordinates;
 use crate::rational::Rational;
 use gonio_brdf::{Material, ModelId, Param};
 use std::fmt::Write;
@@ -227,7 +227,7 @@ pub fn write_rational(r: &Rational, comments: &[String]) -> String {
             if r.cosine { ", times cosθi·cosθo" } else { "" },
             env!("CARGO_PKG_VERSION")
         ),
-        format!("plane: {}", r.parametrization.name()),
+        format!("coordinates: {}", r.coordinates.name()),
     ];
     // The function was fitted with the light at azimuth 0 (`Directions`):
     // the light and the view turned about the normal to put it there. The
@@ -241,22 +241,32 @@ pub fn write_rational(r: &Rational, comments: &[String]) -> String {
          vec3 vr = vec3(az.x * v.x + az.y * v.y, az.x * v.y - az.y * v.x, v.z);\n    \
          float thetaI = degrees(atan(sinI, lr.z));\n",
     );
-    b.push_str(match r.parametrization {
-        Parametrization::Back => {
+    // `Coordinates::of`: the angle and the direction of the view's place
+    // in its plane, then the warp (none in ALTA's view plane, whose
+    // azimuth is Δφ folded onto [0°, 180°]).
+    b.push_str(match r.coordinates {
+        Coordinates::Back => {
             "    vec3 back = unitSum(vec3(-v.x, -v.y, v.z), l);\n    \
              float theta = degrees(atan(length(planar(back)), back.z));\n    \
              vec2 w = planar(unitSum(vec3(-vr.x, -vr.y, vr.z), lr));\n"
         }
-        Parametrization::LightView => {
+        Coordinates::LightView => {
             "    float theta = degrees(atan(length(cross(l, v)), dot(l, v)));\n    \
              vec2 w = vec2(dot(vr, vec3(-lr.z, 0.0, lr.x)), vr.y);\n"
+        }
+        Coordinates::ViewProjected => {
+            "    float theta = degrees(atan(length(planar(vr)), vr.z));\n    \
+             vec2 w = vec2(vr.x, abs(vr.y));\n"
         }
     });
     b.push_str(
         "    float wLength = length(w);\n    vec2 toward = wLength > 0.0 ? w / wLength : vec2(1.0, 0.0);\n    \
-         float px = theta * toward.x;\n    float py = theta * toward.y;\n    float radius = sqrt(px * px + py * py);\n    \
-         float warp = radius > 0.0 ? sqrt(radius) / radius : 0.0;\n",
+         float px = theta * toward.x;\n    float py = theta * toward.y;\n",
     );
+    b.push_str(match r.coordinates {
+        Coordinates::ViewProjected => "    float warp = 1.0;\n",
+        _ => "    float radius = sqrt(px * px + py * py);\n    float warp = radius > 0.0 ? sqrt(radius) / radius : 0.0;\n",
+    });
     for (k, c) in ["thetaI", "warp * px", "warp * py"].iter().enumerate() {
         let (lo, hi) = (r.domain.lo[k], r.domain.hi[k]);
         let _ = writeln!(

@@ -9,33 +9,72 @@
 //! parallel. Terms are ordered by total degree, so a basis of `n` terms
 //! is a prefix of that of `n + 1`: a solution with fewer terms is one with
 //! every larger count (zeros appended), which is what makes bisecting on
-//! the number of terms sound for the segments. The positivity grid
-//! (`qp`) grows with the degree, so across a degree's boundary a count
-//! that held can fail with more terms; the bisection then answers a count
-//! that holds, not always the fewest.
+//! the number of terms sound for the segments (`search`).
 
 use crate::moments::plane::Parametrization;
 use gonio_brdf::Directions;
 use serde::{Deserialize, Serialize};
 
 /// The coordinates a rational function is a function of: the incidence θi
-/// (degrees) and the view's place `(x, y)` in a retro plane
+/// (degrees) and two of the view.
+///
+/// `Back` and `LightView` take the view's place `(x, y)` in a retro plane
 /// (`moments::plane`), with the retro direction at the origin and its
 /// radius, the angle θ from the retro direction in degrees, taken to its
-/// square root: `(x, y)·θ^(−1/2)`.
+/// square root: `(x, y)·θ^(−1/2)`. The warp is for the retro lobe. A lobe
+/// a few degrees wide fills 1 % of a 180° span and no polynomial of degree
+/// 8 on it follows the lobe; √θ gives its core a tenth of the span. A lobe
+/// that is a smooth function of θ² stays one of `(x′² + y′²)²` after the
+/// warp. Measured on a simulated glass-bead scan (1 506 samples, retro
+/// rings to 4.75°, ±0.5 sr⁻¹): no degree up to 8 held every segment in
+/// `(x, y)`; degree 6 does in `(x′, y′)`.
 ///
-/// The warp is for the retro lobe. A lobe a few degrees wide fills 1 % of a
-/// 180° span and no polynomial of degree 8 on it follows the lobe; √θ gives
-/// its core a tenth of the span. A lobe that is a smooth function of θ²
-/// stays one of `(x′² + y′²)²` after the warp. Measured on a simulated
-/// glass-bead scan (1 506 samples, retro rings to 4.75°, ±0.5 sr⁻¹): no
-/// degree up to 8 held every segment in `(x, y)`; degree 6 does in
-/// `(x′, y′)`.
-pub fn coordinates(param: Parametrization, d: &Directions) -> [f64; 3] {
-    let [x, y] = param.coordinates(d);
-    let r = x.hypot(y);
-    let k = if r > 0.0 { r.sqrt() / r } else { 0.0 };
-    [d.angles().0.to_degrees(), k * x, k * y]
+/// `ViewProjected` is ALTA's `ISOTROPIC_TL_TV_PROJ_DPHI`, in degrees:
+/// `(θo cosΔφ, θo |sinΔφ|)`, unwarped. A lobe as wide as the mimic tape's
+/// (`tests/data/tape-frcos.dat`, σ 4° and 6°) needs fewer terms there:
+/// 126 coefficients at ±0.5, as ALTA, where the warped light-view plane
+/// needs 258; on ALTA's yellow tape the warped plane needs 462 where
+/// ALTA needs 1 242. The fit tries both (`fit`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Coordinates {
+    Back,
+    LightView,
+    ViewProjected,
+}
+
+impl Coordinates {
+    /// The warped retro plane of `p`.
+    pub fn retro(p: Parametrization) -> Coordinates {
+        match p {
+            Parametrization::Back => Coordinates::Back,
+            Parametrization::LightView => Coordinates::LightView,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Coordinates::Back => "back",
+            Coordinates::LightView => "light-view",
+            Coordinates::ViewProjected => "view-projected",
+        }
+    }
+
+    /// The coordinates of `d`, before the box maps them onto [−1, 1]³.
+    pub fn of(self, d: &Directions) -> [f64; 3] {
+        let (theta_i, theta_o, dphi) = d.angles();
+        let [x, y] = match self {
+            Coordinates::Back => Parametrization::Back.coordinates(d),
+            Coordinates::LightView => Parametrization::LightView.coordinates(d),
+            Coordinates::ViewProjected => {
+                let t = theta_o.to_degrees();
+                return [theta_i.to_degrees(), t * dphi.cos(), t * dphi.sin().abs()];
+            }
+        };
+        let r = x.hypot(y);
+        let k = if r > 0.0 { r.sqrt() / r } else { 0.0 };
+        [theta_i.to_degrees(), k * x, k * y]
+    }
 }
 
 /// The box the coordinates are mapped from: the data's range per coordinate.

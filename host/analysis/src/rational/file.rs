@@ -19,7 +19,7 @@ pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, goodness: Opt
     let r = &f.function;
     let mut v = json!({
         "model": MODEL,
-        "parametrization": r.parametrization,
+        "parametrization": r.coordinates,
         "degree": r.degree,
         "terms": r.numerator.len(),
         "cosine": r.cosine,
@@ -87,13 +87,12 @@ pub fn function_of(v: &Value) -> Result<Rational> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::moments::Parametrization;
-    use crate::rational::basis::{Domain, TermOrder};
+    use crate::rational::basis::{Coordinates, Domain, TermOrder};
 
     #[test]
     fn a_function_survives_its_file_and_bad_files_are_refused() {
         let r = Rational {
-            parametrization: Parametrization::LightView,
+            coordinates: Coordinates::LightView,
             degree: 1,
             cosine: true,
             quantity: Units::FrCos,

@@ -11,9 +11,8 @@
 //! published in ALTA's format, whose ±0.5 segments (the paper's) are of
 //! that quantity. `eval` is `f_r` either way.
 
-use super::basis::{coordinates, Basis, Domain, TermOrder};
+use super::basis::{Basis, Coordinates, Domain, TermOrder};
 use crate::fit::{Dataset, Metrics, Units};
-use crate::moments::plane::Parametrization;
 use gonio_brdf::Directions;
 use serde::{Deserialize, Serialize};
 
@@ -34,8 +33,10 @@ fn first_order() -> TermOrder {
 
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Rational {
-    /// The retro plane the view's coordinates are taken in.
-    pub parametrization: Parametrization,
+    /// What it is a function of (the file's `parametrization`, named so
+    /// before the unwarped view plane existed).
+    #[serde(rename = "parametrization")]
+    pub coordinates: Coordinates,
     /// Total degree of numerator and denominator: that of their last term
     /// (`Basis::in_order`; both have as many terms).
     pub degree: usize,
@@ -89,7 +90,7 @@ impl Rational {
 
     /// As `eval`, with the basis built once by the caller.
     pub fn eval_with(&self, basis: &Basis, d: &Directions) -> f64 {
-        let u = self.domain.unit(coordinates(self.parametrization, d));
+        let u = self.domain.unit(self.coordinates.of(d));
         let q = basis.eval(&self.denominator, u);
         if q <= 0.0 {
             // A pole or worse: the denominator is held positive at the

@@ -9,9 +9,9 @@
 //!
 //! `basis` the Legendre terms and the coordinates' box, `segments` the
 //! intervals, `qp` one count's quadratic programme, `active_set` its
-//! solver (Goldfarb–Idnani), `fit` the
-//! search on the number of terms, `function` the result as a BRDF, `file`
-//! its JSON.
+//! solver (Goldfarb–Idnani), `search` the walk over counts of terms,
+//! `fit` the programmes it walks over, `function` the result as a BRDF,
+//! `file` its JSON.
 
 pub mod active_set;
 pub mod basis;
@@ -19,6 +19,7 @@ pub mod file;
 pub mod fit;
 pub mod function;
 pub mod qp;
+pub mod search;
 pub mod segments;
 
 pub use fit::{fit, fit_observed, Attempt, RationalFit, RationalSpec};

@@ -55,7 +55,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let r = &f.function;
     println!(
         "rational in the {} plane{} ({} samples, {:.2} s)",
-        r.parametrization.name(),
+        r.coordinates.name(),
         if r.cosine { ", times cosθi·cosθo" } else { "" },
         f.samples,
         f.seconds

@@ -78,16 +78,21 @@ fn alta_rational(alta: &Alta, data: &Dataset, function: &'static str) -> Result<
         let (np, nq) = rest.split_once("& nq =")?;
         Some(np.trim().parse::<usize>().ok()? + nq.trim().parse::<usize>().ok()?)
     });
-    let linf = text
-        .lines()
-        .find_map(|l| l.split_once("Linf distance to data =").and_then(|(_, v)| v.trim().parse().ok()))
-        .unwrap_or(f64::NAN);
+    let linf = printed_linf(&text);
     Ok(AltaRational {
         function,
         coefficients: held,
         linf,
         seconds,
     })
+}
+
+/// The L∞ distance ALTA prints (`Linf distance to data = 0.5`, to six
+/// digits), NaN if it printed none.
+pub fn printed_linf(text: &str) -> f64 {
+    text.lines()
+        .find_map(|l| l.split_once("Linf distance to data =").and_then(|(_, v)| v.trim().parse().ok()))
+        .unwrap_or(f64::NAN)
 }
 
 /// The section, on the materials whose name holds `filter`.
