@@ -5,7 +5,7 @@
 //!
 //! Each trial boots the image, opens its port with the host crate's client
 //! (as `gonio --port` does) and asks for a measurement; `STRIKE_S` after the
-//! laser enable rises, the board injects the fault (`board.py --fault`):
+//! laser enable rises, the board injects the fault (`python3 -m board --fault`):
 //!
 //! - `hardfault`: a bus error at whatever instruction runs;
 //! - `stack-overflow`: the stack runs out (SP moved to the bottom of the

@@ -1,5 +1,6 @@
-//! The virtual STM32F405 board (`tests/chip/board/`) as the benchmarks run
-//! it: the unmodified image with a USB host on a pseudo-terminal, the
+//! The virtual STM32F405 board (the Python package `tests/chip/board/`, run
+//! as `python3 -m board` from `tests/chip`) as the benchmarks run it: the
+//! unmodified image with a USB host on a pseudo-terminal, the
 //! simulated head's world behind its pins (`board-plant`, built beside the
 //! benchmark), and its report when it is told to stop.
 
@@ -11,7 +12,8 @@ use std::io::{BufRead, BufReader, Read};
 use std::path::{Path, PathBuf};
 use std::process::{Child, ChildStderr, Command, Stdio};
 
-/// `board-plant` built in this program's profile: its path.
+/// `board-plant` built in this program's profile: its absolute path (the
+/// board runs it from `tests/chip`).
 pub fn board_plant(root: &Path) -> Result<PathBuf> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut build = Command::new(cargo);
@@ -24,16 +26,18 @@ pub fn board_plant(root: &Path) -> Result<PathBuf> {
     if !build.status().context("building board-plant")?.success() {
         bail!("board-plant did not build");
     }
-    Ok(chip_costs::target_dir()
+    let plant = chip_costs::target_dir()
         .join(if cfg!(debug_assertions) { "debug" } else { "release" })
-        .join("board-plant"))
+        .join("board-plant");
+    std::path::absolute(&plant).with_context(|| format!("the absolute path of {}", plant.display()))
 }
 
 /// The chip the image is built for.
 pub const TARGET: &str = "thumbv7em-none-eabihf";
 
 /// The firmware's binaries `bins`, built in release for the chip: the
-/// folder they are in.
+/// folder they are in, absolute (`CARGO_TARGET_DIR` may be relative, and the
+/// board and the emulator run from `tests/chip`).
 pub fn chip_images(root: &Path, bins: &[&str]) -> Result<PathBuf> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut build = Command::new(cargo);
@@ -44,7 +48,8 @@ pub fn chip_images(root: &Path, bins: &[&str]) -> Result<PathBuf> {
     if !build.current_dir(root).status().context("building the firmware")?.success() {
         bail!("{bins:?} did not build for {TARGET}");
     }
-    Ok(chip_costs::target_dir().join(TARGET).join("release"))
+    let images = chip_costs::target_dir().join(TARGET).join("release");
+    std::path::absolute(&images).with_context(|| format!("the absolute path of {}", images.display()))
 }
 
 /// The release `gonio-head` image, built: its path.
@@ -61,17 +66,21 @@ pub struct Board {
 }
 
 impl Board {
-    /// Starts `board.py IMAGE --pty ARGS…` and reads its pseudo-terminal.
+    /// Starts `python3 -m board IMAGE --pty ARGS…` in `tests/chip` and reads
+    /// its pseudo-terminal. Paths in `args` must be absolute.
     pub fn start(root: &Path, image: &Path, args: &[&OsStr]) -> Result<Board> {
+        // Absolute: the board runs in `tests/chip`, not here.
+        let image = std::path::absolute(image).with_context(|| format!("the absolute path of {}", image.display()))?;
         let mut child = Command::new("python3")
-            .arg(root.join("tests/chip/board/board.py"))
-            .arg(image)
+            .args(["-m", "board"])
+            .arg(&image)
             .arg("--pty")
             .args(args)
+            .current_dir(root.join("tests/chip"))
             .stdout(Stdio::piped())
             .stderr(Stdio::piped())
             .spawn()
-            .context("running python3 tests/chip/board/board.py --pty (needs `pip install unicorn`)")?;
+            .context("running python3 -m board --pty in tests/chip (needs `pip install unicorn`)")?;
         let mut err = BufReader::new(child.stderr.take().context("the board's stderr")?);
         let mut line = String::new();
         err.read_line(&mut line).context("reading the board's pseudo-terminal")?;

@@ -21,8 +21,13 @@ Assumed where RM0090 is silent: a trigger during a conversion is ignored
 Not modelled: scan sequences, continuous mode, injected channels, the
 analog watchdog, ADC2 and ADC3 (their registers hold what is written)."""
 
-from bus import Block
-from clock import HZ, cycles
+from .bus import Block
+from .clock import HZ, Clock, Cycles, Event, cycles
+from .dma import Dma
+from .nvic import Nvic
+from .plant import Plant
+from .system import Rcc
+from .timer import Timer
 
 ADC_BASE = 0x4001_2000
 ADC_IRQ = 18
@@ -36,52 +41,52 @@ AWD, EOC, JEOC, JSTRT, STRT, OVR = 1, 2, 4, 8, 16, 32
 class Adc(Block):
     name = "ADC"
 
-    def __init__(self, clock, nvic, rcc, trigger_timer, dma):
+    def __init__(self, clock: Clock, nvic: Nvic, rcc: Rcc, trigger_timer: Timer, dma: Dma) -> None:
         self.clock = clock
         self.nvic = nvic
         self.rcc = rcc
         self.timer = trigger_timer
         self.dma = dma
-        self.plant = None  # the photodiode's source; None: the input at ground
+        self.plant: Plant | None = None  # the photodiode's source; None: the input at ground
         self.sr = self.cr1 = self.cr2 = self.dr = self.ccr = 0
-        self.regs = {}  # sampling times, sequences, other ADCs: held as written
-        self.seen = 0  # triggers up to here are collected
-        self.waiting = []  # trigger instants whose conversions have not ended
-        self.event = None
+        self.regs: dict[int, int] = {}  # sampling times, sequences, other ADCs: held as written
+        self.seen: Cycles = 0  # triggers up to here are collected
+        self.waiting: list[Cycles] = []  # trigger instants whose conversions have not ended
+        self.event: Event | None = None
         self.conversions = 0  # ended, for the board's report
         self.lost = 0  # results overwritten or dropped by an overrun
         dma.before_access = self._advance
         dma.after_write = self._after_dma_write
 
     # --- timing ------------------------------------------------------------------
-    def _adcclk_cycles(self):
+    def _adcclk_cycles(self) -> Cycles:
         """Core cycles per ADC clock."""
         prescaler = 2 * ((self.ccr >> 16 & 3) + 1)
         return cycles(HZ * prescaler, self.rcc.apb2_hz())
 
-    def _channel(self):
+    def _channel(self) -> int:
         return self.regs.get(0x34, 0) & 0x1F
 
-    def _sample_cycles(self):
+    def _sample_cycles(self) -> Cycles:
         ch = self._channel()
         smpr = self.regs.get(0x10, 0) if ch < 10 else self.regs.get(0x0C, 0)
         smp = smpr >> (3 * (ch % 10)) & 7
         return SAMPLE_CLOCKS[smp] * self._adcclk_cycles()
 
-    def _conversion_cycles(self):
+    def _conversion_cycles(self) -> Cycles:
         return self._sample_cycles() + 12 * self._adcclk_cycles()
 
-    def _listening(self):
+    def _listening(self) -> bool:
         """Whether the ADC is on and takes TIM2's TRGO as its trigger."""
-        return self.cr2 & 1 and self.cr2 >> 28 & 3 and self.cr2 >> 24 & 0xF == EXTSEL_TIM2_TRGO
+        return bool(self.cr2 & 1 and self.cr2 >> 28 & 3 and self.cr2 >> 24 & 0xF == EXTSEL_TIM2_TRGO)
 
-    def _triggered(self):
+    def _triggered(self) -> bool:
         """Whether TIM2's updates start conversions now."""
         t = self.timer
-        return self._listening() and t.cr2 >> 4 & 7 == 0b010 and t.running and not t._external()
+        return bool(self._listening() and t.cr2 >> 4 & 7 == 0b010 and t.running and not t._external())
 
     # --- the chain, brought up to now ---------------------------------------------
-    def _advance(self):
+    def _advance(self) -> None:
         now = self.clock.now
         self._offer_waiting_result()
         if self._triggered() and now > self.seen:
@@ -101,7 +106,7 @@ class Adc(Block):
             triggers, self.waiting = self.waiting[:done], self.waiting[done:]
             self._convert(triggers)
 
-    def _convert(self, triggers):
+    def _convert(self, triggers: list[Cycles]) -> None:
         """The conversions started at `triggers` (evenly spaced, in order)
         have ended: their results go to the DMA or to DR."""
         if self.sr & OVR:
@@ -127,7 +132,7 @@ class Adc(Block):
             self.sr |= EOC
         self._line()
 
-    def overrun(self):
+    def overrun(self) -> None:
         """A result the DMA did not take in time (a test's fault): lost, and
         OVR set."""
         self.sr |= OVR
@@ -135,28 +140,26 @@ class Adc(Block):
         self._line()
         self._schedule()
 
-    def _requests(self):
+    def _requests(self) -> bool:
         """Whether a result goes to the DMA (DMA bit set, no overrun, the
         stream taking this ADC's requests)."""
-        return self.cr2 >> 8 & 1 and not self.sr & OVR and self.dma.accepts(DR)
+        return bool(self.cr2 >> 8 & 1 and not self.sr & OVR and self.dma.accepts(DR))
 
-    def _offer_waiting_result(self):
+    def _offer_waiting_result(self) -> None:
         """A result left in DR is requested again: it goes once the stream
         takes it."""
-        if self.sr & EOC and self._requests():
-            if self.dma.receive(bytes((self.dr & 0xFF, self.dr >> 8))):
-                self.sr &= ~EOC
-                self._line()
+        if self.sr & EOC and self._requests() and self.dma.receive(bytes((self.dr & 0xFF, self.dr >> 8))):
+            self.sr &= ~EOC
+            self._line()
 
-    def _trigger_edge(self, master):
+    def _trigger_edge(self, master: Timer) -> None:
         """A software update of TIM2 (EGR.UG) is a TRGO edge too when its
         master mode is reset or update."""
-        if self._listening() and master.cr2 >> 4 & 7 in (0, 2):
-            if not self.sr & OVR:
-                self.waiting.append(self.clock.now)
-                self._schedule()
+        if self._listening() and master.cr2 >> 4 & 7 in (0, 2) and not self.sr & OVR:
+            self.waiting.append(self.clock.now)
+            self._schedule()
 
-    def _schedule(self):
+    def _schedule(self) -> None:
         """An event when the DMA next sets a flag the core has enabled."""
         if self.event:
             self.event.cancel()
@@ -173,22 +176,22 @@ class Adc(Block):
             return
         self.event = self.clock.at(-(-end // 1), self._due)
 
-    def _due(self):
+    def _due(self) -> None:
         self.event = None
         self._advance()
         self._schedule()
 
-    def _after_dma_write(self):
+    def _after_dma_write(self) -> None:
         self._offer_waiting_result()
         self._schedule()
 
-    def _line(self):
+    def _line(self) -> None:
         enabled = (EOC if self.cr1 >> 5 & 1 else 0) | (OVR if self.cr1 >> 26 & 1 else 0)
         enabled |= (JEOC if self.cr1 >> 7 & 1 else 0) | (AWD if self.cr1 >> 6 & 1 else 0)
         self.nvic.line(ADC_IRQ, bool(self.sr & enabled))
 
     # --- registers (offsets from ADC1's base; the common block at 0x300) ----------
-    def read(self, offset):
+    def read(self, offset: int) -> int:
         self._advance()
         if offset == 0x00:
             return self.sr
@@ -204,7 +207,7 @@ class Adc(Block):
             return self.ccr
         return self.regs.get(offset, 0)
 
-    def write(self, offset, value):
+    def write(self, offset: int, value: int) -> None:
         self._advance()
         if offset == 0x00:  # rc_w0
             self.sr &= value | ~0x3F

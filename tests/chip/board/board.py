@@ -1,8 +1,10 @@
 """The virtual STM32F405 board: the core, its memory map and the
 peripheral models wired together, running an unmodified image from reset.
 
-    python3 tests/chip/board/board.py IMAGE [--seconds S] [--set PB12=1@0.5 ...]
+    python3 -m board IMAGE [--seconds S] [--set PB12=1@0.5 ...]
         [--fault KIND@WHEN]
+
+(from tests/chip, or anywhere with the package installed)
 
 runs IMAGE for S seconds of virtual time (default 2), the plant driving
 each `--set` input pin to its level at its time, and prints one JSON
@@ -18,36 +20,34 @@ high after it. A watchdog reset ends the run, the pins let go as a reset
 lets them go (the board's resistors then hold them)."""
 
 import argparse
-from collections import deque
+import itertools
 import json
+import os
 import re
 import shlex
 import signal
-import tty
-import os
 import sys
 import time
+import tty
+from collections import deque
+from typing import Any
 
-from unicorn import UC_HOOK_MEM_WRITE
+from unicorn import UC_HOOK_MEM_WRITE, Uc
 from unicorn import arm_const as arm
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-
-from emulate import Elf, Machine, by_function  # noqa: E402
-
-from adc import ADC_BASE, Adc  # noqa: E402
-from bus import Bus, Plain  # noqa: E402
-from clock import HZ, Clock  # noqa: E402
-from core import Core, Fault  # noqa: E402
-from dma import DMA2_BASE, Dma  # noqa: E402
-from gpio import EXTI_BASE, GPIO_BASE, SYSCFG_BASE, Exti, Port, Syscfg  # noqa: E402
-from nvic import Nvic, SystemResetRequest  # noqa: E402
-from otg import OTG_FS_BASE, OtgFs  # noqa: E402
-from plant import Plant  # noqa: E402
-from usb_host import Host  # noqa: E402
-from system import FLASH_BASE, IWDG_BASE, PWR_BASE, RCC_BASE, Iwdg, Rcc  # noqa: E402
-from timer import Timer  # noqa: E402
+from .adc import ADC_BASE, Adc
+from .bus import Bus, Plain
+from .clock import HZ, Clock
+from .core import Blocked, Core, Fault
+from .dma import DMA2_BASE, Dma
+from .emulate import Elf, Machine, by_function
+from .gpio import EXTI_BASE, GPIO_BASE, SYSCFG_BASE, Exti, Port, Syscfg
+from .nvic import Nvic, SystemResetRequest
+from .otg import OTG_FS_BASE, OtgFs
+from .plant import Plant
+from .system import FLASH_BASE, IWDG_BASE, PWR_BASE, RCC_BASE, Iwdg, Rcc
+from .timer import Timer
+from .usb_host import Host
 
 # The reference board's wiring (firmware/src/bin/head/chip/pins.rs): the
 # E-STOP and the three home switches are normally closed to ground, so they
@@ -102,6 +102,8 @@ USB_UNPLUGGED_S = 0.1
 # An instruction that branches to itself, put at the top of SRAM (above the
 # image's statics) for `serve-hang`.
 HANG_AT = 0x2001_FFF0
+# The core's registers the report gives when it faults.
+FAULT_REGISTERS = (*(f"r{n}" for n in (*range(9), 12)), "sp", "lr", "pc", "xpsr", "control", "primask")
 ESTOP_PULSE_S = 200e-6
 
 
@@ -110,9 +112,9 @@ class WatchdogReset(Exception):
 
 
 class Board:
-    def __init__(self, image, plant=None):
+    def __init__(self, image: str, plant: list[str] | None = None) -> None:
         self.elf = Elf(image)
-        self.plant = None
+        self.plant: Plant | None = None
         self.clock = Clock()
         self.machine = Machine(self.elf, plain=())
         uc = self.uc = self.machine.uc
@@ -122,28 +124,34 @@ class Board:
         self.nvic = Nvic()
         self.nvic.clock = self.clock
         self.rcc = Rcc()
-        self.pins = []  # (seconds, pin, level) of every driven change but STEP's
+        self.pins: list[tuple[float, str, int]] = []  # (seconds, pin, level) of every driven change but STEP's
         # The laser enable's level, and when it last fell from high.
         self.laser_high = False
         self.laser_fell_at = 0
         # Rises of the laser enable and enables of DMA2 stream 0, counted.
         self.rises = {"laser": 0, "dma": 0}
-        self.steps = {name: 0 for name in STEP}  # rising STEP edges
-        self.step_lateness = {}  # cycles from the tick TIM5's compare was set for to a rising STEP edge → edges
+        self.steps = dict.fromkeys(STEP, 0)  # rising STEP edges
+        # cycles from the tick TIM5's compare was set for to a rising STEP edge → edges
+        self.step_lateness: dict[int, int] = {}
         # The STEP edges that rose last (cycle, pin, lateness), and the
         # latest edge of all with those that rose just before it: whether
         # it waited for other axes' edges in the same handler.
-        self.step_recent = deque(maxlen=4)
-        self.step_latest = None
+        self.step_recent: deque[tuple[int, str, int]] = deque(maxlen=4)
+        self.step_latest: dict[str, Any] | None = None
         # When each STEP line last rose, and the shortest and longest its
         # pulses were high (cycles): the driver needs the configured width.
-        self.step_rose = {}
-        self.step_high = [None, None]
+        self.step_rose: dict[str, int] = {}
+        self.step_high: list[int | None] = [None, None]
         # pin → the fastest slew rate (OSPEEDR) its driven edges had
-        self.output_speed = {}
+        self.output_speed: dict[str, int] = {}
         bus = self.bus = Bus(uc)
-        for i, (name, irq, bits) in enumerate((("TIM2", 28, 32), ("TIM3", 29, 16), ("TIM4", 30, 16), ("TIM5", 50, 32))):
-            setattr(self, name.lower(), bus.attach(0x4000_0000 + 0x400 * i, 0x400, Timer(name, irq, bits, self.clock, self.nvic, self.rcc)))
+        # TIM2–TIM5, one after the other from 0x4000_0000.
+        self.tim2, self.tim3, self.tim4, self.tim5 = (
+            bus.attach(0x4000_0000 + 0x400 * i, 0x400, Timer(name, irq, bits, self.clock, self.nvic, self.rcc))
+            for i, (name, irq, bits) in enumerate(
+                (("TIM2", 28, 32), ("TIM3", 29, 16), ("TIM4", 30, 16), ("TIM5", 50, 32))
+            )
+        )
         # TIM7, a basic timer: the registers it has are the general ones'.
         self.tim7 = bus.attach(TIM7_BASE, 0x400, Timer("TIM7", 55, 16, self.clock, self.nvic, self.rcc))
         # TIM3's internal trigger 1 is TIM2 (RM0090 Table 93).
@@ -153,7 +161,7 @@ class Board:
         bus.attach(PWR_BASE, 0x400, Plain("PWR", {0x04: 1 << 14}))  # CSR VOSRDY
         self.syscfg = bus.attach(SYSCFG_BASE, 0x400, Syscfg())
         self.exti = bus.attach(EXTI_BASE, 0x400, Exti(self.nvic, self.syscfg))
-        self.ports = {}
+        self.ports: dict[str, Port] = {}
         for i, letter in enumerate("ABCDE"):
             self.ports[letter] = bus.attach(GPIO_BASE + 0x400 * i, 0x400, Port(letter, self))
         for name, level in RESISTORS.items():
@@ -179,15 +187,15 @@ class Board:
         self.core.on_thread_turn = self._thread_turn
         self.turn_longest = self.turn_longest_laser_on = 0
         self.machine.start_profile()
-        self.host = None
+        self.host: Host | None = None
         self.stop_requested = False
         # An injected fault: its kind; the rise it is timed by (the laser
         # enable's or DMA2 stream 0's, which one) and the seconds after it,
         # until it is scheduled; the cycle it struck at.
-        self.fault_plan = None
-        self.fault_on_rise = None
-        self.fault_at = None
-        self.reset_at = None
+        self.fault_plan: str | None = None
+        self.fault_on_rise: tuple[str, int, float] | None = None
+        self.fault_at: int | None = None
+        self.reset_at: int | None = None
         # The head behind the pins (`board-plant` run as the command
         # `plant`): it drives the home switches' lines and the photodiode.
         self.plant = self.adc.plant = Plant(plant) if plant else None
@@ -200,27 +208,29 @@ class Board:
             if not (self.plant and name in self.plant.switches):
                 self.set_input(name, 0, 0.0)
 
-    def _switches_from_plant(self):
+    def _switches_from_plant(self) -> None:
+        assert self.plant is not None
         for name, level in self.plant.switch_levels(self.clock.now).items():
             port, pin = self.ports[name[1]], int(name[2:])
             if port.outside.get(pin) != level:
                 port.set_input(pin, level)
 
-    def reading(self, port):
+    def reading(self, port: Port) -> None:
         """The image reads `port`'s inputs: the plant's switches as they
         are now (the conversions up to now first, which the plant answers
         in time order)."""
         if self.plant and any(s[1] == port.letter for s in self.plant.switches):
             self.adc._advance()
             self._switches_from_plant()
-    def plug(self, stream=None, replug=False):
+
+    def plug(self, stream: int | None = None, replug: bool = False) -> None:
         """A USB host on the bus from now on, bridging `stream` (a file
         descriptor) to the CDC-ACM port while a program holds it open;
         `replug`: the cable pulled and plugged back after each session."""
         self.host = Host(self.otg, self.clock, stream, replug)
         self.host.start()
 
-    def log_pin(self, port, pin, level):
+    def log_pin(self, port: Port, pin: int, level: int) -> None:
         """A driven pin's level, when it changes or when it starts to be
         driven; a STEP edge counted, with how late it rose after the tick
         the step timer's compare was set for, matched or already passed
@@ -242,7 +252,10 @@ class Board:
             if not level and name in self.step_rose:
                 high = self.clock.now - self.step_rose.pop(name)
                 shortest, longest = self.step_high
-                self.step_high = [high if shortest is None else min(shortest, high), high if longest is None else max(longest, high)]
+                self.step_high = [
+                    high if shortest is None else min(shortest, high),
+                    high if longest is None else max(longest, high),
+                ]
             if level:
                 self.step_rose[name] = self.clock.now
                 self.steps[name] += 1
@@ -264,30 +277,30 @@ class Board:
             return
         self.pins.append((self.clock.now / HZ, name, level))
 
-    def _thread_turn(self, since, now):
+    def _thread_turn(self, since: int, now: int) -> None:
         self.turn_longest = max(self.turn_longest, now - since)
         if self.laser_high or self.laser_fell_at > since:
             self.turn_longest_laser_on = max(self.turn_longest_laser_on, now - since)
 
-    def edge(self, port, pin, level):
+    def edge(self, port: Port, pin: int, level: int) -> None:
         """Every change of a pin's level: to the EXTI and the plant."""
         self.exti.edge(port.index, pin, rising=bool(level))
         if self.plant:
             self.plant.output(self.clock.now, f"P{port.letter}{pin}", level)
 
-    def set_input(self, name, level, at):
+    def set_input(self, name: str, level: int, at: float) -> None:
         """The plant drives pin `name` (`PB12`) to `level` from `at` seconds."""
         port, pin = self.ports[name[1]], int(name[2:])
         self.clock.at(int(at * HZ), lambda: port.set_input(pin, level))
 
-    def _rise(self, source):
+    def _rise(self, source: str) -> None:
         """The laser enable rose, or DMA2 stream 0 was enabled: a fault
         timed by the N-th such rise is scheduled."""
         self.rises[source] += 1
         if self.fault_on_rise and self.fault_on_rise[:2] == (source, self.rises[source]):
             self._schedule_fault(self.clock.now + int(self.fault_on_rise[2] * HZ))
 
-    def inject(self, kind, when):
+    def inject(self, kind: str, when: str) -> None:
         """Injects fault `kind` (FAULTS) at `when`: seconds, or `laser+S`
         (S seconds after the laser enable first rises), `laserN+S` (after
         its N-th rise), `dmaN+S` (after DMA2 stream 0 is enabled for the
@@ -301,11 +314,12 @@ class Board:
         else:
             self._schedule_fault(int(float(when) * HZ))
 
-    def _schedule_fault(self, cycle):
+    def _schedule_fault(self, cycle: int) -> None:
         kind, self.fault_on_rise = self.fault_plan, None
+        assert kind is not None
         self.clock.at(cycle, lambda: self._strike(kind))
 
-    def _strike(self, kind):
+    def _strike(self, kind: str) -> None:
         self.fault_at = self.clock.now
         if kind == "hardfault":
             self.core.request_fault("injected bus error")
@@ -323,6 +337,7 @@ class Board:
             self.adc._advance()
             self.adc.overrun()
         elif kind in ("usb-suspend", "usb-replug"):
+            assert self.host is not None, f"{kind} needs the USB host (--usb or --pty)"
             # The fault is the bus going idle, at the host's next turn.
             if kind == "usb-suspend":
                 self.host.suspend_for = int(USB_SUSPEND_S * HZ)
@@ -330,15 +345,16 @@ class Board:
                 self.host.pull_for = int(USB_UNPLUGGED_S * HZ)
             self.host.on_suspend = lambda: setattr(self, "fault_at", self.clock.now)
         elif kind == "usb-in-nak":
+            assert self.host is not None, f"{kind} needs the USB host (--usb or --pty)"
             self.host.reading = False
         elif kind == "serve-hang":
             self.uc.mem_write(HANG_AT, b"\xfe\xe7")  # b .
             self.core.request_hang(HANG_AT)
 
-    def _below_stack(self, uc, access, address, size, value, _user):
+    def _below_stack(self, uc: Uc, access: int, address: int, size: int, value: int, _user: object) -> None:
         self.core.request_fault(f"a write at {address:#010x}, below the stack's memory")
 
-    def _fault_report(self):
+    def _fault_report(self) -> dict[str, Any] | None:
         """When the laser enable went low and every driver's enable high
         after the fault (None: not by the end): after the core faulted, for
         a fault that makes it fault (a stack overflow does when the stack
@@ -347,12 +363,12 @@ class Board:
             return None if self.fault_plan is None else {"kind": self.fault_plan, "struck": False}
         faulted = [c for c, *_ in self.core.faults if c >= self.fault_at]
         at = (faulted[0] if faulted else self.fault_at) / HZ
-        level = {}
+        level: dict[str, int] = {}
         for t, pin, v in self.pins:
             if t > at:
                 break
             level[pin] = v
-        safe_at = {}
+        safe_at: dict[str, float | None] = {}
         for pin in ("PB0", "PC2", "PC6", "PC10"):
             want = SAFE[pin]
             if level.get(pin, want) == want:
@@ -367,17 +383,15 @@ class Board:
             "struck_s": round(self.fault_at / HZ, 9),
             "faulted_s": round(faulted[0] / HZ, 9) if faulted else None,
             "laser_off_after_s": after["PB0"],
-            "drivers_off_after_s": None if None in drivers else max(drivers),
+            "drivers_off_after_s": None if None in drivers else max(d for d in drivers if d is not None),
             "reset_after_s": None if self.reset_at is None else round(self.reset_at / HZ - at, 9),
         }
 
-    def driven_pins(self):
+    def driven_pins(self) -> dict[str, int]:
         """Every pin driven at the end (output or alternate function), its level."""
-        return {
-            f"P{p.letter}{n}": p.level[n] for p in self.ports.values() for n in range(16) if p.mode(n) in (1, 2)
-        }
+        return {f"P{p.letter}{n}": p.level[n] for p in self.ports.values() for n in range(16) if p.mode(n) in (1, 2)}
 
-    def _wait(self, cycles, why, taken_at):
+    def _wait(self, cycles: int, why: Blocked | None, taken_at: int) -> dict[str, Any]:
         """An interrupt's wait, in the report: where it pended and what
         masked it, where it was taken."""
         blocked = None
@@ -391,24 +405,25 @@ class Board:
             }
         return {"cycles": cycles, "masked": blocked, "taken_in": self.elf.function_at(taken_at)}
 
-    def _watchdog(self):
+    def _watchdog(self) -> None:
         self._reset()
         raise WatchdogReset()
 
-    def _reset(self):
+    def _reset(self) -> None:
         """A system reset: every pin lets go (the image does not run again
         here)."""
         self.reset_at = self.clock.now
         for p in self.ports.values():
             p.reset()
 
-    def run(self, seconds, paced=False, pace=1.0):
+    def run(self, seconds: float, paced: bool = False, pace: float = 1.0) -> dict[str, Any]:
         """Runs to `seconds` of virtual time; `paced`: never more than
         `pace` times ahead of the wall clock (a program on the
         pseudo-terminal times its requests in real time)."""
         started = time.monotonic()
         reason = "time"
-        trail = registers = None
+        trail: list[dict[str, Any]] | None = None
+        registers: dict[str, str] | None = None
         try:
             if paced:
                 step = HZ // 200
@@ -430,17 +445,23 @@ class Board:
             reason = f"fault: {e}"
             registers = {
                 name: f"{self.uc.reg_read(getattr(arm, 'UC_ARM_REG_' + name.upper())):#010x}"
-                for name in ("r0", "r1", "r2", "r3", "r4", "r5", "r6", "r7", "r8", "r12", "sp", "lr", "pc", "xpsr", "control", "primask")
+                for name in FAULT_REGISTERS
             }
             trail = [
-                {"t": c / HZ, "what": w, "irq": IRQ_NAMES.get(i, i), "sp": f"{sp:#010x}" if sp else None, "pc": f"{pc:#010x}" if pc is not None else None}
+                {
+                    "t": c / HZ,
+                    "what": w,
+                    "irq": IRQ_NAMES.get(i, i),
+                    "sp": f"{sp:#010x}" if sp else None,
+                    "pc": f"{pc:#010x}" if pc is not None else None,
+                }
                 for c, w, i, sp, pc in e.trail
             ]
         if self.stop_requested and reason == "time":
             reason = "stopped (SIGTERM)"
         reloads = self.iwdg.reloads
         driven = self.driven_pins()
-        gaps = [b - a for a, b in zip(reloads, reloads[1:])]
+        gaps = [b - a for a, b in itertools.pairwise(reloads)]
         return {
             "stopped": reason,
             "exceptions_before_fault": trail,
@@ -519,14 +540,17 @@ class Board:
                 "ended": self.adc.conversions,
                 "lost": self.adc.lost,
                 "moved_by_dma": self.dma.moved,
-                "forbidden_dma_writes": [{"t": c / HZ, "register": r, "value": f"{v:#x}"} for c, r, v in self.dma.forbidden],
+                "forbidden_dma_writes": [
+                    {"t": c / HZ, "register": r, "value": f"{v:#x}"} for c, r, v in self.dma.forbidden
+                ],
             },
             "exti_edges": [{"line": n, "rising": r, "latched": l} for n, r, l in self.exti.edges],
         }
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+def main(prog: str | None = None) -> None:
+    """The command line; `prog`: how the usage names the command."""
+    ap = argparse.ArgumentParser(prog=prog, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("image")
     ap.add_argument("--seconds", type=float, default=2.0)
     ap.add_argument("--set", action="append", default=[], metavar="PIN=LEVEL@SECONDS")
@@ -578,7 +602,3 @@ def main():
         level, at = rest.split("@")
         board.set_input(pin, int(level), float(at))
     print(json.dumps(board.run(args.seconds, paced=args.pty, pace=args.pace)))
-
-
-if __name__ == "__main__":
-    main()

@@ -14,10 +14,16 @@ access is recorded and replayed when the instruction comes again: the
 value first read, or nothing for a store.
 """
 
+from collections.abc import Iterable
+from typing import TypeVar
+
+from unicorn import Uc
 from unicorn import arm_const as arm
-from registers import Registers
+
+from .registers import Registers
 
 PAGE = 0x1000
+B = TypeVar("B", bound="Block")
 # A store replayed: nothing to do.
 STORED = object()
 
@@ -28,57 +34,66 @@ class Block:
 
     name = "block"
 
-    def read(self, offset):
+    def read(self, offset: int) -> int:
         raise NotImplementedError
 
-    def write(self, offset, value):
+    def write(self, offset: int, value: int) -> None:
         raise NotImplementedError
+
+    def write_narrow(self, offset: int, size: int, value: int) -> None:
+        """A byte or half-word write: merged into the word it is part of
+        (a block with byte registers handles them itself)."""
+        shift = 8 * (offset & 3)
+        mask = ((1 << (8 * size)) - 1) << shift
+        value = (self.read(offset & ~3) & ~mask) | ((value << shift) & mask)
+        self.write(offset & ~3, value & 0xFFFF_FFFF)
 
 
 class Plain(Block):
     """Registers that hold what is written (unmodelled, or without side
     effects), with optional reset values."""
 
-    def __init__(self, name, reset=None):
+    def __init__(self, name: str, reset: dict[int, int] | None = None) -> None:
         self.name = name
         self.regs = dict(reset or {})
 
-    def read(self, offset):
+    def read(self, offset: int) -> int:
         return self.regs.get(offset, 0)
 
-    def write(self, offset, value):
+    def write(self, offset: int, value: int) -> None:
         self.regs[offset] = value
 
 
 class Bus:
-    def __init__(self, uc):
+    def __init__(self, uc: Uc) -> None:
         self.uc = uc
         self.reg = Registers(uc)
-        self.blocks = []  # (base, size, block)
-        self.pages = {}
-        self.accesses = {}  # address → reads and writes: where the image polls
+        self.blocks: list[tuple[int, int, Block]] = []  # (base, size, block)
+        self.pages: dict[int, list[tuple[int, int, Block]]] = {}
+        self.fallback: dict[int, Plain] = {}
+        self.accesses: dict[int, int] = {}  # address → reads and writes: where the image polls
         self._accessing = False
         self._stopped = False  # the run was ended during the access in progress
-        self._replay = {}  # (PC, address) → what the access gave the first time
+        self._replay: dict[tuple[int, int], object] = {}  # (PC, address) → what the access gave the first time
 
-    def stop(self):
+    def stop(self) -> None:
         """Ends the core's current run (at this access, if one is in progress)."""
         self.uc.emu_stop()
         if self._accessing:
             self._stopped = True
 
-    def _replayed(self, address):
+    def _replayed(self, address: int) -> object:
         key = (self.reg.read(arm.UC_ARM_REG_PC), address)
         return self._replay.pop(key, None)
 
-    def _record(self, address, what):
+    def _record(self, address: int, what: object) -> None:
         self._replay[(self.reg.read(arm.UC_ARM_REG_PC), address)] = what
 
-    def attach(self, base, size, block):
+    def attach(self, base: int, size: int, block: B) -> B:
         self.blocks.append((base, size, block))
         return block
 
-    def map(self, regions):
+    def map(self, regions: Iterable[tuple[int, int]]) -> None:
         """Maps the blocks' pages as MMIO and the rest of `regions` ((base,
         size)) as plain memory."""
         pages = sorted({(b + o) & ~(PAGE - 1) for b, s, _ in self.blocks for o in range(0, s, PAGE)})
@@ -97,19 +112,19 @@ class Bus:
         self.pages = {p: [(b, s, blk) for b, s, blk in self.blocks if b < p + PAGE and b + s > p] for p in pages}
         self.fallback = {p: Plain(f"unmodelled {p:#x}") for p in pages}
 
-    def _find(self, address):
+    def _find(self, address: int) -> tuple[Block, int]:
         page = address & ~(PAGE - 1)
         for b, s, blk in self.pages[page]:
             if b <= address < b + s:
                 return blk, address - b
         return self.fallback[page], address - page
 
-    def _read(self, uc, offset, size, page):
+    def _read(self, uc: Uc, offset: int, size: int, page: int) -> int:
         address = page + offset
         if self._replay:
-            value = self._replayed(address)
-            if value is not None:
-                return value
+            replayed = self._replayed(address)
+            if isinstance(replayed, int):
+                return replayed
         self.accesses[address] = self.accesses.get(address, 0) + 1
         self._accessing = True
         try:
@@ -124,7 +139,7 @@ class Bus:
             self._record(address, value)
         return value
 
-    def _write(self, uc, offset, size, value, page):
+    def _write(self, uc: Uc, offset: int, size: int, value: int, page: int) -> None:
         address = page + offset
         if self._replay and self._replayed(address) is STORED:
             return
@@ -138,15 +153,11 @@ class Bus:
             self._stopped = False
             self._record(address, STORED)
 
-    def _store(self, address, size, value):
+    def _store(self, address: int, size: int, value: int) -> None:
         blk, off = self._find(address)
         if size < 4:
             # A narrower write: the block's own handling if it has one (byte
             # registers), else merged into the word it is part of.
-            if hasattr(blk, "write_narrow"):
-                blk.write_narrow(off, size, value)
-                return
-            shift = 8 * (off & 3)
-            mask = ((1 << (8 * size)) - 1) << shift
-            value = (blk.read(off & ~3) & ~mask) | ((value << shift) & mask)
+            blk.write_narrow(off, size, value)
+            return
         blk.write(off & ~3, value & 0xFFFF_FFFF)

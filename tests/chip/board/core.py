@@ -33,15 +33,18 @@ sleep skips to the next event of the clock."""
 
 import collections
 import struct
+from collections.abc import Callable, Iterable
 
-from unicorn import UC_HOOK_CODE, UC_HOOK_INTR, UcError
+from unicorn import UC_HOOK_CODE, UC_HOOK_INTR, Uc, UcError
 from unicorn import arm_const as arm
 
-from nvic import EXTERNAL
-from registers import Batch, Registers
+from .clock import Clock
+from .emulate import Elf, Machine
+from .nvic import EXTERNAL, Nvic
+from .registers import Batch, Registers
 
 WFE, WFI, SEV, CPSIE_I = 0xBF20, 0xBF30, 0xBF40, 0xB662
-FRAME = (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2, arm.UC_ARM_REG_R3, arm.UC_ARM_REG_R12, arm.UC_ARM_REG_LR)
+FRAME = tuple(getattr(arm, f"UC_ARM_REG_{r}") for r in ("R0", "R1", "R2", "R3", "R12", "LR"))
 FP_FRAME = [getattr(arm, f"UC_ARM_REG_S{i}") for i in range(16)] + [arm.UC_ARM_REG_FPSCR]
 # What an exception entry reads first.
 STATE = (arm.UC_ARM_REG_CONTROL, arm.UC_ARM_REG_IPSR, arm.UC_ARM_REG_XPSR, arm.UC_ARM_REG_MSP)
@@ -56,18 +59,26 @@ STKERR, FORCED = 1 << 12, 1 << 30
 # a run at the latest.
 SLICE = 16_800
 
+# An exception entry or return: (cycle, "enter"/"return"/"chain"/"fault",
+# IRQ, SP, PC).
+TrailEntry = tuple[int, str, int, int | None, int | None]
+# What kept an interrupt waiting: (PC, PRIMASK, BASEPRI, the running exception).
+Blocked = tuple[int, int, int, int]
+# An exception entry's stacking: (SP, EXC_RETURN, whether the frame was written).
+Stacking = tuple[int, int, bool]
+
 
 class Fault(Exception):
     """The core stopped where real silicon would fault or lock up; `trail`:
     the last exception entries and returns before it."""
 
-    def __init__(self, message, trail=()):
+    def __init__(self, message: str, trail: Iterable[TrailEntry] = ()) -> None:
         super().__init__(message)
         self.trail = list(trail)
 
 
 class Core:
-    def __init__(self, machine, elf, nvic, clock):
+    def __init__(self, machine: Machine, elf: Elf, nvic: Nvic, clock: Clock) -> None:
         self.m = machine
         self.uc = machine.uc
         self.nvic = nvic
@@ -77,46 +88,52 @@ class Core:
         # Since when the thread has been awake without a turn of its loop
         # (a WFE executed in thread mode), and who hears of each turn:
         # `on_thread_turn(since, now)`.
-        self.awake_since = 0
-        self.on_thread_turn = None
+        self.awake_since: int | None = 0
+        self.on_thread_turn: Callable[[int, int], None] | None = None
         self._running = False  # inside `emu_start`
         self.instructions = 0
         # (cycle, "enter"/"return"/"chain", IRQ, SP, PC) of the last
         # exceptions, for the report of a fault.
-        self.trail = collections.deque(maxlen=24)
+        self.trail: collections.deque[TrailEntry] = collections.deque(maxlen=24)
         # Per IRQ, what kept it waiting when it could not be taken at once
         # (where the core was, PRIMASK, BASEPRI, the running exception),
         # until it is taken; and its longest wait: (cycles, that, where it
         # was taken).
-        self.blocked = {}
-        self.worst_wait = {}
+        self.blocked: dict[int, Blocked] = {}
+        self.worst_wait: dict[int, tuple[int, Blocked | None, int]] = {}
         # Per IRQ, when its handler was entered, and its runs: [count,
         # total cycles, longest] (what pre-empted it included).
-        self.entered = {}
-        self.handler_runs = {}
-        self.first_sleep = None  # instructions from reset to the first idle wait
+        self.entered: dict[int, int] = {}
+        self.handler_runs: dict[int, list[int]] = {}
+        self.first_sleep: int | None = None  # instructions from reset to the first idle wait
         # HardFault active; the core locked up; a fault to take at the next
         # instruction (a test's); the faults taken: (cycle, why, PC, stacked).
         self.in_hardfault = False
         self.locked = False
-        self.fault_request = None
-        self.faults = []
+        self.fault_request: str | None = None
+        self.faults: list[tuple[int, str, int, bool | None]] = []
         # Where the thread is sent to loop for ever (a test's stuck serve loop).
-        self.hang_at = None
+        self.hang_at: int | None = None
         # Where the stack's memory ends (a test moves it up: an overflow).
         self.stack_floor = 0
         clock.executed = lambda: self.m.executed - self._run_start
         clock.shorten_run = self._shorten_run
         # Ends the current run from a peripheral's access (the board's bus,
         # which replays the access unicorn will execute again).
-        self.stop_run = self.uc.emu_stop
+        self.stop_run: Callable[[], None] = self.uc.emu_stop
         self._run_start = 0
         nvic.on_change = self._interrupts_changed
         text = [(a, b) for a, b in elf.segments if 0x0800_0000 <= a < 0x0810_0000]
+        hooks: dict[int, Callable[[Uc, int, int, object], None]] = {
+            WFE: self._on_wfe,
+            WFI: self._on_wfe,
+            SEV: self._on_sev,
+            CPSIE_I: self._on_cpsie,
+        }
         for base, blob in text:
             for off in range(0, len(blob) - 1, 2):
                 half = blob[off] | blob[off + 1] << 8
-                hook = {WFE: self._on_wfe, WFI: self._on_wfe, SEV: self._on_sev, CPSIE_I: self._on_cpsie}.get(half)
+                hook = hooks.get(half)
                 # `msr PRIMASK, rN` (F38n 8810): how cortex-m's critical
                 # sections end, restoring the mask they found.
                 if half & 0xFFF0 == 0xF380 and off + 3 < len(blob) and blob[off + 2] | blob[off + 3] << 8 == 0x8810:
@@ -133,10 +150,10 @@ class Core:
         self.pc = machine.reset() | 1
 
     # --- hooks -------------------------------------------------------------
-    def _on_sev(self, uc, address, size, _user):
+    def _on_sev(self, uc: Uc, address: int, size: int, _user: object) -> None:
         self.event = True
 
-    def _on_wfe(self, uc, address, size, _user):
+    def _on_wfe(self, uc: Uc, address: int, size: int, _user: object) -> None:
         if self._current_exception() == 0 and self.awake_since is not None and self.on_thread_turn:
             self.on_thread_turn(self.awake_since, self.clock.now)
         self.awake_since = self.clock.now
@@ -150,13 +167,13 @@ class Core:
             uc.emu_stop()
         self.reg.write(arm.UC_ARM_REG_PC, (address + 2) | 1)
 
-    def _on_cpsie(self, uc, address, size, _user):
+    def _on_cpsie(self, uc: Uc, address: int, size: int, _user: object) -> None:
         if self.nvic.best_pending() is not None:
             self.reg.write(arm.UC_ARM_REG_PRIMASK, 0)
             self.reg.write(arm.UC_ARM_REG_PC, (address + 2) | 1)
             uc.emu_stop()
 
-    def _on_msr_primask(self, uc, address, size, _user):
+    def _on_msr_primask(self, uc: Uc, address: int, size: int, _user: object) -> None:
         """Unmasking with a pending interrupt: done here, and the interrupt
         taken right after the instruction, as on silicon."""
         rn = uc.mem_read(address, 2)[0] & 0xF
@@ -166,7 +183,7 @@ class Core:
             self.reg.write(arm.UC_ARM_REG_PC, (address + 4) | 1)
             uc.emu_stop()
 
-    def _on_interrupt(self, uc, intno, _user):
+    def _on_interrupt(self, uc: Uc, intno: int, _user: object) -> None:
         if intno != EXCEPTION_EXIT:
             # QEMU's EXCP_UDEF (1), EXCP_SWI (2), ...: a usage fault, escalated.
             self.pc = self.reg.read(arm.UC_ARM_REG_PC) | 1
@@ -175,27 +192,27 @@ class Core:
             return
         self._return(self.reg.read(arm.UC_ARM_REG_PC) | 1)
 
-    def request_hang(self, address):
+    def request_hang(self, address: int) -> None:
         """The thread continues at `address` (a loop) the next time the core
         is in thread mode."""
         self.hang_at = address
         if self._running:
             self.stop_run()
 
-    def request_fault(self, why):
+    def request_fault(self, why: str) -> None:
         """A fault at the instruction the core is at (a test injects a bus
         error): taken before the next one."""
         self.fault_request = why
         if self._running:
             self.uc.emu_stop()
 
-    def _shorten_run(self):
+    def _shorten_run(self) -> None:
         """An event now falls due before the current run's end: the run
         ends here, and the next one ends at the event."""
         if self._running:
             self.stop_run()
 
-    def _interrupts_changed(self):
+    def _interrupts_changed(self) -> None:
         """A peripheral or a register write changed what may be taken: end
         the current run so that what may preempt now is taken at this
         instruction (what PRIMASK masks is taken where it is unmasked, what
@@ -206,10 +223,10 @@ class Core:
                 self.stop_run()
 
     # --- exceptions ----------------------------------------------------------
-    def _current_exception(self):
+    def _current_exception(self) -> int:
         return self.reg.read(arm.UC_ARM_REG_IPSR) & 0x1FF
 
-    def _execution_priority(self, active_excluding=None):
+    def _execution_priority(self, active_excluding: int | None = None) -> int:
         if self.in_hardfault:
             return -1
         p = self.nvic.running_priority(active_excluding)
@@ -220,14 +237,15 @@ class Core:
             p = min(p, self.nvic.group(basepri))
         return p
 
-    def _vector(self, exception):
+    def _vector(self, exception: int) -> int:
         address = self.nvic.vtor + 4 * exception
         if address < 0x10_0000:
             # Address 0 aliases the boot memory: main flash, BOOT0 low (RM0090 §2.4).
             address += 0x0800_0000
-        return struct.unpack("<I", self.uc.mem_read(address, 4))[0]
+        vector: int = struct.unpack("<I", self.uc.mem_read(address, 4))[0]
+        return vector
 
-    def take_pending(self):
+    def take_pending(self) -> None:
         """Takes the pending exception that may preempt now, if any."""
         best = self.nvic.best_pending()
         if best is None:
@@ -242,7 +260,7 @@ class Core:
                 self._current_exception(),
             )
 
-    def _stack(self):
+    def _stack(self) -> Stacking:
         """Exception entry's stacking; returns EXC_RETURN and whether the
         frame was written (a stack overflow: it was not, SP moved all the same)."""
         uc = self.uc
@@ -254,9 +272,9 @@ class Core:
         words = 26 if fp else 8
         pad = (sp - 4 * words) & 4
         sp = sp - 4 * words - pad
-        values = self._frame.read() + [self.pc & ~1, xpsr | (pad and 1 << 9) | 1 << 24]
+        values = [*self._frame.read(), self.pc & ~1, xpsr | (pad and 1 << 9) | 1 << 24]
         if fp:
-            values += self._fp_frame.read() + [0]
+            values += [*self._fp_frame.read(), 0]
         frame = struct.pack(f"<{words}I", *values)
         stacked = sp >= self.stack_floor
         try:
@@ -271,7 +289,7 @@ class Core:
         self.reg.write(arm.UC_ARM_REG_CONTROL, control & ~4)
         return sp, exc_return, stacked
 
-    def _enter(self, irq):
+    def _enter(self, irq: int) -> None:
         entry = sp, exc_return, stacked = self._stack()
         if not stacked:
             # A derived fault of the entry: HardFault instead, which preempts.
@@ -280,7 +298,7 @@ class Core:
         self.trail.append((self.clock.now, "enter", irq, sp, self.pc & ~1))
         self._dispatch(irq, exc_return)
 
-    def fault(self, why, entry=None):
+    def fault(self, why: str, entry: Stacking | None = None) -> None:
         """A fault at `self.pc`: HardFault entered (`entry`: the stacking
         an interrupt's entry already did), or the core locked up if it
         faulted in HardFault."""
@@ -302,7 +320,7 @@ class Core:
         self.reg.write(arm.UC_ARM_REG_PC, self.pc)
         self.sleeping = False
 
-    def _dispatch(self, irq, exc_return):
+    def _dispatch(self, irq: int, exc_return: int) -> None:
         waited = self.clock.now - self.nvic.pended_at[irq]
         why = self.blocked.pop(irq, None)
         if waited > self.worst_wait.get(irq, (-1,))[0]:
@@ -317,7 +335,7 @@ class Core:
             self.awake_since = self.clock.now
         self.sleeping = False
 
-    def _return(self, exc_return):
+    def _return(self, exc_return: int) -> None:
         uc = self.uc
         leaving = self._current_exception() - EXTERNAL
         if leaving < 0:
@@ -361,7 +379,7 @@ class Core:
             uc.emu_stop()
 
     # --- running -------------------------------------------------------------
-    def run(self, until):
+    def run(self, until: int) -> None:
         """Runs the core to cycle `until` (virtual time), taking exceptions
         and sleeping as events come."""
         clock = self.clock

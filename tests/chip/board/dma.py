@@ -28,7 +28,13 @@ What the manual states and this model does:
 Not modelled: FIFO mode, double-buffer mode, memory-to-memory, bursts,
 transfer and FIFO errors, stream priorities (one stream is active)."""
 
-from bus import Block
+from collections.abc import Callable
+
+from unicorn import Uc
+
+from .bus import Block
+from .clock import Clock
+from .nvic import Nvic
 
 DMA2_BASE = 0x4002_6400
 STREAM0_IRQ = 56
@@ -43,7 +49,7 @@ CR_FREE = EN | DMEIE | TEIE | HTIE | TCIE | CIRC
 class Dma(Block):
     name = "DMA2"
 
-    def __init__(self, uc, nvic, clock):
+    def __init__(self, uc: Uc, nvic: Nvic, clock: Clock) -> None:
         self.uc = uc
         self.nvic = nvic
         self.clock = clock
@@ -54,26 +60,26 @@ class Dma(Block):
         self.par = self.m0ar = self.m1ar = 0
         self.fcr = 0x21  # reset value: FS empty, DMDIS 0
         self.pointer = 0  # items moved since the pointer left SxM0AR
-        self.others = {}  # the other streams' registers
+        self.others: dict[int, int] = {}  # the other streams' registers
         # The requester brings its requests up to now before an access, and
         # plans again after a write.
-        self.before_access = lambda: None
-        self.after_write = lambda: None
+        self.before_access: Callable[[], None] = lambda: None
+        self.after_write: Callable[[], None] = lambda: None
         # Told when software enables the stream (a test times a fault by it).
-        self.on_enable = lambda: None
-        self.forbidden = []  # (seconds, register, value): writes the manual forbids
+        self.on_enable: Callable[[], None] = lambda: None
+        self.forbidden: list[tuple[int, str, int]] = []  # (cycle, register, value): writes the manual forbids
         self.moved = 0  # items moved in all, for the board's report
         # A test's fault: the stream stops serving requests (NDTR frozen)
         # until software disables and enables it again.
         self.frozen = False
 
     # --- what the requester does -----------------------------------------
-    def accepts(self, source):
+    def accepts(self, source: int) -> bool:
         """Whether stream 0 takes requests from the peripheral register at
         `source` now (enabled, channel 0, peripheral to memory)."""
         return bool(self.cr & EN) and self.cr >> 25 & 7 == 0 and self.cr >> 6 & 3 == 0 and self.par == source
 
-    def receive(self, data):
+    def receive(self, data: bytes) -> int:
         """Moves the items of `data` (16-bit, little-endian bytes) in order;
         returns how many the stream took (it stops at the end of a
         non-circular transfer)."""
@@ -104,7 +110,7 @@ class Dma(Block):
         self._line()
         return taken
 
-    def until_flag(self):
+    def until_flag(self) -> int | None:
         """Items until an enabled half or complete flag is next set (None:
         none will be)."""
         if not self.cr & EN or self.frozen:
@@ -119,12 +125,12 @@ class Dma(Block):
         return min(ahead) if ahead else None
 
     # --- registers -----------------------------------------------------------
-    def _line(self):
+    def _line(self) -> None:
         enabled = (TCIF if self.cr & TCIE else 0) | (HTIF if self.cr & HTIE else 0) | (TEIF if self.cr & TEIE else 0)
         enabled |= (DMEIF if self.cr & DMEIE else 0) | (FEIF if self.fcr & 0x80 else 0)
         self.nvic.line(STREAM0_IRQ, bool(self.lisr & enabled))
 
-    def read(self, offset):
+    def read(self, offset: int) -> int:
         self.before_access()
         return {
             0x00: self.lisr,
@@ -136,7 +142,7 @@ class Dma(Block):
             0x24: self.fcr,
         }.get(offset, self.others.get(offset, 0))
 
-    def write(self, offset, value):
+    def write(self, offset: int, value: int) -> None:
         self.before_access()
         running = self.cr & EN
         if offset == 0x08:  # LIFCR: stream 0's flags are its bits 0–5
@@ -154,7 +160,9 @@ class Dma(Block):
             if not running and value & EN:
                 self.on_enable()
         elif offset in (0x14, 0x18, 0x1C, 0x20) and running:
-            self.forbidden.append((self.clock.now, {0x14: "S0NDTR", 0x18: "S0PAR", 0x1C: "S0M0AR", 0x20: "S0M1AR"}[offset], value))
+            self.forbidden.append(
+                (self.clock.now, {0x14: "S0NDTR", 0x18: "S0PAR", 0x1C: "S0M0AR", 0x20: "S0M1AR"}[offset], value)
+            )
         elif offset == 0x14:
             self.ndtr = self.programmed = value & 0xFFFF
         elif offset == 0x18:

@@ -11,7 +11,10 @@ pends again on exception return while the level stays (B1.5.6 "the
 interrupt is pended again when its handler returns if the signal is still
 asserted")."""
 
-from bus import Block
+from collections.abc import Callable
+
+from .bus import Block
+from .clock import Clock
 
 IRQS = 82
 EXTERNAL = 16  # exception number of IRQ 0
@@ -20,7 +23,7 @@ EXTERNAL = 16  # exception number of IRQ 0
 class Nvic(Block):
     name = "NVIC/SCB"
 
-    def __init__(self):
+    def __init__(self) -> None:
         self.enabled = [False] * IRQS
         self.pending = [False] * IRQS
         self.active = [False] * IRQS
@@ -28,16 +31,16 @@ class Nvic(Block):
         self.priority = [0] * IRQS
         self.prigroup = 0
         self.vtor = 0
-        self.scb = {}  # other SCB/SCS registers, held as written
-        self.on_change = lambda: None  # the core re-checks what it can take
+        self.scb: dict[int, int] = {}  # other SCB/SCS registers, held as written
+        self.on_change: Callable[[], None] = lambda: None  # the core re-checks what it can take
         self.taken = [0] * IRQS  # exceptions entered, per IRQ
         # When each line last pended (the core times the wait to its
         # handler's entry from there: the interrupt's latency).
-        self.clock = None
+        self.clock: Clock | None = None
         self.pended_at = [0] * IRQS
 
     # --- what peripherals do -------------------------------------------
-    def line(self, irq, asserted):
+    def line(self, irq: int, asserted: bool) -> None:
         if asserted and not self.level[irq]:
             if not self.pending[irq] and self.clock:
                 self.pended_at[irq] = self.clock.instant()
@@ -47,17 +50,17 @@ class Nvic(Block):
         self.level[irq] = asserted
 
     # --- what the core does --------------------------------------------
-    def group(self, priority):
+    def group(self, priority: int) -> int:
         """The preempting part of a priority (PRIGROUP splits the byte)."""
         shift = self.prigroup + 1 if self.prigroup < 7 else 8
         return priority >> shift << shift
 
-    def best_pending(self):
+    def best_pending(self) -> tuple[int, int] | None:
         """The pending, enabled IRQ to take next: lowest priority value, then
         lowest number; (group priority, irq) or None."""
         if not any(self.pending):
             return None
-        best = None
+        best: tuple[int, int] | None = None
         for irq in range(IRQS):
             if self.pending[irq] and self.enabled[irq]:
                 key = (self.priority[irq], irq)
@@ -65,7 +68,7 @@ class Nvic(Block):
                     best = key
         return None if best is None else (self.group(best[0]), best[1])
 
-    def running_priority(self, excluding=None):
+    def running_priority(self, excluding: int | None = None) -> int:
         """The group priority of the active exceptions (256: none)."""
         p = 256
         if not any(self.active):
@@ -75,12 +78,12 @@ class Nvic(Block):
                 p = min(p, self.group(self.priority[irq]))
         return p
 
-    def enter(self, irq):
+    def enter(self, irq: int) -> None:
         self.pending[irq] = False
         self.active[irq] = True
         self.taken[irq] += 1
 
-    def leave(self, irq):
+    def leave(self, irq: int) -> None:
         self.active[irq] = False
         if self.level[irq]:
             self.pending[irq] = True
@@ -88,18 +91,24 @@ class Nvic(Block):
                 self.pended_at[irq] = self.clock.now
 
     # --- registers (offsets from 0xE000E000) ----------------------------
-    def _bits(self, array, offset, base):
+    def _bits(self, array: list[bool], offset: int, base: int) -> int:
         i = (offset - base) // 4 * 32
         return sum(1 << k for k in range(32) if i + k < IRQS and array[i + k])
 
-    def _apply(self, array, offset, base, value, state):
+    def _apply(self, array: list[bool], offset: int, base: int, value: int, state: bool) -> None:
         i = (offset - base) // 4 * 32
         for k in range(32):
             if value >> k & 1 and i + k < IRQS:
                 array[i + k] = state
 
-    def read(self, offset):
-        for base, array in ((0x100, self.enabled), (0x180, self.enabled), (0x200, self.pending), (0x280, self.pending), (0x300, self.active)):
+    def read(self, offset: int) -> int:
+        for base, array in (
+            (0x100, self.enabled),
+            (0x180, self.enabled),
+            (0x200, self.pending),
+            (0x280, self.pending),
+            (0x300, self.active),
+        ):
             if base <= offset < base + 0x20:
                 return self._bits(array, offset, base)
         if 0x400 <= offset < 0x400 + IRQS:
@@ -116,7 +125,7 @@ class Nvic(Block):
             return 0xFA05_0000 | self.prigroup << 8
         return self.scb.get(offset, 0)
 
-    def write(self, offset, value):
+    def write(self, offset: int, value: int) -> None:
         if 0x100 <= offset < 0x120:
             self._apply(self.enabled, offset, 0x100, value, True)
         elif 0x180 <= offset < 0x1A0:
@@ -145,7 +154,7 @@ class Nvic(Block):
             self.scb[offset] = value
         self.on_change()
 
-    def write_narrow(self, offset, size, value):
+    def write_narrow(self, offset: int, size: int, value: int) -> None:
         """Priority bytes are written one at a time (`set_priority`)."""
         if 0x400 <= offset < 0x400 + IRQS:
             for k in range(size):
@@ -156,7 +165,9 @@ class Nvic(Block):
         shift = 8 * (offset & 3)
         mask = ((1 << (8 * size)) - 1) << shift
         word = offset & ~3
-        self.write(word, (self.read(word) & ~mask) | ((value << shift) & mask) if word >= 0xD00 else (value << shift) & mask)
+        self.write(
+            word, (self.read(word) & ~mask) | ((value << shift) & mask) if word >= 0xD00 else (value << shift) & mask
+        )
 
 
 class SystemResetRequest(Exception):

@@ -51,7 +51,8 @@ read after the first by CNAK alone, and works on silicon; RM0090 says EPENA
 clears at transfer completion, and does not say that a disabled endpoint
 NAKs."""
 
-from bus import Block
+from .bus import Block
+from .nvic import Nvic
 
 OTG_FS_BASE = 0x5000_0000
 OTG_FS_IRQ = 67
@@ -61,8 +62,7 @@ RX_FIFO_WORDS = 320  # 1.25 KiB of shared FIFO RAM (RM0090 §34.11)
 # GINTSTS bits
 CMOD, MMIS, OTGINT, SOF, RXFLVL, NPTXFE = 0, 1, 2, 3, 4, 5
 USBSUSP, USBRST, ENUMDNE, EOPF, IEPINT, OEPINT, SRQINT, WKUPINT = 11, 12, 13, 15, 18, 19, 30, 31
-W1C = (1 << MMIS | 1 << SOF | 1 << USBSUSP | 1 << USBRST | 1 << ENUMDNE | 1 << EOPF | 1 << SRQINT | 1 << WKUPINT
-       | 1 << 10 | 1 << 14 | 1 << 20 | 1 << 21 | 1 << 28 | 1 << 29)
+W1C = sum(1 << bit for bit in (MMIS, SOF, USBSUSP, USBRST, ENUMDNE, EOPF, SRQINT, WKUPINT, 10, 14, 20, 21, 28, 29))
 # GCCFG bits, GOTGCTL's, GOTGINT's
 PWRDWN, VBUSBSEN, NOVBUSSENS = 1 << 16, 1 << 19, 1 << 21
 CIDSTS, BSVLD = 1 << 16, 1 << 19
@@ -75,7 +75,7 @@ XFRC, EPDISD, STUP = 1, 2, 8
 
 
 class Endpoint:
-    def __init__(self):
+    def __init__(self) -> None:
         self.ctl = 0
         self.int = 0
         self.tsiz = 0
@@ -84,7 +84,7 @@ class Endpoint:
 class OtgFs(Block):
     name = "OTG_FS"
 
-    def __init__(self, nvic):
+    def __init__(self, nvic: Nvic) -> None:
         self.nvic = nvic
         self.regs = {0x3C: 0x0000_1200}
         self.gintsts = 1 << NPTXFE | 1 << 26
@@ -95,9 +95,9 @@ class OtgFs(Block):
         self.frame = 0
         self.ins = [Endpoint() for _ in range(ENDPOINTS)]
         self.outs = [Endpoint() for _ in range(ENDPOINTS)]
-        self.rx = []  # entries (status word, [data words])
-        self.rx_data = []  # words of the popped entry still to read
-        self.tx = [[] for _ in range(ENDPOINTS)]  # words pushed per IN endpoint
+        self.rx: list[tuple[int, list[int]]] = []  # entries (status word, [data words])
+        self.rx_data: list[int] = []  # words of the popped entry still to read
+        self.tx: list[list[int]] = [[] for _ in range(ENDPOINTS)]  # words pushed per IN endpoint
         self.dieptxf = [0] * ENDPOINTS
         self.diepmsk = self.doepmsk = self.daintmsk = self.diepempmsk = 0
         self.gccfg = 0
@@ -110,16 +110,16 @@ class OtgFs(Block):
 
     # --- derived state -----------------------------------------------------
     @property
-    def connected(self):
+    def connected(self) -> bool:
         """The pull-up on D+ (DCTL.SDIS clear, in a valid session): a host
         sees the device."""
         return not self.dctl & 2 and self.session_valid
 
-    def _sense(self):
+    def _sense(self) -> None:
         """The B-session valid comparator after a change of VBUS or of
         GCCFG, and the interrupt its edge raises."""
         powered = self.gccfg & PWRDWN
-        valid = bool(powered and (self.gccfg & NOVBUSSENS or self.gccfg & VBUSBSEN and self.vbus_on))
+        valid = bool(powered and (self.gccfg & NOVBUSSENS or (self.gccfg & VBUSBSEN and self.vbus_on)))
         if valid and not self.session_valid:
             self.gintsts |= 1 << SRQINT
         if self.session_valid and not valid:
@@ -127,7 +127,7 @@ class OtgFs(Block):
         self.session_valid = valid
         self._pullup_check()
 
-    def daint(self):
+    def daint(self) -> int:
         v = 0
         for n in range(ENDPOINTS):
             # TXFE (bit 7) is the FIFO's state, enabled by DIEPEMPMSK.
@@ -138,7 +138,7 @@ class OtgFs(Block):
                 v |= 1 << (16 + n)
         return v
 
-    def _gintsts(self):
+    def _gintsts(self) -> int:
         v = self.gintsts & ~(1 << RXFLVL | 1 << IEPINT | 1 << OEPINT | 1 << OTGINT)
         if self.gotgint:
             v |= 1 << OTGINT
@@ -151,24 +151,24 @@ class OtgFs(Block):
             v |= 1 << OEPINT
         return v
 
-    def _pullup_check(self):
+    def _pullup_check(self) -> None:
         """After a change of what `connected` depends on (SDIS, the
         session) or of VBUS."""
         if self.connected and not self.vbus_on:
             self.pullup_without_vbus = True
 
-    def update(self):
+    def update(self) -> None:
         self.nvic.line(OTG_FS_IRQ, bool(self.gahbcfg & 1 and self._gintsts() & self.gintmsk))
 
-    def tx_depth(self, n):
+    def tx_depth(self, n: int) -> int:
         word = self.regs.get(0x28, 0) if n == 0 else self.dieptxf[n]
         return word >> 16 or 16
 
-    def rx_used(self):
+    def rx_used(self) -> int:
         return sum(1 + len(d) for _, d in self.rx)
 
     # --- the host's side -----------------------------------------------------
-    def bus_reset(self):
+    def bus_reset(self) -> None:
         """A reset ends every transfer: the IN endpoints' EPENA and the
         FIFOs are cleared (a choice: RM0090 leaves them to the driver, whose
         reset handling flushes the FIFOs but would wait on a stale EPENA)."""
@@ -181,19 +181,19 @@ class OtgFs(Block):
         self.gintsts |= 1 << USBRST
         self.update()
 
-    def reset_done(self):
+    def reset_done(self) -> None:
         self.gintsts |= 1 << ENUMDNE
         self.update()
 
-    def suspend(self):
+    def suspend(self) -> None:
         self.gintsts |= 1 << USBSUSP
         self.update()
 
-    def resume(self):
+    def resume(self) -> None:
         self.gintsts |= 1 << WKUPINT
         self.update()
 
-    def vbus(self, on):
+    def vbus(self, on: bool) -> None:
         """The cable plugged (VBUS on) or pulled; pulled without VBUS
         sensing, the bus idles with the device's pull-up on: a suspend."""
         self.vbus_on = on
@@ -202,18 +202,18 @@ class OtgFs(Block):
             self.gintsts |= 1 << USBSUSP
         self.update()
 
-    def start_of_frame(self):
+    def start_of_frame(self) -> None:
         self.frame = (self.frame + 1) & 0x3FFF
 
     @property
-    def address(self):
+    def address(self) -> int:
         return self.dcfg >> 4 & 0x7F
 
-    def _push(self, status, payload):
+    def _push(self, status: int, payload: bytes) -> None:
         words = [int.from_bytes(payload[i : i + 4].ljust(4, b"\0"), "little") for i in range(0, len(payload), 4)]
         self.rx.append((status, words))
 
-    def setup(self, data):
+    def setup(self, data: bytes) -> str:
         if self.rx_used() + 4 > self.rx_depth():
             return "NAK"  # the FIFO is full: the packet is lost, the host retries
         ep = self.outs[0]
@@ -227,10 +227,10 @@ class OtgFs(Block):
         self.update()
         return "ACK"
 
-    def rx_depth(self):
+    def rx_depth(self) -> int:
         return self.regs.get(0x24, 0) & 0xFFFF or RX_FIFO_WORDS
 
-    def out(self, n, data):
+    def out(self, n: int, data: bytes) -> str:
         ep = self.outs[n]
         if ep.ctl & STALL:
             return "STALL"
@@ -254,7 +254,7 @@ class OtgFs(Block):
         self.update()
         return "ACK"
 
-    def in_(self, n):
+    def in_(self, n: int) -> tuple[str, bytes | None]:
         ep = self.ins[n]
         if ep.ctl & STALL:
             return "STALL", None
@@ -276,12 +276,12 @@ class OtgFs(Block):
         self.update()
         return "ACK", data
 
-    def _mps(self, eps, n):
+    def _mps(self, eps: list[Endpoint], n: int) -> int:
         m = eps[n].ctl & 0x7FF
         return {0: 64, 1: 32, 2: 16, 3: 8}[m & 3] if n == 0 else m
 
     # --- registers ------------------------------------------------------------
-    def _ep(self, offset):
+    def _ep(self, offset: int) -> tuple[list[Endpoint], int, int] | None:
         """(endpoints, index, register offset within the endpoint's 0x20)."""
         if 0x900 <= offset < 0x900 + 0x20 * ENDPOINTS:
             return self.ins, (offset - 0x900) // 0x20, offset & 0x1F
@@ -289,7 +289,7 @@ class OtgFs(Block):
             return self.outs, (offset - 0xB00) // 0x20, offset & 0x1F
         return None
 
-    def read(self, offset):
+    def read(self, offset: int) -> int:
         if offset >= 0x1000:  # any FIFO address pops the RX FIFO
             return self.rx_data.pop(0) if self.rx_data else 0
         if offset == 0x00:  # GOTGCTL: a B-device (ID pin open)
@@ -354,7 +354,7 @@ class OtgFs(Block):
             return 0
         return self.regs.get(offset, 0)
 
-    def write(self, offset, value):
+    def write(self, offset: int, value: int) -> None:
         ep = self._ep(offset)
         if offset >= 0x1000:
             n = offset // 0x1000 - 1

@@ -13,38 +13,39 @@ import subprocess
 
 
 class Plant:
-    def __init__(self, command):
+    def __init__(self, command: list[str]) -> None:
         self.proc = subprocess.Popen(command, stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True, bufsize=1 << 16)
-        line = self.proc.stdout.readline()
+        assert self.proc.stdin is not None and self.proc.stdout is not None
+        self.stdin, self.stdout = self.proc.stdin, self.proc.stdout
+        line = self.stdout.readline()
         if not line:
             raise RuntimeError(f"{command[0]} did not start (exit {self.proc.wait()})")
         header = json.loads(line)
-        self.outputs = set(header["outputs"])
-        self.switches = header["switches"]
-        self.photodiode = header["photodiode"]
+        self.outputs: set[str] = set(header["outputs"])
+        self.switches: list[str] = header["switches"]
+        self.photodiode: str = header["photodiode"]
 
-    def output(self, cycle, pin, level):
+    def output(self, cycle: int, pin: str, level: int) -> None:
         if pin in self.outputs:
-            self.proc.stdin.write(f"p {cycle} {pin} {level}\n")
+            self.stdin.write(f"p {cycle} {pin} {level}\n")
 
-    def _ask(self, line):
-        self.proc.stdin.write(line + "\n")
-        self.proc.stdin.flush()
-        answer = self.proc.stdout.readline()
+    def _ask(self, line: str) -> str:
+        self.stdin.write(line + "\n")
+        self.stdin.flush()
+        answer = self.stdout.readline()
         if not answer:
             raise RuntimeError(f"board-plant ended (exit {self.proc.poll()})")
         return answer.strip()
 
-    def switch_levels(self, cycle):
+    def switch_levels(self, cycle: int) -> dict[str, int]:
         """{pin: level} of the home switches' lines at `cycle`."""
-        return dict(zip(self.switches, map(int, self._ask(f"s {cycle}").split())))
+        return dict(zip(self.switches, map(int, self._ask(f"s {cycle}").split()), strict=False))
 
-    def convert(self, n, start, step):
+    def convert(self, n: int, start: float, step: float) -> bytes:
         """The codes (little-endian 16-bit bytes) of `n` conversions sampled
         at `start + k·step` cycles."""
         return bytes.fromhex(self._ask(f"c {n} {start!r} {step!r}"))
 
-
-    def close(self):
-        self.proc.stdin.close()
+    def close(self) -> None:
+        self.stdin.close()
         self.proc.wait(timeout=5)

@@ -25,14 +25,33 @@ scheduled, so the pin log has every edge at its instant. Not modelled:
 down and centre-aligned counting, input capture, the compare preload
 (OCxPE: CCRx takes effect at once)."""
 
-from bus import Block
-from clock import HZ, cycles
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Protocol
+
+from .bus import Block
+from .clock import HZ, Clock, Cycles, Event, cycles
+from .nvic import Nvic
+from .system import Rcc
+
+if TYPE_CHECKING:
+    from .gpio import Port
 
 UIE_UIF = 1
 
 
+class Slave(Protocol):
+    """What counts a timer's update events (a slave timer, an ADC)."""
+
+    def _advance(self) -> None: ...
+
+    def _schedule(self) -> None: ...
+
+    def _trigger_edge(self, master: Timer) -> None: ...
+
+
 class Timer(Block):
-    def __init__(self, name, irq, bits, clock, nvic, rcc):
+    def __init__(self, name: str, irq: int, bits: int, clock: Clock, nvic: Nvic, rcc: Rcc) -> None:
         self.name = name
         self.irq = irq
         self.top = (1 << bits) - 1
@@ -45,46 +64,46 @@ class Timer(Block):
         self.arr = self.arr_pre = self.top
         self.ccr = [0, 0, 0, 0]
         self.cnt0 = 0
-        self.t0 = 0
-        self.event = None
-        self.triggers = {}  # ITRx → the master timer
-        self.slaves = []  # what counts this timer's updates: slave timers, an ADC
-        self.outputs = {}  # channel → (port, pin) its output drives
+        self.t0: Cycles = 0
+        self.event: Event | None = None
+        self.triggers: dict[int, Timer] = {}  # ITRx → the master timer
+        self.slaves: list[Slave] = []  # what counts this timer's updates: slave timers, an ADC
+        self.outputs: dict[int, tuple[Port, int]] = {}  # channel → (port, pin) its output drives
         self.ref = [0, 0, 0, 0]  # OCxREF
 
     # --- the counter's input ----------------------------------------------------
     @property
-    def running(self):
+    def running(self) -> int:
         return self.cr1 & 1
 
-    def _master(self):
+    def _master(self) -> Timer | None:
         """The master whose updates clock this timer, in external clock
         mode 1 on an internal trigger."""
         if self.smcr & 7 == 7:
             return self.triggers.get(self.smcr >> 4 & 7)
         return None
 
-    def _tick(self):
+    def _tick(self) -> Cycles:
         return cycles(HZ * (self.psc + 1), self.rcc.apb1_timer_hz())
 
-    def _edges(self, a, b):
+    def _edges(self, a: Cycles, b: Cycles) -> int:
         """Counter ticks in (a, b]."""
         master = self._master()
         if self._external():
             return master.updates_in(a, b) // (self.psc + 1) if master else 0
         return (b - a) // self._tick()
 
-    def _external(self):
+    def _external(self) -> bool:
         return self.smcr & 7 == 7
 
-    def _after(self, n):
+    def _after(self, n: int) -> Cycles | None:
         """The instant of the n-th tick after t0."""
         master = self._master()
         if self._external():
             return master.update_at(self.t0, n * (self.psc + 1)) if master and master.running else None
         return self.t0 + n * self._tick()
 
-    def reached(self, ch):
+    def reached(self, ch: int) -> Cycles | None:
         """The instant the counter became (or, less than half its range
         ahead, will become) equal to CCRx: a compare written after the
         counter passed it never matches, yet it says when the event it was
@@ -100,28 +119,28 @@ class Timer(Block):
         return self.t0 + (k - back) * self._tick()
 
     # --- this timer as a master ---------------------------------------------------
-    def _first_overflow(self):
+    def _first_overflow(self) -> Cycles:
         return self.t0 + (self.arr + 1 - self.cnt0) * self._tick()
 
-    def updates_in(self, a, b):
+    def updates_in(self, a: Cycles, b: Cycles) -> int:
         """Its overflows in (a, b], at its present settings."""
         if not self.running or self._external() or b <= a:
             return 0
         first, period = self._first_overflow(), (self.arr + 1) * self._tick()
 
-        def upto(t):  # overflows at or before t
+        def upto(t: Cycles) -> int:  # overflows at or before t
             return 0 if t < first else (t - first) // period + 1
 
         return upto(b) - upto(a)
 
-    def update_at(self, after, n):
+    def update_at(self, after: Cycles, n: int) -> Cycles:
         """The instant of its n-th overflow after `after`."""
         first, period = self._first_overflow(), (self.arr + 1) * self._tick()
         k = 0 if after < first else (after - first) // period + 1
         return first + (k + n - 1) * period
 
     # --- time ---------------------------------------------------------------
-    def _advance(self):
+    def _advance(self) -> None:
         """Brings the counter and its flags to now."""
         now = self.clock.now
         if not self.running:
@@ -148,10 +167,10 @@ class Timer(Block):
             self._update_event(hardware=True)
 
     # --- outputs ----------------------------------------------------------------
-    def _oc_mode(self, ch):
+    def _oc_mode(self, ch: int) -> int:
         return self.ccmr[ch // 2] >> (4 + 8 * (ch % 2)) & 7
 
-    def _on_match(self, ch, matches):
+    def _on_match(self, ch: int, matches: int) -> None:
         mode = self._oc_mode(ch)
         if mode == 1:
             self.ref[ch] = 1
@@ -160,7 +179,7 @@ class Timer(Block):
         elif mode == 3:
             self.ref[ch] ^= matches & 1
 
-    def _drive_outputs(self):
+    def _drive_outputs(self) -> None:
         """The outputs' levels at the counter's present value."""
         for ch, (port, pin) in self.outputs.items():
             mode = self._oc_mode(ch)
@@ -174,11 +193,11 @@ class Timer(Block):
             else:
                 port.drive(pin, None)
 
-    def _output_changes(self):
+    def _output_changes(self) -> bool:
         """Whether a driven output changes as the counter runs."""
         return any(self.ccer >> (4 * ch) & 1 and self._oc_mode(ch) in (1, 2, 3, 6, 7) for ch in self.outputs)
 
-    def _schedule(self):
+    def _schedule(self) -> None:
         if self.event:
             self.event.cancel()
             self.event = None
@@ -201,7 +220,7 @@ class Timer(Block):
         if at is not None:
             self.event = self.clock.at(-(-at // 1), self._due)
 
-    def _due(self):
+    def _due(self) -> None:
         self.event = None
         # The slaves count this timer's updates at its settings up to now,
         # before an update here loads new ones.
@@ -214,7 +233,7 @@ class Timer(Block):
         for s in self.slaves:
             s._schedule()
 
-    def _update_event(self, hardware):
+    def _update_event(self, hardware: bool) -> None:
         """UEV: preloads take effect; UIF unless UG with URS set. UDIS
         suppresses it (a UG still restarts the counter)."""
         if self.cr1 >> 1 & 1:
@@ -224,11 +243,11 @@ class Timer(Block):
         if hardware or not self.cr1 >> 2 & 1:
             self.sr |= 1
 
-    def _line(self):
+    def _line(self) -> None:
         self.nvic.line(self.irq, bool(self.sr & self.dier & 0x5F))
 
     # --- registers -------------------------------------------------------------
-    def read(self, offset):
+    def read(self, offset: int) -> int:
         # Its settings may change after this, its slaves must have counted.
         for s in self.slaves:
             s._advance()
@@ -249,7 +268,7 @@ class Timer(Block):
             0x2C: self.arr_pre,
         }.get(offset, self.ccr[(offset - 0x34) // 4] if 0x34 <= offset <= 0x40 else 0)
 
-    def write(self, offset, value):
+    def write(self, offset: int, value: int) -> None:
         # A slave counts this timer's updates at its settings until now.
         for s in self.slaves:
             s._advance()
@@ -293,7 +312,7 @@ class Timer(Block):
         for s in self.slaves:
             s._schedule()
 
-    def _trigger_edge(self, master):
+    def _trigger_edge(self, master: Timer) -> None:
         """A software update of `master` (EGR.UG) is one more input edge
         when this timer counts its updates (psc 0)."""
         if self.running and self._master() is master and self.psc == 0:

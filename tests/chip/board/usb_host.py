@@ -14,8 +14,11 @@ while one is open."""
 
 import os
 import struct
+from collections.abc import Callable, Generator
+from typing import TypeVar
 
-from clock import HZ
+from .clock import HZ, Clock
+from .otg import OtgFs
 
 US = HZ // 1_000_000
 MS = HZ // 1000
@@ -24,13 +27,18 @@ PACKET_TIME = 50 * US  # a 64-byte full-speed packet on the wire
 CDC_OUT, CDC_IN = 1, 2
 GIVE_UP = 2 * HZ  # a transaction NAKed this long is an error of the device
 
+# The host's life and its transfers: generators that yield the cycles to
+# wait before they go on (and return what a transfer read).
+Steps = Generator[int, None, None]
+T = TypeVar("T", bound=tuple[object, ...])
+
 
 class HostError(Exception):
     pass
 
 
 class Host:
-    def __init__(self, otg, clock, stream=None, replug=False):
+    def __init__(self, otg: OtgFs, clock: Clock, stream: int | None = None, replug: bool = False) -> None:
         self.otg = otg
         self.clock = clock
         self.stream = stream  # a file descriptor, read and written raw
@@ -42,35 +50,35 @@ class Host:
         # writes it did not take whole.
         self.to_host = bytearray()
         self.pty_full = 0
-        self.log = []  # (seconds, what)
-        self.descriptor = None
-        self.configuration = None
+        self.log: list[tuple[float, str]] = []  # (seconds, what)
+        self.descriptor: bytes | None = None
+        self.configuration: bytes | None = None
         self.state = "detached"
-        self.error = None
+        self.error: str | None = None
         self.sessions = 0
         # After each session, unplug the cable and plug it back in.
         self.replug = replug
         # A test's fault: the host suspends the bus for this long (cycles)
         # in the middle of a session, then resumes it without a reset; told
         # when it suspends.
-        self.suspend_for = None
-        self.on_suspend = lambda: None
+        self.suspend_for: int | None = None
+        self.on_suspend: Callable[[], object] = lambda: None
         # A test's fault: the cable pulled in the middle of a session for
         # this long (cycles), then plugged back: the bus reset and the
         # device enumerated again, the port reopened (the program holding
         # it open meanwhile); what was on its way is lost. Told when the
         # cable goes, as for a suspend.
-        self.pull_for = None
+        self.pull_for: int | None = None
         # A test's fault: the host keeps the port open but stops reading
         # (every IN NAKed from then on).
         self.reading = True
 
-    def start(self):
+    def start(self) -> None:
         self.otg.vbus(True)
         self.proc = self._run()
         self.clock.at(self.clock.now + MS, self._step)
 
-    def _step(self):
+    def _step(self) -> None:
         try:
             delay = next(self.proc)
         except StopIteration:
@@ -81,11 +89,11 @@ class Host:
             return
         self.clock.at(self.clock.now + delay, self._step)
 
-    def _note(self, what):
+    def _note(self, what: str) -> None:
         self.log.append((round(self.clock.now / HZ, 6), what))
 
     # --- transactions, retried while NAKed -------------------------------------
-    def _until(self, attempt, what):
+    def _until(self, attempt: Callable[[], T], what: str) -> Generator[int, None, T]:
         since = self.clock.now
         while True:
             result = attempt()
@@ -95,11 +103,13 @@ class Host:
                 raise HostError(f"{what}: NAKed for {GIVE_UP / HZ} s")
             yield RETRY
 
-    def _setup(self, packet):
+    def _setup(self, packet: bytes) -> Steps:
         yield from self._until(lambda: (self.otg.setup(packet),), "SETUP")
         yield PACKET_TIME
 
-    def control_in(self, request_type, request, value, index, length):
+    def control_in(
+        self, request_type: int, request: int, value: int, index: int, length: int
+    ) -> Generator[int, None, bytes]:
         """A control read: SETUP, IN data until short or complete, OUT status."""
         yield from self._setup(struct.pack("<BBHHH", request_type, request, value, index, length))
         data = bytearray()
@@ -107,22 +117,23 @@ class Host:
             status, chunk = yield from self._until(lambda: self.otg.in_(0), f"control IN {request:#x} data")
             if status == "STALL":
                 raise HostError(f"control IN {request:#x} {value:#x} stalled")
+            assert chunk is not None  # an ACK's data
             data += chunk
             yield PACKET_TIME
             if len(chunk) < 64 or len(data) >= length:
                 break
-        status = yield from self._until(lambda: (self.otg.out(0, b""),), "control IN status")
-        if status[0] == "STALL":
+        (status,) = yield from self._until(lambda: (self.otg.out(0, b""),), "control IN status")
+        if status == "STALL":
             raise HostError(f"control IN {request:#x} status stalled")
         yield PACKET_TIME
         return bytes(data)
 
-    def control_out(self, request_type, request, value, index, payload=b""):
+    def control_out(self, request_type: int, request: int, value: int, index: int, payload: bytes = b"") -> Steps:
         """A control write: SETUP, OUT data if any, IN status (a ZLP)."""
         yield from self._setup(struct.pack("<BBHHH", request_type, request, value, index, len(payload)))
         if payload:
-            status = yield from self._until(lambda: (self.otg.out(0, payload),), f"control OUT {request:#x} data")
-            if status[0] == "STALL":
+            (status,) = yield from self._until(lambda: (self.otg.out(0, payload),), f"control OUT {request:#x} data")
+            if status == "STALL":
                 raise HostError(f"control OUT {request:#x} stalled")
             yield PACKET_TIME
         status, chunk = yield from self._until(lambda: self.otg.in_(0), f"control OUT {request:#x} status")
@@ -133,7 +144,7 @@ class Host:
         yield PACKET_TIME
 
     # --- the host's life --------------------------------------------------------
-    def _run(self):
+    def _run(self) -> Steps:
         while True:
             while not (self.otg.connected and self.otg.gahbcfg & 1):
                 yield MS
@@ -149,7 +160,7 @@ class Host:
                     yield from self._unplug(100 * MS)
                     break
 
-    def _unplug(self, cycles):
+    def _unplug(self, cycles: int) -> Steps:
         """The cable out for `cycles`, then back in."""
         self._note("unplugged")
         self.otg.vbus(False)
@@ -157,7 +168,7 @@ class Host:
         self._note("plugged")
         self.otg.vbus(True)
 
-    def _enumerate(self):
+    def _enumerate(self) -> Steps:
         self.otg.bus_reset()
         yield 10 * MS
         self.otg.reset_done()
@@ -174,7 +185,7 @@ class Host:
         yield from self.control_out(0x00, 9, 1, 0)
         self._note("configured")
 
-    def _port_open(self):
+    def _port_open(self) -> bool:
         """Whether a program holds the pseudo-terminal open (reading its
         master side fails with EIO when none does); without a stream, the
         port is open from the start."""
@@ -188,8 +199,9 @@ class Host:
             return False
         return True
 
-    def _to_pty(self):
+    def _to_pty(self) -> None:
         """Hands the pseudo-terminal what it takes of the device's bytes."""
+        assert self.stream is not None  # only a stream's bytes wait for it
         try:
             del self.to_host[: os.write(self.stream, self.to_host)]
         except BlockingIOError:
@@ -199,7 +211,7 @@ class Host:
         if self.to_host:
             self.pty_full += 1
 
-    def _set_dtr(self, on):
+    def _set_dtr(self, on: bool) -> Steps:
         """What an operating system's CDC-ACM driver does when a program
         opens the port (115 200 8N1, then DTR and RTS) and closes it."""
         if on:
@@ -208,7 +220,7 @@ class Host:
         self.state = "open" if on else "closed"
         self._note("port open (DTR)" if on else "port closed (DTR dropped)")
 
-    def _session(self):
+    def _session(self) -> Generator[int, None, bool]:
         """Waits for a program to open the port, bridges the bulk endpoints
         while it is open, and drops DTR when it closes the port; True when
         the cable was pulled instead."""
@@ -244,7 +256,7 @@ class Host:
             if status == "ACK":
                 busy = True
                 # Without a stream, what the device sends is dropped.
-                if self.stream is not None:
+                if self.stream is not None and data is not None:
                     self.to_host += data
                     self._to_pty()
             elif status == "STALL":

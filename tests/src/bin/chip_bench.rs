@@ -4,11 +4,11 @@
 //!
 //! It builds `gonio-cost` (the core's hot paths in the release profile of the
 //! chip image, `firmware/src/bin/cost`) for thumbv7em-none-eabihf and runs it
-//! on the unicorn engine (`tests/chip/emulate.py`, `pip install unicorn`),
-//! which counts the instructions between the image's marks. Cycles are taken
-//! as one per instruction at 168 MHz, plus 24 per interrupt for exception
-//! entry and exit: the M4 needs more for loads, branches and divisions, so
-//! the derived rates are upper bounds.
+//! on the unicorn engine (`python3 -m board.emulate` in `tests/chip`, `pip
+//! install unicorn`), which counts the instructions between the image's
+//! marks. Cycles are taken as one per instruction at 168 MHz, plus 24 per
+//! interrupt for exception entry and exit: the M4 needs more for loads,
+//! branches and divisions, so the derived rates are upper bounds.
 //!
 //! Figures and bars (`docs/architecture.md`, "The chip's costs"; a bar
 //! missed fails the run, as the counts are exact on every machine):
@@ -44,14 +44,15 @@
 //!   chunks before its end (`await_free_scan_points`,
 //!   `await_free_resume_points`: the points served; fewer fails the run).
 //! - `boot_instructions`, `board`: the unmodified `gonio-head` image on the
-//!   virtual board (`tests/chip/board/`: the core taking interrupts, the
-//!   peripherals modelled from RM0090) for 3 s of virtual time from reset,
-//!   the E-STOP opened at 1 s; the instructions to its first idle wait, the
-//!   interrupts taken, the watchdog's reloads and the driven pins. The run
-//!   fails (and `.ci/run`) unless: it neither faults nor resets, the laser
-//!   enable and STEP stay low and the drivers' EN high throughout, the time
-//!   driver interrupts at every half period of its counter, the E-STOP's
-//!   edge is taken once, and the watchdog is reloaded within 0.5 s.
+//!   virtual board (`python3 -m board` in `tests/chip`: the core taking
+//!   interrupts, the peripherals modelled from RM0090) for 3 s of virtual
+//!   time from reset, the E-STOP opened at 1 s; the instructions to its
+//!   first idle wait, the interrupts taken, the watchdog's reloads and the
+//!   driven pins. The run fails (and `.ci/run`) unless: it neither faults
+//!   nor resets, the laser enable and STEP stay low and the drivers' EN high
+//!   throughout, the time driver interrupts at every half period of its
+//!   counter, the E-STOP's edge is taken once, and the watchdog is reloaded
+//!   within 0.5 s.
 //! - `usb_session`: the same image with a USB host on the board's bus
 //!   (`board/usb_host.py`: bus reset, descriptors, address, configuration,
 //!   line coding and DTR, then bulk transfers) bridged to a pseudo-terminal,
@@ -83,17 +84,19 @@ use std::process::Command;
 /// The serve loop's budget between two polls (instructions).
 const AWAIT_FREE_BAR: u64 = 100_000;
 
-/// Runs `python3 tests/chip/SCRIPT ARGS…` and reads the JSON it prints.
-fn python(root: &Path, script: &str, args: &[&std::ffi::OsStr]) -> Result<Value> {
+/// Runs `python3 -m MODULE ARGS…` in `tests/chip` (the package `board`) and
+/// reads the JSON it prints; paths in `args` must be absolute.
+fn python(root: &Path, module: &str, args: &[&std::ffi::OsStr]) -> Result<Value> {
     let out = Command::new("python3")
-        .arg(root.join("tests/chip").join(script))
+        .args(["-m", module])
         .args(args)
+        .current_dir(root.join("tests/chip"))
         .output()
-        .with_context(|| format!("running python3 tests/chip/{script} (needs `pip install unicorn`)"))?;
+        .with_context(|| format!("running python3 -m {module} in tests/chip (needs `pip install unicorn`)"))?;
     if !out.status.success() {
-        bail!("{script} {args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
+        bail!("python3 -m {module} {args:?} failed: {}", String::from_utf8_lossy(&out.stderr));
     }
-    serde_json::from_slice(&out.stdout).with_context(|| format!("reading what {script} printed"))
+    serde_json::from_slice(&out.stdout).with_context(|| format!("reading what python3 -m {module} printed"))
 }
 
 /// The longest the laser may stay on for one measurement at rest (s): its
@@ -119,7 +122,7 @@ fn board_run(root: &Path, image: &Path) -> Result<Value> {
     let estop = format!("PB12=1@{ESTOP_OPENS_AT}");
     let run = python(
         root,
-        "board/board.py",
+        "board",
         &[
             image.as_os_str(),
             "--seconds".as_ref(),
@@ -334,7 +337,7 @@ fn simulated_measurement() -> Result<gonio_shared::Signal> {
 fn main() -> Result<()> {
     let root = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("..");
     let images = chip_images(&root, &["gonio-cost", "gonio-head"])?;
-    let run = python(&root, "emulate.py", &["costs".as_ref(), images.join("gonio-cost").as_os_str()])?;
+    let run = python(&root, "board.emulate", &["costs".as_ref(), images.join("gonio-cost").as_os_str()])?;
     // The unmodified image on the virtual board, from reset.
     let board = board_run(&root, &images.join("gonio-head"))?;
     let plant = board_plant(&root)?;

@@ -1,8 +1,9 @@
 //! `gonio-cost`: the core's hot paths as the chip image builds them
 //! (thumbv7em-none-eabihf, the release profile), each run between two calls
 //! of [`mark`]. `chip-bench` runs this image on an emulated Cortex-M4F
-//! (`tests/chip/emulate.py`) and counts the instructions between the marks:
-//! the chip's costs in instructions, not host nanoseconds scaled by a guess.
+//! (`python3 -m board.emulate` in `tests/chip`) and counts the instructions
+//! between the marks: the chip's costs in instructions, not host nanoseconds
+//! scaled by a guess.
 //!
 //! On the host this binary is a one-line program that says so.
 #![cfg_attr(target_os = "none", no_std)]

@@ -1,19 +1,21 @@
-#!/usr/bin/env python3
 """Runs a Cortex-M4F image on the unicorn engine and counts its instructions.
 
 Used by `chip-bench` (tests/src/bin/chip_bench.rs); the unicorn engine comes
 from PyPI (`pip install unicorn`), a prebuilt wheel: the `unicorn-engine`
 crate would build the engine's C sources with cmake on every clean machine.
+Run from tests/chip (or with the package installed):
 
-    emulate.py costs IMAGE     run `gonio-cost` from reset to its `done` mark;
-                               print {name: {count, max, min, total}} as JSON,
-                               instructions between each pair of marks, less
-                               the marks' own cost (the `overhead` bracket).
-    emulate.py costs IMAGE NAME  the same, and on stderr the functions the
-                               longest stretch called NAME ran in.
+    python3 -m board.emulate costs IMAGE
+                   run `gonio-cost` from reset to its `done` mark; print
+                   {name: {count, max, min, total}} as JSON, instructions
+                   between each pair of marks, less the marks' own cost (the
+                   `overhead` bracket).
+    python3 -m board.emulate costs IMAGE NAME
+                   the same, and on stderr the functions the longest stretch
+                   called NAME ran in.
 
-The unmodified `gonio-head` image runs on the virtual board (board/), which
-takes this module's ELF loader and instruction counter.
+The unmodified `gonio-head` image runs on the virtual board (the rest of
+this package), which takes this module's ELF loader and instruction counter.
 
 Instructions are counted per translated block by a hook in C (count.c, built
 here with `cc`): the first time a block runs, its Thumb-2 instructions are
@@ -30,7 +32,10 @@ import struct
 import subprocess
 import sys
 import tempfile
+from collections.abc import Iterable
+from typing import Any
 
+import unicorn
 from unicorn import (
     UC_ARCH_ARM,
     UC_HOOK_BLOCK,
@@ -60,21 +65,22 @@ BEGIN, END, VALUE = 0, 1, 2
 class Elf:
     """The loadable segments and the symbols of a 32-bit little-endian ELF."""
 
-    def __init__(self, path):
-        self.data = open(path, "rb").read()
+    def __init__(self, path: str) -> None:
+        with open(path, "rb") as f:
+            self.data = f.read()
         d = self.data
         if d[:4] != b"\x7fELF" or d[4] != 1 or d[5] != 1:
             raise SystemExit(f"{path}: not a 32-bit little-endian ELF")
         (self.entry, phoff, shoff) = struct.unpack_from("<III", d, 24)
         (phentsize, phnum, shentsize, shnum) = struct.unpack_from("<HHHH", d, 42)
-        self.segments = []
+        self.segments: list[tuple[int, bytes]] = []
         for i in range(phnum):
             p_type, off, _vaddr, paddr, filesz, _memsz = struct.unpack_from("<IIIIII", d, phoff + i * phentsize)
             if p_type == 1 and filesz:
                 self.segments.append((paddr, d[off : off + filesz]))
         sections = [struct.unpack_from("<IIIIIIIIII", d, shoff + i * shentsize) for i in range(shnum)]
-        self.symbols = {}
-        self.functions = []
+        self.symbols: dict[str, int] = {}
+        self.functions: list[tuple[int, int, str]] = []
         for s in sections:
             if s[1] != 2:  # SHT_SYMTAB
                 continue
@@ -89,7 +95,7 @@ class Elf:
         self.functions.sort()
         self._starts = [f[0] for f in self.functions]
 
-    def function_at(self, addr):
+    def function_at(self, addr: int) -> str:
         """The name of the function holding `addr`, or the address."""
         i = bisect.bisect_right(self._starts, addr) - 1
         f = self.functions[i] if i >= 0 else None
@@ -98,6 +104,13 @@ class Elf:
 
 class Counter(ctypes.Structure):
     """`struct counter` of count.c."""
+
+    # The fields' types, for mypy (ctypes makes them from `_fields_`).
+    executed: int
+    lowest_sp: int
+    stretch_lowest: int
+    lowest_at: int
+    profiling: int
 
     _fields_ = [
         ("executed", ctypes.c_uint64),
@@ -112,7 +125,7 @@ class Counter(ctypes.Structure):
     ]
 
 
-def counter_library():
+def counter_library() -> ctypes.CDLL:
     """count.c built with the system's C compiler (the one Rust links with)."""
     source = os.path.join(os.path.dirname(os.path.abspath(__file__)), "count.c")
     with tempfile.TemporaryDirectory() as tmp:
@@ -122,7 +135,7 @@ def counter_library():
 
 
 class Machine:
-    def __init__(self, elf, plain=(PERIPHERALS, SYSTEM)):
+    def __init__(self, elf: Elf, plain: Iterable[tuple[int, int]] = (PERIPHERALS, SYSTEM)) -> None:
         """`plain`: the regions beside memory mapped as plain memory (the
         virtual board maps its own registers there instead)."""
         self.uc = Uc(UC_ARCH_ARM, UC_MODE_THUMB | UC_MODE_MCLASS)
@@ -157,22 +170,23 @@ class Machine:
             raise SystemExit(f"uc_hook_add failed: {status}")
         # Per open stretch, innermost last: its start SP and the lowest SP
         # of the stretch outside it (count.c follows the innermost one).
-        self.open_start = []
-        self.open_outer = []
+        self.open_start: list[int] = []
+        self.open_outer: list[int] = []
+        self.stack_top = 0  # the initial SP, from the vector table at `reset`
 
     @property
-    def executed(self):
+    def executed(self) -> int:
         return self.counter.executed
 
-    def start_profile(self):
+    def start_profile(self) -> None:
         """Counts instructions per block from here until `stop_profile`."""
         self.lib.profile_reset()
         self.counter.profiling = 1
 
-    def stop_profile(self):
+    def stop_profile(self) -> None:
         self.counter.profiling = 0
 
-    def profile(self):
+    def profile(self) -> dict[int, int]:
         """{block address: instructions} from `start_profile` to `stop_profile`."""
         n = ctypes.c_uint32.in_dll(self.lib, "profile_len").value
         used = (ctypes.c_uint32 * n).in_dll(self.lib, "profile_used")
@@ -180,13 +194,13 @@ class Machine:
         count = (ctypes.c_uint64 * (1 << 16)).in_dll(self.lib, "profile_instructions")
         return {address[i]: count[i] for i in used}
 
-    def open_stretch(self):
+    def open_stretch(self) -> None:
         sp = self.uc.reg_read(arm.UC_ARM_REG_SP)
         self.open_start.append(sp)
         self.open_outer.append(self.counter.stretch_lowest)
         self.counter.stretch_lowest = sp
 
-    def close_stretch(self):
+    def close_stretch(self) -> int:
         """The stack the stretch just closed used: from its start to its
         deepest point (stretches nest: an inner one's depth is its outer
         one's too)."""
@@ -194,36 +208,40 @@ class Machine:
         self.counter.stretch_lowest = min(self.open_outer.pop(), lowest)
         return self.open_start.pop() - lowest
 
-    def reset(self):
+    def reset(self) -> int:
+        sp: int
+        pc: int
         sp, pc = struct.unpack("<II", self.uc.mem_read(FLASH[0], 8))
         self.uc.reg_write(arm.UC_ARM_REG_SP, sp)
         self.stack_top = sp
         return pc
 
-    def read_str(self, ptr, length):
+    def read_str(self, ptr: int, length: int) -> str:
         return bytes(self.uc.mem_read(ptr, length)).decode()
 
 
-def by_function(elf, profile, top=40):
+def by_function(elf: Elf, profile: dict[int, int], top: int = 40) -> list[tuple[str, int]]:
     """The functions a profile's instructions ran in, largest first."""
-    totals = {}
+    totals: dict[str, int] = {}
     for addr, n in profile.items():
         name = elf.function_at(addr)
         totals[name] = totals.get(name, 0) + n
     return sorted(totals.items(), key=lambda kv: -kv[1])[:top]
 
 
-def costs(path, profile_name=None):
+def costs(path: str, profile_name: str | None = None) -> dict[str, Any]:
     elf = Elf(path)
     m = Machine(elf)
     mark = elf.symbols["cost_mark"] & ~1
-    open_at = {}
-    figures = {}
-    values = {}
-    state = {"done": False, "panic": None}
+    open_at: dict[str, int] = {}
+    figures: dict[str, dict[str, Any]] = {}
+    values: dict[str, int] = {}
+    state: dict[str, Any] = {"done": False, "panic": None}
 
-    def on_mark(uc, _address, _size, _user):
-        r0, r1, r2, r3 = (uc.reg_read(r) for r in (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2, arm.UC_ARM_REG_R3))
+    def on_mark(uc: Uc, _address: int, _size: int, _user: object) -> None:
+        r0, r1, r2, r3 = (
+            uc.reg_read(r) for r in (arm.UC_ARM_REG_R0, arm.UC_ARM_REG_R1, arm.UC_ARM_REG_R2, arm.UC_ARM_REG_R3)
+        )
         name = m.read_str(r0, r1)
         if r2 == VALUE:
             values[name] = r3
@@ -264,7 +282,9 @@ def costs(path, profile_name=None):
         at = m.uc.reg_read(arm.UC_ARM_REG_PC)
         sp = m.uc.reg_read(arm.UC_ARM_REG_SP)
         inside = ", ".join(open_at) or "no stretch"
-        raise SystemExit(f"emulation failed at pc {at:#010x}, sp {sp:#010x}, after {m.executed} instructions, in {inside}: {e}")
+        raise SystemExit(
+            f"emulation failed at pc {at:#010x}, sp {sp:#010x}, after {m.executed} instructions, in {inside}: {e}"
+        ) from e
     if not state["done"]:
         partial = {k: (v["count"], v["max"]) for k, v in figures.items()}
         raise SystemExit(f"the image stopped before its end: {state['panic'] or 'no done mark'} (so far: {partial})")
@@ -276,8 +296,6 @@ def costs(path, profile_name=None):
     for f in figures.values():
         for k in ("max", "min", "total"):
             f[k] -= overhead * (f["count"] if k == "total" else 1)
-    import unicorn
-
     return {
         "emulator": f"unicorn {unicorn.__version__} (Cortex-M4, Thumb-2, instructions counted per translated block)",
         "overhead_instructions": overhead,
@@ -288,7 +306,7 @@ def costs(path, profile_name=None):
     }
 
 
-def main():
+def main() -> None:
     if len(sys.argv) not in (3, 4) or sys.argv[1] != "costs":
         raise SystemExit(__doc__)
     print(json.dumps(costs(sys.argv[2], sys.argv[3] if len(sys.argv) == 4 else None)))
