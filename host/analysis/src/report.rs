@@ -6,7 +6,7 @@
 
 use crate::calibration::IncidenceBudget;
 use crate::coefficients::{self, Estimate, Fitted, Kind, Provenance, Source, Support};
-use crate::fit::compared::ComparedFit;
+use crate::fit::compared::{best_first, ComparedFit};
 use crate::fit::file::{self as fit_file, FittedBrdf};
 use crate::fit::goodness::{Adequacy, Goodness, ADEQUATE_P};
 use crate::fit::{Dataset, Metrics};
@@ -329,9 +329,7 @@ fn renders_section(best: &ComparedFit, fits_dir: &Path, plots_dir: &Path) -> Res
 
 /// Fits sorted best first (RMSE on the fitted samples).
 fn ranked(fits: &[ComparedFit]) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..fits.len()).collect();
-    order.sort_by(|&a, &b| fits[a].metrics().rmse.total_cmp(&fits[b].metrics().rmse));
-    order
+    best_first(&fits.iter().map(|f| f.metrics().rmse).collect::<Vec<_>>())
 }
 
 /// Writes `dir/report.html` with `dir/fits/` and `dir/plots/`; returns the

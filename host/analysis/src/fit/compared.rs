@@ -105,3 +105,11 @@ impl ComparedFit {
         }
     }
 }
+
+/// The indices of `keys` from the lowest (the best fit's RMSE, AIC or BIC)
+/// to the highest: the order a comparison ranks and a report lists by.
+pub fn best_first(keys: &[f64]) -> Vec<usize> {
+    let mut order: Vec<usize> = (0..keys.len()).collect();
+    order.sort_by(|&a, &b| keys[a].total_cmp(&keys[b]));
+    order
+}

@@ -4,7 +4,7 @@
 //! its fit file's JSON; ranked by RMSE, AIC and BIC (Spieringhs Table 6,
 //! Belcour Table 1), with R_A and R_L from the data and the fits beyond.
 
-use super::compared::ComparedFit;
+use super::compared::{best_first, ComparedFit};
 use super::criteria::Criteria;
 use super::goodness::Goodness;
 use super::selection::Selection;
@@ -106,21 +106,64 @@ pub fn model_fit(s: &Selection, settings: &Settings, model: ModelId, every_model
     Ok((f, holdout))
 }
 
-/// The rational function through `s`'s segments as a row: its criteria in
-/// `units` under `weighting`, as the models are ranked; `trying` hears of
-/// each count of coefficients tried.
-pub fn rational_row(s: &Selection, spec: &RationalSpec, units: Units, weighting: Weighting, trying: impl FnMut(usize)) -> Result<Row> {
-    let f = rational::fit_observed(&s.train, spec, trying).context("fitting rational")?;
-    let holdout = s.holdout.as_ref().map(|h| f.function.against(h).0);
-    let criteria = Criteria::of_brdf(&s.train, units, weighting, f.function.coefficients(), |x| f.function.eval(x))?;
-    let goodness = Goodness::of_brdf(&s.train, f.function.coefficients(), |x| f.function.eval(x));
-    let fit = ComparedFit::Rational {
-        fit: f,
+/// A rational fit with what a comparison ranks it by: its criteria, its
+/// χ² where the samples have σ, and its held-out metrics.
+#[derive(Debug, Clone)]
+pub struct RationalRow {
+    pub fit: rational::RationalFit,
+    pub criteria: Criteria,
+    pub goodness: Option<Goodness>,
+    pub holdout: Option<Metrics>,
+}
+
+impl RationalRow {
+    /// Its fit file's JSON (in the samples' own units).
+    pub fn to_json(&self) -> Value {
+        rational::file::to_json(
+            &self.fit,
+            self.fit.function.quantity,
+            &self.criteria,
+            self.goodness.as_ref(),
+            self.holdout.as_ref(),
+        )
+    }
+}
+
+impl From<RationalRow> for Row {
+    fn from(r: RationalRow) -> Row {
+        let json = r.to_json();
+        Row {
+            fit: ComparedFit::Rational {
+                fit: r.fit,
+                criteria: r.criteria,
+                goodness: r.goodness,
+            },
+            holdout: r.holdout,
+            json,
+        }
+    }
+}
+
+/// The rational function through `s`'s segments, its criteria in `units`
+/// under `weighting`, as the models are ranked; `trying` hears of each
+/// count of coefficients tried.
+pub fn rational_fit(
+    s: &Selection,
+    spec: &RationalSpec,
+    units: Units,
+    weighting: Weighting,
+    trying: impl FnMut(usize),
+) -> Result<RationalRow> {
+    let fit = rational::fit_observed(&s.train, spec, trying).context("fitting rational")?;
+    let holdout = s.holdout.as_ref().map(|h| fit.function.against(h).0);
+    let criteria = Criteria::of_brdf(&s.train, units, weighting, fit.function.coefficients(), |x| fit.function.eval(x))?;
+    let goodness = Goodness::of_brdf(&s.train, fit.function.coefficients(), |x| fit.function.eval(x));
+    Ok(RationalRow {
+        fit,
         criteria,
         goodness,
-    };
-    let json = fit.to_json(s.train.units, holdout.as_ref());
-    Ok(Row { fit, holdout, json })
+        holdout,
+    })
 }
 
 /// Every fit of a comparison, and the fits it tried and could not make.
@@ -156,10 +199,9 @@ impl Comparison {
             _ => f.criteria().bic,
         };
         let by = |c: usize| {
-            let mut order: Vec<usize> = (0..rows.len()).collect();
-            order.sort_by(|&a, &b| key(&rows[a].fit, c).total_cmp(&key(&rows[b].fit, c)));
+            let keys: Vec<f64> = rows.iter().map(|r| key(&r.fit, c)).collect();
             let mut rank = vec![0; rows.len()];
-            for (r, i) in order.into_iter().enumerate() {
+            for (r, i) in best_first(&keys).into_iter().enumerate() {
                 rank[i] = r + 1;
             }
             rank

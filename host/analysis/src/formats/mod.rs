@@ -5,6 +5,7 @@
 pub mod alta;
 pub mod brdf_csv;
 pub mod brdf_explorer;
+pub mod export;
 pub mod guard;
 pub mod merl;
 pub mod rgl;

@@ -117,7 +117,7 @@ pub fn compare(d: &Selection, o: &FitOptions, rational: Option<&RationalSpec>) -
     bar.finish_and_clear();
     if let Some(spec) = rational {
         match super::rational::row(d, spec, o.units.unwrap_or(d.train.units), o.weights, o.json) {
-            Ok(row) => comparison.rows.push(row),
+            Ok(row) => comparison.rows.push(row.into()),
             Err(e) => comparison.unfitted.push(format!("{e:#}")),
         }
     }

@@ -7,6 +7,7 @@ use gonio_analysis::fit::comparison::{NamedBox, Settings};
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::selection::{select, Restriction, Selection};
 use gonio_analysis::fit::{Dataset, Units, Weighting};
+use gonio_analysis::formats::export;
 use gonio_analysis::moments::Parametrization;
 use gonio_analysis::rational::RationalSpec;
 use gonio_brdf::Param;
@@ -89,7 +90,8 @@ pub struct FitArgs {
     /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
     pub file: PathBuf,
     /// Model id (models.md): lambert, retro-phong, abc-retro, abc-retro-per-lobe, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param,
-    /// or `rational` (a rational function through every sample's segment; its plane is --param: back or view, the light-view plane).
+    /// or `rational` (a rational function through every sample's segment, in the --param retro plane, back or view (light-view),
+    /// or in ALTA's view plane, whichever holds with fewer terms).
     #[arg(long)]
     pub model: String,
     #[command(flatten)]
@@ -180,12 +182,11 @@ impl FitOptions {
 pub fn write_drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<()> {
     let origin = format!("a fit to {}", a.file.display());
     if let Some(out) = &a.brdf {
-        super::export::write_brdf(fitted, &origin, out)?;
+        export::write_brdf(fitted, &origin, out)?;
     }
     if let Some(out) = &a.bsdf {
-        let opt = gonio_analysis::formats::rgl::Options::default();
-        let written = super::export::write_bsdf(&|d| fitted.eval(d), fitted.name(), &origin, out, &opt)?;
-        if let Some(w) = super::export::coarse_warning(&written.accuracy) {
+        let written = export::write_bsdf(&|d| fitted.eval(d), fitted.name(), &origin, out, &Default::default())?;
+        if let Some(w) = export::coarse_warning(&written.accuracy) {
             eprintln!("{w}");
         }
     }

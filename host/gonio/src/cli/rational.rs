@@ -6,21 +6,20 @@ use super::fitting::FitArgs;
 use anyhow::{bail, Result};
 use gonio_acquire::operator::Operator;
 use gonio_analysis::coefficients::Support;
-use gonio_analysis::fit::compared::ComparedFit;
-use gonio_analysis::fit::comparison::{rational_row, Row};
+use gonio_analysis::fit::comparison::{rational_fit, RationalRow};
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::selection::Selection;
 use gonio_analysis::fit::{self, Units, Weighting};
 use gonio_analysis::rational::RationalSpec;
 use gonio_analysis::rounding::significant;
 
-/// The rational function through `d`'s segments as a comparison's row
+/// The rational function through `d`'s segments as a comparison ranks it
 /// (its criteria in `units` under `weighting`), with a progress bar over
 /// the coefficients tried.
-pub fn row(d: &Selection, spec: &RationalSpec, units: Units, weighting: Weighting, json: bool) -> Result<Row> {
+pub fn row(d: &Selection, spec: &RationalSpec, units: Units, weighting: Weighting, json: bool) -> Result<RationalRow> {
     let most = 2 * gonio_analysis::rational::basis::Basis::size(spec.max_degree);
     let bar = Operator::for_json(json).bar(most as u64, "fitting rational", "coefficients");
-    let row = rational_row(d, spec, units, weighting, |coefficients| {
+    let row = rational_fit(d, spec, units, weighting, |coefficients| {
         bar.set_position(coefficients as u64);
         bar.set_message(format!("{coefficients} coefficients"));
     });
@@ -36,11 +35,8 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let spec = a.rational.spec(o.param)?;
     let d = o.select(&a.file)?;
     let row = row(&d, &spec, o.units.unwrap_or(d.train.units), Weighting::Uniform, o.json)?;
-    let ComparedFit::Rational { fit: f, .. } = &row.fit else {
-        bail!("the rational fit came back as a model's");
-    };
-    let holdout = row.holdout;
-    let mut v = row.json.clone();
+    let mut v = row.to_json();
+    let (f, holdout) = (&row.fit, &row.holdout);
     if !d.train.warnings.is_empty() {
         v["warnings"] = serde_json::json!(d.train.warnings);
     }
@@ -99,7 +95,7 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
         );
     }
     println!("  {}  L∞ {}", f.metrics.summary(), significant(f.linf, 4));
-    if let Some(h) = &holdout {
+    if let Some(h) = holdout {
         println!("  held out θi {:?}°: {}", o.holdout_theta_i, h.summary());
     }
     if f.shifted > 0 {
