@@ -10,18 +10,20 @@
 //! `basis` the Legendre terms and the coordinates' box, `segments` the
 //! intervals, `qp` one count's quadratic programme, `active_set` its
 //! solver (Goldfarb–Idnani), `search` the walk over counts of terms,
-//! `fit` the programmes it walks over, `function` the result as a BRDF,
-//! `file` its JSON.
+//! `programmes` what it walks over in both coordinate systems, `fit` the
+//! fit it gives, `function` the result as a BRDF, `file` its JSON.
 
 pub mod active_set;
 pub mod basis;
 pub mod file;
 pub mod fit;
 pub mod function;
+pub mod programmes;
 pub mod qp;
 pub mod search;
 pub mod segments;
 
-pub use fit::{fit, fit_observed, Attempt, RationalFit, RationalSpec};
+pub use fit::{fit, fit_observed, RationalFit, RationalSpec};
 pub use function::Rational;
+pub use programmes::{Attempt, Held};
 pub use segments::SegmentSource;
