@@ -13,6 +13,7 @@
 //! against a Monte Carlo average.
 
 use crate::frame::{cross, normalize};
+use crate::Directions;
 
 /// How finely a disc is covered: rings, and points on each.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -58,6 +59,20 @@ pub fn disc(axis: [f64; 3], diameter_deg: f64, rule: DiscRule) -> Vec<[f64; 3]> 
 pub fn diameter_deg(solid_angle_sr: f64) -> f64 {
     let cos_rho = 1.0 - solid_angle_sr / std::f64::consts::TAU;
     2.0 * cos_rho.clamp(-1.0, 1.0).acos().to_degrees()
+}
+
+/// The BRDF (sr⁻¹) a detector of field `detector_sr` reads of `f` at
+/// nominal directions `d`: the flux `f·cosθ` it collects over its field (a
+/// disc of that solid angle about the view) over the nominal `cosθo`, which
+/// is what a calibration divides by.
+pub fn field_average(detector_sr: f64, d: &Directions, f: impl Fn(&Directions) -> f64) -> f64 {
+    let views = disc(d.v, diameter_deg(detector_sr), DiscRule::DETECTOR);
+    let flux: f64 = views
+        .iter()
+        .filter(|v| v[2] > 0.0)
+        .map(|&v| f(&Directions { l: d.l, v }) * v[2])
+        .sum();
+    flux / views.len() as f64 / d.cos_o()
 }
 
 #[cfg(test)]

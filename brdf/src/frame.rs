@@ -42,6 +42,7 @@ fn unit_sum(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 /// Which cosine a retro lobe takes (`models.md` §1).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "lowercase")]
+#[cfg_attr(feature = "clap", derive(clap::ValueEnum))]
 pub enum Param {
     /// `cos_B = n·b`, the back vector (Belcour eq. 3–4).
     Back,

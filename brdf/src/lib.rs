@@ -46,6 +46,25 @@ impl Default for Specimen {
 }
 
 impl Specimen {
+    /// A specimen by name: `glass-beads` (no parameters: a physical
+    /// retroreflector none of the models is) or a model id with its
+    /// parameters, `NAME=V,...` (retro-phong's default: a retroreflective
+    /// tape), as `gonio scan --sim --material` takes them.
+    pub fn named(material: &str, params: Option<&str>) -> Result<Specimen> {
+        if material == "glass-beads" {
+            if params.is_some() {
+                bail!("--material glass-beads takes no --params (its parameters are fixed: docs/architecture.md#the-simulated-head)");
+            }
+            return Ok(Specimen::default());
+        }
+        let model = ModelId::parse(material).context("--material: glass-beads or a model id")?;
+        Ok(Specimen::Model(match params {
+            Some(p) => Material::parse(model, p)?,
+            None if model == ModelId::RetroPhong => Material::tape(),
+            None => bail!("--params is required for --material {}", model.name()),
+        }))
+    }
+
     /// `f_r` (sr⁻¹) for a pair of directions.
     pub fn eval(&self, d: &Directions) -> f64 {
         match self {

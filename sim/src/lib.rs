@@ -21,7 +21,7 @@ pub use frames::{Cue, FrameHead, Sent};
 pub use imperfections::Imperfections;
 #[cfg(feature = "in-process")]
 pub use inproc::spawn_in_process;
-pub use optics::{field_average, seen_brdf, Photodiode};
+pub use optics::{seen_brdf, Photodiode};
 pub use pty::serve_pty;
 pub use world::World;
 
@@ -106,6 +106,28 @@ impl Default for SimConfig {
             pace: 0.0,
             machine: REFERENCE,
         }
+    }
+}
+
+impl SimConfig {
+    /// The configuration, refused where a user's value makes no head: a
+    /// drift of half the laser's power or more, a clock before power-up, a
+    /// pace beyond 100 wall-clock seconds per simulated second.
+    pub fn checked(self) -> anyhow::Result<Self> {
+        let drift = self.photodiode.laser_drift;
+        if !(0.0..0.5).contains(&drift) {
+            anyhow::bail!("--laser-drift {drift} must be in [0, 0.5)");
+        }
+        if !(self.clock_start_s.is_finite() && self.clock_start_s >= 0.0) {
+            anyhow::bail!("--clock-start-s must be a finite time ≥ 0");
+        }
+        if !(self.pace.is_finite() && (0.0..=100.0).contains(&self.pace)) {
+            anyhow::bail!(
+                "--pace {}: wall-clock seconds per simulated second, from 0 (as fast as it can) to 100",
+                self.pace
+            );
+        }
+        Ok(self)
     }
 }
 

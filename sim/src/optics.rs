@@ -4,7 +4,7 @@
 //! ambient light, mains pickup, amplifier bandwidth, noise, offset,
 //! quantisation and saturation.
 
-use gonio_brdf::aperture::{diameter_deg, disc, DiscRule};
+use gonio_brdf::aperture::field_average;
 use gonio_brdf::{Directions, Specimen};
 use gonio_firmware::config::HeadConfig;
 use rand::Rng;
@@ -110,15 +110,4 @@ impl Photodiode {
 /// simulated scan's values are to be checked against.
 pub fn seen_brdf(material: &Specimen, detector_sr: f64, d: &Directions) -> f64 {
     field_average(detector_sr, d, |d| material.eval(d))
-}
-
-/// As `seen_brdf`, for any BRDF (a fitted function the head is not made of).
-pub fn field_average(detector_sr: f64, d: &Directions, f: impl Fn(&Directions) -> f64) -> f64 {
-    let views = disc(d.v, diameter_deg(detector_sr), DiscRule::DETECTOR);
-    let flux: f64 = views
-        .iter()
-        .filter(|v| v[2] > 0.0)
-        .map(|&v| f(&Directions { l: d.l, v }) * v[2])
-        .sum();
-    flux / views.len() as f64 / d.cos_o()
 }

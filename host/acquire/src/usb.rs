@@ -16,6 +16,21 @@ pub struct Found {
     pub port: Option<String>,
 }
 
+impl std::fmt::Display for Found {
+    /// A line for the operator: what, which, where on the bus, which port.
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "{}  serial {}  bus {} address {}  port {}",
+            self.product.as_deref().unwrap_or("gonio head"),
+            self.serial.as_deref().unwrap_or("?"),
+            self.bus,
+            self.address,
+            self.port.as_deref().unwrap_or("(no tty)")
+        )
+    }
+}
+
 /// The tty node the kernel made for the head's CDC-ACM interface.
 fn tty_of(info: &nusb::DeviceInfo) -> Option<String> {
     let sys = info.sysfs_path();

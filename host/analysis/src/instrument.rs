@@ -132,8 +132,16 @@ impl Instrument {
     }
 
     /// An instrument the user states: both apertures are needed (what a
-    /// value is the average over), the wavelength is optional.
+    /// value is the average over), the wavelength is optional; each a
+    /// non-negative number.
     pub fn stated(source_deg: Option<f64>, receiver_deg: Option<f64>, wavelength_nm: Option<f64>) -> Result<Instrument> {
+        if let Some(v) = [source_deg, receiver_deg, wavelength_nm]
+            .into_iter()
+            .flatten()
+            .find(|v| !(v.is_finite() && *v >= 0.0))
+        {
+            bail!("an instrument's apertures and wavelength are non-negative numbers, not {v}");
+        }
         match (source_deg, receiver_deg) {
             (Some(source_deg), Some(receiver_deg)) => Ok(Instrument::Stated {
                 apertures: Apertures { source_deg, receiver_deg },

@@ -5,6 +5,7 @@
 //! `docs/retroreflection.md#uncertainty` explains each component and how
 //! the simulated head is given the matching imperfections.
 
+use anyhow::{bail, Result};
 use serde::{Deserialize, Serialize};
 
 /// Coverage factor of the expanded intervals (≈ 95 % for a normal distribution).
@@ -41,6 +42,36 @@ impl Default for HeadUncertainty {
 }
 
 impl HeadUncertainty {
+    /// What a user states, each part left out the reference head's: the
+    /// zeros and the backlash as one value for every axis or three (ω, τ,
+    /// ψ), each finite and ≥ 0.
+    pub fn stated(zero_deg: Option<&[f64]>, backlash_deg: Option<&[f64]>, gain_rel: Option<f64>, stray_a: Option<f64>) -> Result<Self> {
+        let reference = HeadUncertainty::default();
+        let valid = |x: f64| x.is_finite() && x >= 0.0;
+        let three = |v: Option<&[f64]>, default: [f64; 3], name: &str| -> Result<[f64; 3]> {
+            match v {
+                None => Ok(default),
+                Some(v) if v.iter().any(|x| !valid(*x)) => bail!("--{name} must be finite and ≥ 0"),
+                Some([x]) => Ok([*x; 3]),
+                Some([a, b, c]) => Ok([*a, *b, *c]),
+                Some(v) => bail!("--{name} takes one value or three (ω, τ, ψ), found {}", v.len()),
+            }
+        };
+        let one = |v: Option<f64>, default: f64, name: &str| -> Result<f64> {
+            match v {
+                None => Ok(default),
+                Some(x) if valid(x) => Ok(x),
+                Some(_) => bail!("--{name} must be finite and ≥ 0"),
+            }
+        };
+        Ok(HeadUncertainty {
+            zero_deg: three(zero_deg, reference.zero_deg, "u-zero-deg")?,
+            backlash_deg: three(backlash_deg, reference.backlash_deg, "backlash-deg")?,
+            gain_rel: one(gain_rel, reference.gain_rel, "u-gain")?,
+            stray_a: one(stray_a, reference.stray_a, "stray-a")?,
+        })
+    }
+
     /// Standard uncertainty of one stage angle (degrees): the zero, and the
     /// backlash. Homing ends on a move towards the switch, so the zero is
     /// taken with the load half a backlash to one side of the motor's mean

@@ -5,4 +5,3 @@
 //! (`gonio-sim`) is plugged in as a target ([`cli::simulated`]).
 
 pub mod cli;
-pub mod live;

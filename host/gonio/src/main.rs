@@ -1,7 +1,8 @@
 //! `gonio`: scan BRDFs with the retroreflection head, or with its simulator.
 
 use clap::Parser;
-use gonio::cli::{failure, interrupt};
+use gonio::cli::failure;
+use gonio_acquire::interrupt;
 use std::process::ExitCode;
 
 fn main() -> ExitCode {

@@ -105,6 +105,80 @@ pub struct ScanOutcome {
     pub wall_time_s: f64,
 }
 
+impl ScanOutcome {
+    /// Head time against the lower bound, in words (`None` without a bound).
+    pub fn against_bound(&self) -> Option<String> {
+        self.lower_bound_s.map(|bound| {
+            format!(
+                "{} of head time; no stop-and-go order of the grid's points takes less than {} (× {:.3})",
+                hms(self.head_time_s),
+                hms(bound),
+                self.head_time_s / bound
+            )
+        })
+    }
+
+    /// What the scan of `spec` did, in lines for the operator, ending with
+    /// where its samples are.
+    pub fn summary(&self, spec: &ScanSpec, samples: &Path) -> String {
+        let mut lines = vec![format!(
+            "{} {}: {} measured, {} unreachable, {} flagged; {:.0} s of head time in {:.1} s",
+            self.points,
+            positions(spec),
+            self.measured,
+            self.skipped,
+            self.flagged,
+            self.head_time_s,
+            self.wall_time_s
+        )];
+        lines.extend(self.against_bound().map(|b| format!("  {b}")));
+        lines.extend(self.skipped_by_reason.iter().map(|(reason, n)| format!("  {n:5} × {reason}")));
+        lines.extend(self.recoveries.iter().map(|(why, n)| format!("  recovered {n} × {why}")));
+        if self.duplicates_dropped > 0 {
+            lines.push(format!("  {} duplicate events dropped", self.duplicates_dropped));
+        }
+        lines.push(format!("samples: {}", samples.display()));
+        lines.join("\n") + "\n"
+    }
+}
+
+impl ScanOutcome {
+    /// What the scan of `spec` measured, in a sentence for a report.
+    pub fn measured_text(&self, spec: &ScanSpec) -> String {
+        match spec.sweep {
+            Some(_) => format!(
+                "{} rows of the grid swept, {} retro points and {} pattern points measured at rest: {} of them measured ({} swept samples), {} refused, {} flagged",
+                spec.rows(),
+                spec.retro_points(),
+                spec.pattern_points(),
+                self.measured,
+                self.swept_samples,
+                self.skipped,
+                self.flagged
+            ),
+            None => format!(
+                "{} points of the grid: {} measured, {} unreachable, {} flagged",
+                self.points, self.measured, self.skipped, self.flagged
+            ),
+        }
+    }
+}
+
+/// What a scan's visit positions are called: a grid's points, or a sweep
+/// scan's positions (rows and retro points).
+pub fn positions(spec: &ScanSpec) -> &'static str {
+    match spec.sweep {
+        Some(_) => "positions",
+        None => "points",
+    }
+}
+
+/// Seconds as h:mm:ss.
+pub fn hms(s: f64) -> String {
+    let s = s.round() as u64;
+    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
+}
+
 #[derive(Debug, Serialize)]
 pub struct RunRecord {
     pub versions: Versions,

@@ -26,13 +26,12 @@
 //! `cargo run --release -p tests --bin coverage-bench [-- SCANS [NONMODEL_SCANS [RL_SCANS]]]`
 //! (default 100, 20 and 500).
 
-use gonio::cli::calibrate::CalibrateArgs;
 use gonio::cli::demo::demo_scan;
 use gonio::cli::fit::compare;
 use gonio::cli::fitting::FitOptions;
 use gonio::cli::scan::OutputArgs;
 use gonio_analysis::calibration;
-use gonio_analysis::calibration::directory::{calibrate, Calibrated};
+use gonio_analysis::calibration::directory::{self, calibrate, Calibrated};
 use gonio_analysis::coefficients::{self, Cie, Fitted, Provenance, Request, Source, Support};
 use gonio_analysis::fit::comparison::Row;
 use gonio_analysis::fit::{self, FitSpec, Weighting};
@@ -307,7 +306,8 @@ fn imperfect_scan(
     spec: &ScanSpec,
 ) -> anyhow::Result<(tempfile::TempDir, Imperfections, Calibrated)> {
     let dir = tempfile::tempdir()?;
-    let imperfections = gonio::cli::material::drawn_imperfections(seed, &HeadUncertainty::default(), PLATE_RHO_U);
+    let u = HeadUncertainty::default();
+    let imperfections = gonio_sim::Imperfections::drawn(seed, u.zero_deg, u.backlash_deg, u.gain_rel, u.stray_a, PLATE_RHO_U);
     let sim = SimConfig {
         seed,
         imperfections: Box::new(imperfections.clone()),
@@ -322,7 +322,11 @@ fn imperfect_scan(
         &OutputArgs { force: false, json: true },
         &Default::default(),
     ))?;
-    let c = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true).request()?)?;
+    let c = calibrate(&directory::Request::for_scan(
+        dir.path().to_path_buf(),
+        gonio_sim::PLATE_RHO,
+        gonio_sim::PLATE_RHO_U,
+    ))?;
     Ok((dir, imperfections, c))
 }
 

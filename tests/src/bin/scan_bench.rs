@@ -55,13 +55,12 @@
 //!   slowing down bought.
 
 use anyhow::Result;
-use gonio::cli::calibrate::CalibrateArgs;
 use gonio::cli::demo::{demo_scan, DEMO_SWEEP};
-use gonio::cli::grid::SWEEP_EXTENT;
 use gonio::cli::scan::OutputArgs;
 use gonio::cli::simulated::Simulated;
+use gonio_acquire::grid::SWEEP_EXTENT;
 use gonio_acquire::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
-use gonio_analysis::calibration::directory::calibrate;
+use gonio_analysis::calibration::directory::{calibrate, Request};
 use gonio_analysis::fit::{fit, Fit, FitSpec, Weighting};
 use gonio_analysis::lobe;
 use gonio_brdf::frame::Directions;
@@ -221,7 +220,11 @@ fn fitted(material: &Specimen, spec: &ScanSpec) -> Result<Fitted> {
     let rt = tokio::runtime::Builder::new_current_thread().enable_time().build()?;
     let quiet = OutputArgs { force: false, json: true };
     let (outcome, _) = rt.block_on(demo_scan(sim, spec, dir.path(), &quiet, &Default::default()))?;
-    let calibrated = calibrate(&CalibrateArgs::for_scan(dir.path().to_path_buf(), true).request()?)?;
+    let calibrated = calibrate(&Request::for_scan(
+        dir.path().to_path_buf(),
+        gonio_sim::PLATE_RHO,
+        gonio_sim::PLATE_RHO_U,
+    ))?;
     let blind = (SimConfig::default().machine.optics.blind_max_deg as f64).to_radians();
     let mut data = gonio_analysis::formats::load(&calibrated.summary.file, None)?.filter(|o| {
         let d = o.directions();

@@ -5,7 +5,7 @@
 //! known to be possible; Ctrl-C stops the head and says how to resume.
 
 use super::live::Live;
-use super::progress::{hms, Progress};
+use super::progress::Progress;
 use super::run;
 use crate::operator::Operator;
 use crate::plate;
@@ -18,6 +18,7 @@ use gonio_firmware::footprint;
 use gonio_firmware::kinematics;
 use gonio_firmware::motion::PARK;
 use gonio_scan_dir::record::ScanRecord;
+use gonio_scan_dir::run::{hms, positions};
 use gonio_scan_dir::run::{RunRecord, ScanOutcome};
 use gonio_scan_dir::samples::{self, drop_last_position, stored_rows, SampleWriter};
 use gonio_scan_dir::ScanDir;
@@ -316,13 +317,4 @@ fn lower_bound_s(cfg: &HeadConfig, spec: &ScanSpec, det: &DetectionReport) -> Op
         ..spec.clone()
     };
     lower_bound(cfg, &grid, settle, acquire).map(|(t, _)| t.total_s())
-}
-
-/// What a scan's visit positions are called: a grid's points, or a sweep
-/// scan's positions (rows and retro points).
-pub fn positions(spec: &ScanSpec) -> &'static str {
-    match spec.sweep {
-        Some(_) => "positions",
-        None => "points",
-    }
 }

@@ -4,6 +4,7 @@
 
 pub mod directory;
 pub mod live;
+pub mod page;
 pub mod progress;
 pub mod sequencer;
 

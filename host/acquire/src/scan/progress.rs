@@ -9,6 +9,7 @@
 
 use super::live::{Live, Update};
 use crate::operator::Operator;
+use gonio_scan_dir::run::hms;
 use gonio_shared::{Geometry, Signal};
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -102,12 +103,6 @@ impl Progress {
     pub fn finish(&self) {
         self.bar.finish_and_clear();
     }
-}
-
-/// Seconds as h:mm:ss.
-pub fn hms(s: f64) -> String {
-    let s = s.round() as u64;
-    format!("{}:{:02}:{:02}", s / 3600, s / 60 % 60, s % 60)
 }
 
 #[cfg(test)]

@@ -28,6 +28,17 @@ pub enum SlopeSource {
     None,
 }
 
+impl SlopeSource {
+    /// From a fit file if given, else a model by id (`none`: no angle component).
+    pub fn named(fit: Option<&Path>, model: &str) -> Result<SlopeSource> {
+        Ok(match (fit, model) {
+            (Some(path), _) => SlopeSource::File(path.to_path_buf()),
+            (None, "none") => SlopeSource::None,
+            (None, name) => SlopeSource::Fitted(ModelId::parse(name).context("--slope-model")?),
+        })
+    }
+}
+
 /// What a calibration is asked for.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Request {
@@ -43,6 +54,24 @@ pub struct Request {
     pub splitter: Option<f64>,
     pub slope: SlopeSource,
     pub head: HeadUncertainty,
+}
+
+impl Request {
+    /// The command line's defaults for a scan directory and a plate of
+    /// reflectance `rho_ref` ± `u_rho_ref`: the scan's own `reference.csv`,
+    /// the splitter as the plate run measured it, retro-phong's slope, the
+    /// reference head's uncertainties.
+    pub fn for_scan(scan: PathBuf, rho_ref: f64, u_rho_ref: f64) -> Request {
+        Request {
+            scan,
+            reference: None,
+            rho_ref,
+            u_rho_ref,
+            splitter: None,
+            slope: SlopeSource::Fitted(ModelId::RetroPhong),
+            head: HeadUncertainty::default(),
+        }
+    }
 }
 
 /// The slope model as `calibration.json` names it.

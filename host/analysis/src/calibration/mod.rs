@@ -20,6 +20,7 @@
 //!   model fitted to the same data: only its slope is used).
 
 pub mod directory;
+mod text;
 mod unblur;
 
 use crate::fit::{Dataset, Observation, Units};

@@ -7,14 +7,17 @@
 
 pub mod angles;
 pub mod aperture;
+pub mod asked;
 pub mod fit_files;
 pub mod json;
 pub mod provenance;
 pub mod scan;
 mod source;
+pub mod text;
 
 pub use angles::Cie;
 pub use aperture::Apertures;
+pub use asked::Asked;
 pub use provenance::{Basis, Provenance, Support};
 pub use source::{best, head_apertures, Estimate, Fitted, ModelValue, Nearest, Source, COMPARABLE_RMSE_RATIO};
 

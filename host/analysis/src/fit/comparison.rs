@@ -8,86 +8,15 @@ use super::compared::{best_first, ComparedFit};
 use super::criteria::Criteria;
 use super::goodness::Goodness;
 use super::selection::Selection;
-use super::{Fit, FitSpec, Metrics, Units, Weighting};
+use super::settings::Settings;
+use super::{Fit, Metrics, Units, Weighting};
 use crate::calibration::IncidenceBudget;
 use crate::coefficients::{self, Coefficient, Source, Support};
 use crate::rational::{self, RationalSpec};
-use anyhow::{bail, Context, Result};
-use gonio_brdf::{ModelId, Param};
+use anyhow::{Context, Result};
+use gonio_brdf::ModelId;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-
-/// A search box by parameter name, `name ∈ [lo, hi]`.
-#[derive(Debug, Clone, PartialEq)]
-pub struct NamedBox {
-    pub name: String,
-    pub lo: f64,
-    pub hi: f64,
-}
-
-/// How every model of a comparison (or one fit) is fitted.
-#[derive(Debug, Clone, PartialEq)]
-pub struct Settings {
-    pub param: Param,
-    /// The residuals' units; the data's own where `None`.
-    pub units: Option<Units>,
-    pub weighting: Weighting,
-    /// The global search's seed.
-    pub seed: u64,
-    /// Boxes replacing the defaults: in a comparison each model takes the
-    /// names it has.
-    pub bounds: Vec<NamedBox>,
-    /// Parameters held at a value (one model's fit only).
-    pub fixed: Vec<(String, f64)>,
-}
-
-impl Default for Settings {
-    /// The command line's: the view cosine, the data's units, uniform
-    /// weights, seed 1, the default boxes.
-    fn default() -> Self {
-        Settings {
-            param: Param::View,
-            units: None,
-            weighting: Weighting::Uniform,
-            seed: 1,
-            bounds: Vec::new(),
-            fixed: Vec::new(),
-        }
-    }
-}
-
-impl Settings {
-    /// The fit of `model` to data in `units`. With `every_model` (a
-    /// comparison), a box's name the model lacks is skipped, unless no
-    /// model has it.
-    pub fn spec(&self, model: ModelId, units: Units, every_model: bool) -> Result<FitSpec> {
-        let mut bounds = Vec::new();
-        for b in &self.bounds {
-            if !(b.lo.is_finite() && b.hi.is_finite() && b.lo < b.hi) {
-                bail!("--bounds {}: the box [{}, {}] must be finite with LO < HI", b.name, b.lo, b.hi);
-            }
-            match model.param_index(&b.name) {
-                Ok(i) => bounds.push((i, b.lo, b.hi)),
-                Err(_) if every_model && ModelId::ALL.iter().any(|m| m.param_index(&b.name).is_ok()) => {}
-                Err(e) => return Err(e.context("--bounds")),
-            }
-        }
-        let fixed = self
-            .fixed
-            .iter()
-            .map(|(name, v)| Ok((model.param_index(name)?, *v)))
-            .collect::<Result<_>>()?;
-        Ok(FitSpec {
-            param: self.param,
-            units: self.units.unwrap_or(units),
-            weighting: self.weighting,
-            fixed,
-            bounds,
-            seed: self.seed,
-            ..FitSpec::new(model)
-        })
-    }
-}
 
 /// One fit of a comparison, its held-out metrics and its fit file's JSON.
 #[derive(Debug, Clone)]
@@ -191,6 +120,31 @@ impl Comparison {
     }
 
     /// Each row's rank (1 = best) by RMSE, AIC and BIC.
+    /// The row of the lowest RMSE (`None` when nothing was fitted).
+    pub fn best(&self) -> Option<&Row> {
+        self.rows
+            .iter()
+            .min_by(|x, y| x.fit.metrics().rmse.total_cmp(&y.fit.metrics().rmse))
+    }
+
+    /// The comparison as `gonio compare --json` prints it: every fit's
+    /// file JSON with its `rank` by RMSE, AIC and BIC, and the notes of
+    /// what was not fitted.
+    pub fn into_json(self) -> Value {
+        let ranks = self.ranks();
+        let fits: Vec<Value> = self
+            .rows
+            .into_iter()
+            .zip(&ranks)
+            .map(|(r, k)| {
+                let mut v = r.json;
+                v["rank"] = serde_json::json!({"rmse": k[0], "aic": k[1], "bic": k[2]});
+                v
+            })
+            .collect();
+        serde_json::json!({"fits": fits, "unfitted": self.unfitted})
+    }
+
     pub fn ranks(&self) -> Vec<[usize; 3]> {
         let rows = &self.rows;
         let key = |f: &ComparedFit, c: usize| match c {

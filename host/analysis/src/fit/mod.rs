@@ -16,7 +16,9 @@ mod local;
 pub mod metrics;
 mod problem;
 pub mod selection;
+pub mod settings;
 pub mod settle;
+pub mod text;
 pub mod transform;
 
 pub use data::{Dataset, Observation, Units};

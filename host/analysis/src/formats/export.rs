@@ -3,11 +3,121 @@
 //! checked as a renderer reads it back, with the warning its check may
 //! call for.
 
+use super::merl::Merl;
 use super::{brdf_explorer, rgl};
+use crate::evaluation::Brdf;
 use crate::fit::file::FittedBrdf;
-use anyhow::{Context, Result};
+use anyhow::{bail, Context, Result};
 use gonio_brdf::Directions;
-use std::path::Path;
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+
+/// What a fit is drawn as besides its own file: a BRDF Explorer shader, a
+/// renderer's `.bsdf` at the default resolution, pictures over its data.
+#[derive(Debug, Clone, Default)]
+pub struct Drawn {
+    pub brdf: Option<PathBuf>,
+    pub bsdf: Option<PathBuf>,
+    pub plot: Option<PathBuf>,
+}
+
+impl Drawn {
+    /// Writes `fitted` (from `origin`) as asked, its pictures over `data`;
+    /// returns the warning of a `.bsdf` too coarse for it, if any.
+    pub fn write(&self, fitted: &FittedBrdf, origin: &str, data: &crate::fit::Dataset) -> Result<Option<String>> {
+        if let Some(out) = &self.brdf {
+            write_brdf(fitted, origin, out)?;
+        }
+        let mut warning = None;
+        if let Some(out) = &self.bsdf {
+            let written = write_bsdf(&|d| fitted.eval(d), fitted.name(), origin, out, &rgl::Options::default())?;
+            warning = coarse_warning(&written.accuracy);
+        }
+        if let Some(dir) = &self.plot {
+            crate::plot::render(data, std::slice::from_ref(fitted), dir, &Default::default())?;
+        }
+        Ok(warning)
+    }
+}
+
+/// A file written, by format.
+pub enum Export {
+    Brdf,
+    Bsdf(Written),
+    Merl { bytes: usize },
+}
+
+/// Writes `what` (called `name`, from `origin`) to `output`, in the format
+/// its extension names: `.brdf` (a fit only), `.bsdf` with `opt`, or `.binary`.
+pub fn export(what: &Brdf, name: &str, origin: &str, output: &Path, opt: &rgl::Options) -> Result<Export> {
+    match output.extension().and_then(|e| e.to_str()) {
+        Some("brdf") => {
+            let Brdf::Fit(fitted) = what else {
+                bail!("a BRDF Explorer .brdf is written from a fit (FIT.json), not from --material");
+            };
+            write_brdf(fitted, origin, output)?;
+            Ok(Export::Brdf)
+        }
+        Some("bsdf") => Ok(Export::Bsdf(write_bsdf(&|d| what.eval(d), name, origin, output, opt)?)),
+        Some("binary") => {
+            let merl = Merl::tabulate(&|d: &Directions| what.eval(d)).with_context(|| format!("{name} as MERL .binary"))?;
+            let bytes = merl.bytes();
+            std::fs::write(output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
+            Ok(Export::Merl { bytes: bytes.len() })
+        }
+        _ => bail!(
+            "{}: the extension must be .brdf (BRDF Explorer), .bsdf (RGL, for Mitsuba 3 and pbrt-v4) or .binary (MERL)",
+            output.display()
+        ),
+    }
+}
+
+impl Export {
+    /// What was written, as `gonio export --json` prints it.
+    pub fn to_json(&self, name: &str, output: &Path) -> Value {
+        match self {
+            Export::Brdf => json!({ "written": output, "format": "brdf-explorer", "model": name }),
+            Export::Merl { bytes } => json!({ "written": output, "format": "merl-binary", "model": name, "bytes": bytes }),
+            Export::Bsdf(w) => {
+                let [median, p95, peak] = rgl::TOLERANCE;
+                json!({"written": output, "format": "rgl-bsdf", "model": name, "bytes": w.bytes, "incidences": w.incidences,
+                       "accuracy": w.accuracy, "tolerance": {"median": median, "p95": p95, "retro_peak": peak},
+                       "within_tolerance": w.accuracy.within_tolerance()})
+            }
+        }
+    }
+
+    /// What was written, in words for the operator, with a too-coarse
+    /// table's warning last.
+    pub fn lines(&self, name: &str, output: &Path) -> Vec<String> {
+        let out = output.display();
+        match self {
+            Export::Brdf => vec![format!("{name} written to {out}")],
+            Export::Merl { .. } => vec![format!(
+                "{name} written to {out} (MERL 90 × 90 × 180, grey; isotropic and reciprocal by assumption: docs/render.md)"
+            )],
+            Export::Bsdf(w) => {
+                let acc = &w.accuracy;
+                let mut lines = vec![
+                    format!("{name} written to {out} ({:.1} MB, {} incidences)", w.bytes as f64 / 1e6, w.incidences),
+                    format!(
+                        "read back as a renderer reads it, at {} direction pairs: median error {:.2} %, 95th percentile {:.2} %, largest {:.1} % (at θi {:.1}°, θo {:.1}°, Δφ {:.1}°), retro peak {:.2} %",
+                        acc.pairs,
+                        100.0 * acc.median,
+                        100.0 * acc.p95,
+                        100.0 * acc.max,
+                        acc.worst_deg[0],
+                        acc.worst_deg[1],
+                        acc.worst_deg[2],
+                        100.0 * acc.retro_peak
+                    ),
+                ];
+                lines.extend(coarse_warning(acc));
+                lines
+            }
+        }
+    }
+}
 
 /// Writes a fit as `.brdf`, naming where it came from in the header.
 pub fn write_brdf(fitted: &FittedBrdf, source: &str, out: &Path) -> Result<()> {

@@ -51,3 +51,15 @@ pub fn load(path: &Path, units: Option<Units>) -> Result<Dataset> {
     data.settle();
     Ok(data)
 }
+
+/// [`load`], with the instrument the user stated (`None`: the file's own),
+/// and the data's doubts (`Dataset::doubts`) added to the reader's warnings,
+/// for a command to show.
+pub fn load_stated(path: &Path, units: Option<Units>, instrument: Option<crate::instrument::Instrument>) -> Result<Dataset> {
+    let mut data = load(path, units)?;
+    if let Some(i) = instrument {
+        data.instrument = i;
+    }
+    data.warnings.extend(data.doubts());
+    Ok(data)
+}

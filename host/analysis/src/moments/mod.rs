@@ -14,6 +14,7 @@
 mod integrate;
 mod mesh;
 pub mod plane;
+pub mod text;
 
 use crate::fit::{data::theta_in, Dataset, Units};
 use anyhow::{bail, Result};

@@ -24,6 +24,17 @@ pub enum Parametrization {
     LightView,
 }
 
+impl From<gonio_brdf::Param> for Parametrization {
+    /// The plane a retro lobe's cosine measures its angle in: the back
+    /// vector's, or the light's and the view's.
+    fn from(p: gonio_brdf::Param) -> Parametrization {
+        match p {
+            gonio_brdf::Param::Back => Parametrization::Back,
+            gonio_brdf::Param::View => Parametrization::LightView,
+        }
+    }
+}
+
 impl Parametrization {
     pub const BOTH: [Parametrization; 2] = [Parametrization::Back, Parametrization::LightView];
 

@@ -137,6 +137,18 @@ pub struct Options {
     pub range: Option<(f64, f64)>,
 }
 
+/// A colour range `LO:HI` of f_r (sr⁻¹): finite, with 0 < LO < HI (a log
+/// scale needs it, and f_r is not negative).
+pub fn colour_range(s: &str) -> Result<(f64, f64), String> {
+    let (lo, hi) = s.split_once(':').ok_or_else(|| format!("`{s}` is not LO:HI"))?;
+    let num = |x: &str| x.trim().parse::<f64>().map_err(|_| format!("`{x}` is not a number"));
+    let (lo, hi) = (num(lo)?, num(hi)?);
+    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
+        return Err(format!("{lo}:{hi} must be finite with 0 < LO < HI (sr⁻¹)"));
+    }
+    Ok((lo, hi))
+}
+
 /// Text sizes (pixels), for pictures shown at their own size.
 #[derive(Debug, Clone, Copy)]
 pub(crate) struct Style {

@@ -11,7 +11,7 @@
 //! intervals, `qp` one count's quadratic programme, `active_set` its
 //! solver (Goldfarb–Idnani), `search` the walk over counts of terms,
 //! `programmes` what it walks over in both coordinate systems, `fit` the
-//! fit it gives, `function` the result as a BRDF, `file` its JSON.
+//! fit it gives, `function` the result as a BRDF, `file` its JSON, `text` its words.
 
 pub mod active_set;
 pub mod basis;
@@ -22,6 +22,7 @@ pub mod programmes;
 pub mod qp;
 pub mod search;
 pub mod segments;
+pub mod text;
 
 pub use fit::{fit, fit_observed, RationalFit, RationalSpec};
 pub use function::Rational;

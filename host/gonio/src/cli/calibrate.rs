@@ -2,11 +2,9 @@
 //! (`gonio_analysis::calibration::directory`), and what it did, as text or
 //! JSON.
 
-use anyhow::{bail, Context, Result};
+use anyhow::Result;
 use gonio_analysis::calibration::directory::{calibrate, Request, SlopeSource};
-use gonio_analysis::rounding::{significant, with_uncertainty};
 use gonio_analysis::uncertainty::HeadUncertainty;
-use gonio_brdf::ModelId;
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
@@ -64,66 +62,20 @@ pub struct HeadUncertaintyArgs {
 
 impl HeadUncertaintyArgs {
     pub fn stated(&self) -> Result<HeadUncertainty> {
-        let reference = HeadUncertainty::default();
-        let valid = |x: f64| x.is_finite() && x >= 0.0;
-        let three = |v: &Option<Vec<f64>>, default: [f64; 3], name: &str| -> Result<[f64; 3]> {
-            match v.as_deref() {
-                None => Ok(default),
-                Some(v) if v.iter().any(|x| !valid(*x)) => bail!("--{name} must be finite and ≥ 0"),
-                Some([x]) => Ok([*x; 3]),
-                Some([a, b, c]) => Ok([*a, *b, *c]),
-                Some(v) => bail!("--{name} takes one value or three (ω, τ, ψ), found {}", v.len()),
-            }
-        };
-        let one = |v: Option<f64>, default: f64, name: &str| -> Result<f64> {
-            match v {
-                None => Ok(default),
-                Some(x) if valid(x) => Ok(x),
-                Some(_) => bail!("--{name} must be finite and ≥ 0"),
-            }
-        };
-        Ok(HeadUncertainty {
-            zero_deg: three(&self.u_zero_deg, reference.zero_deg, "u-zero-deg")?,
-            backlash_deg: three(&self.backlash_deg, reference.backlash_deg, "backlash-deg")?,
-            gain_rel: one(self.u_gain, reference.gain_rel, "u-gain")?,
-            stray_a: one(self.stray_a, reference.stray_a, "stray-a")?,
-        })
-    }
-}
-
-impl CalibrateArgs {
-    /// The command line's defaults for a scan directory (the simulated
-    /// head's plate and certificate).
-    pub fn for_scan(scan: PathBuf, json: bool) -> Self {
-        CalibrateArgs {
-            scan,
-            reference: None,
-            rho_ref: gonio_sim::PLATE_RHO,
-            u_rho_ref: gonio_sim::PLATE_RHO_U,
-            splitter: None,
-            slope_model: "retro-phong".into(),
-            slope_fit: None,
-            head: HeadUncertaintyArgs::default(),
-            json,
-        }
+        HeadUncertainty::stated(self.u_zero_deg.as_deref(), self.backlash_deg.as_deref(), self.u_gain, self.stray_a)
     }
 }
 
 impl CalibrateArgs {
     /// The calibration these arguments ask for.
     pub fn request(&self) -> Result<Request> {
-        let slope = match (&self.slope_fit, self.slope_model.as_str()) {
-            (Some(path), _) => SlopeSource::File(path.clone()),
-            (None, "none") => SlopeSource::None,
-            (None, name) => SlopeSource::Fitted(ModelId::parse(name).context("--slope-model")?),
-        };
         Ok(Request {
             scan: self.scan.clone(),
             reference: self.reference.clone(),
             rho_ref: self.rho_ref,
             u_rho_ref: self.u_rho_ref,
             splitter: self.splitter,
-            slope,
+            slope: SlopeSource::named(self.slope_fit.as_deref(), &self.slope_model)?,
             head: self.head.stated()?,
         })
     }
@@ -131,59 +83,9 @@ impl CalibrateArgs {
 
 pub fn calibrate_cmd(a: CalibrateArgs) -> Result<()> {
     let c = calibrate(&a.request()?)?;
-    if a.json {
-        println!("{}", serde_json::to_value(&c.summary)?);
-        return Ok(());
+    match a.json {
+        true => println!("{}", serde_json::to_value(&c.summary)?),
+        false => print!("{c}"),
     }
-    let cal = &c.summary.calibration;
-    println!(
-        "scale K = {} A·sr, splitter T = {} ({}), from {} plate samples (± k = 1)",
-        with_uncertainty(cal.scale_a_sr, cal.scale_a_sr * cal.scale_rel_sd),
-        with_uncertainty(cal.splitter, cal.splitter * cal.splitter_rel_sd),
-        if cal.splitter_measured { "measured" } else { "given" },
-        cal.reference_samples
-    );
-    let (lo, hi) = c.drift.range();
-    match c.drift.readings() {
-        0 => println!("no laser-drift monitor in the sample scan: no drift correction"),
-        n => println!(
-            "laser power {:.2} %…{:.2} % of the plate's, {n} monitor visits",
-            100.0 * lo,
-            100.0 * hi
-        ),
-    }
-    match &c.slope {
-        Some(m) => {
-            let params: Vec<String> = m
-                .model
-                .param_names()
-                .iter()
-                .zip(&m.params)
-                .map(|(n, v)| format!("{n} = {}", significant(*v, 4)))
-                .collect();
-            println!("angle component from the slope of {} ({})", m.model.name(), params.join(", "))
-        }
-        None => println!("no angle component (--slope-model none)"),
-    }
-    for b in &c.summary.budget {
-        let top: Vec<String> = b
-            .components
-            .iter()
-            .take(3)
-            .map(|(n, u)| format!("{n} {:.2} %", 100.0 * u))
-            .collect();
-        println!(
-            "θi = {:>5.1}°: median u = {:.2} % (k = 1); largest: {}",
-            b.theta_i_deg,
-            100.0 * b.combined,
-            top.join(", ")
-        );
-    }
-    println!(
-        "{} of {} samples usable; written to {}",
-        c.summary.usable,
-        c.rows.len(),
-        c.summary.file.display()
-    );
     Ok(())
 }

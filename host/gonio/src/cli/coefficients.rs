@@ -2,7 +2,8 @@
 //! fit, a model, or measured data, with standard uncertainties.
 
 use anyhow::{bail, Context, Result};
-use gonio_analysis::coefficients::{self, Apertures, Kind, Provenance, Request, Set, Source};
+use gonio_analysis::coefficients::text::Table;
+use gonio_analysis::coefficients::{self, Asked, Set, Source};
 use gonio_brdf::{Material, ModelId};
 use std::path::PathBuf;
 
@@ -83,7 +84,7 @@ impl CoefficientsArgs {
             return Ok(source.extrapolating(self.extrapolate));
         }
         if let Some(name) = &self.material {
-            return Ok(Source::Truth(super::material::specimen(name, self.params.as_deref())?));
+            return Ok(Source::Truth(gonio_brdf::Specimen::named(name, self.params.as_deref())?));
         }
         if let (Some(m), Some(p)) = (&self.model, &self.params) {
             return Ok(Source::model(Material::parse(ModelId::parse(m)?, p)?));
@@ -95,113 +96,32 @@ impl CoefficientsArgs {
         bail!("give a BRDF: --fit FIT.json, --model M --params ..., --data FILE or --material NAME")
     }
 
-    fn requests(&self) -> Result<Vec<Request>> {
-        let mut out = Vec::new();
-        for s in &self.set {
-            out.extend(s.requests());
+    fn asked(&self) -> Asked {
+        Asked {
+            sets: self.set.clone(),
+            rl: self.rl,
+            alpha_deg: self.alpha.clone(),
+            beta_deg: self.beta.clone(),
+            epsilon_deg: self.epsilon.clone(),
+            source_aperture_deg: self.source_aperture_deg,
+            receiver_aperture_deg: self.receiver_aperture_deg,
         }
-        if self.rl {
-            out.extend(Set::En1436.requests());
-        }
-        match (self.alpha.is_empty(), self.beta.is_empty()) {
-            (false, false) => out.extend(coefficients::grid(
-                &self.alpha,
-                &self.beta,
-                &self.epsilon,
-                coefficients::ASTM_APERTURES,
-            )),
-            (true, true) => {}
-            _ => bail!("--alpha and --beta go together"),
-        }
-        if out.is_empty() {
-            bail!("no geometry: give --set astm-e810, --set en1436, --rl, or --alpha with --beta");
-        }
-        for r in &mut out {
-            r.apertures = Apertures {
-                source_deg: self.source_aperture_deg.unwrap_or(r.apertures.source_deg),
-                receiver_deg: self.receiver_aperture_deg.unwrap_or(r.apertures.receiver_deg),
-            };
-        }
-        Ok(out)
     }
 }
 
 pub fn coefficients_cmd(a: CoefficientsArgs) -> Result<()> {
     let source = a.source()?;
-    let requests = a.requests()?;
-    let values = coefficients::compute(&source, &requests)?;
+    let values = coefficients::compute(&source, &a.asked().requests()?)?;
     let instrument = source.instrument();
-    if a.json {
-        println!("{}", coefficients::json::to_json(&values, instrument));
-        return Ok(());
-    }
-    match instrument {
-        Some(i) => println!("at {}, not photometric; u: standard uncertainty (k = 1)", i.wavelength_text()),
-        None => println!("a model's values: at no instrument's wavelength, not photometric; u: standard uncertainty (k = 1)"),
-    }
-    println!(
-        "{:<4} {:>6} {:>7} {:>6} {:>8} {:>8} {:>8} {:>25}  {:<12} unit",
-        "", "α°", "β°", "ε°", "θi°", "θo°", "Δφ°", "value ± u (k = 1)", "rests on"
-    );
-    for c in &values {
-        let g = &c.request.geometry;
-        let [ti, to, dp] = c.sample_angles_deg;
-        let name = match c.request.kind {
-            Kind::Ra => "R_A",
-            Kind::Rl => "R_L",
-        };
-        let rests_on = match &c.estimate.basis {
-            Some(b) if b.provenance == Provenance::Extrapolated => "EXTRAPOLATED",
-            Some(b) if b.provenance == Provenance::NotMeasured => "NOT MEASURED",
-            Some(b) => b.provenance.name(),
-            None => "",
-        };
-        if c.estimate.value.is_nan() {
-            println!(
-                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>25}  {rests_on:<12} {}",
-                g.alpha_deg,
-                g.beta_deg(),
-                g.epsilon_deg,
-                "—",
-                c.request.kind.unit()
-            );
-        } else {
-            println!(
-                "{name:<4} {:>6.2} {:>7.2} {:>6.1} {ti:>8.3} {to:>8.3} {dp:>8.2} {:>25}  {rests_on:<12} {}",
-                g.alpha_deg,
-                g.beta_deg(),
-                g.epsilon_deg,
-                gonio_analysis::rounding::with_uncertainty(c.estimate.value, c.estimate.u),
-                c.request.kind.unit()
-            );
-        }
-        if let Some(b) = c.estimate.basis.as_ref().filter(|b| !b.provenance.on_data()) {
-            match (c.estimate.model, c.estimate.u_model) {
-                (Some(m), Some(um)) => println!(
-                    "       {}: carried by {m}; {} models carry it, their spread ±{}",
-                    b.why,
-                    c.estimate.models.len(),
-                    gonio_analysis::rounding::significant(um, 2)
-                ),
-                _ => println!("       {}", b.why),
+    match a.json {
+        true => println!("{}", coefficients::json::to_json(&values, instrument)),
+        false => print!(
+            "{}",
+            Table {
+                values: &values,
+                instrument
             }
-            if let Some(m) = b.measure.as_ref().filter(|_| c.estimate.value.is_nan()) {
-                println!("       measure it: {m}");
-            }
-        }
-        if let Some(n) = c.estimate.nearest.first() {
-            let names: Vec<String> = c
-                .estimate
-                .nearest
-                .iter()
-                .map(|n| format!("({:.2}°, {:.2}°, {:.1}°)", n.theta_i_deg, n.theta_o_deg, n.dphi_deg))
-                .collect();
-            println!(
-                "       from the measured geometries {} (the nearest {:.3}° away)",
-                names.join(", "),
-                n.distance_deg
-            );
-        }
+        ),
     }
     Ok(())
 }

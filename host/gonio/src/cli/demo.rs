@@ -3,21 +3,20 @@
 //! one session, the scan directory calibrated, every model and the
 //! rational function compared, R_A and R_L, and `report.html`.
 
-use super::calibrate::CalibrateArgs;
 use super::detector::DetectorArgs;
 use super::fit;
-use super::fitting::{self, FitOptions};
+use super::fitting::FitOptions;
 use super::grid::LobeArgs;
-use super::live::LiveArgs;
-use super::scan::{against_bound, summarise, OutputArgs};
-use super::{interrupt, simulated};
+use super::scan::{summarise, LiveArgs, OutputArgs};
+use super::simulated;
 use anyhow::{Context, Result};
+use gonio_acquire::interrupt;
 use gonio_acquire::operator::Operator;
 use gonio_acquire::scan::directory::{scan_into, Destination};
 use gonio_acquire::scan::live::Live;
-use gonio_analysis::calibration::directory::calibrate;
+use gonio_analysis::calibration::directory::{calibrate, Request};
 use gonio_analysis::coefficients::Set;
-use gonio_analysis::rounding::{figure, significant, with_uncertainty};
+use gonio_analysis::rounding::{figure, significant};
 use gonio_scan_dir::record::ScanRecord;
 use gonio_scan_dir::run::ScanOutcome;
 use gonio_shared::{ScanSpec, SweepRequest, SweepScan};
@@ -65,59 +64,29 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         false => None,
     };
     let spec = ScanSpec { sweep, ..belcour };
-    let live = super::live::start(&a.live, Operator::for_json(a.output.json)).await?;
+    let live = gonio_acquire::scan::page::start(a.live.live_addr, a.live.live, Operator::for_json(a.output.json)).await?;
     let (outcome, samples) = demo_scan(sim, &spec, &a.out, &a.output, &live).await?;
-    let retro = spec.retro_points();
     let json = a.output.json;
     if !json {
         summarise(&spec, &outcome, &samples, false)?;
     }
-    let calibrated = calibrate(&CalibrateArgs::for_scan(a.out.clone(), json).request()?)?;
+    let calibrated = calibrate(&Request::for_scan(a.out.clone(), gonio_sim::PLATE_RHO, gonio_sim::PLATE_RHO_U))?;
     let cal = &calibrated.summary.calibration;
     let options = FitOptions {
         json,
         ..FitOptions::default()
     };
     let domain = options.select(&calibrated.summary.file)?;
-    let rational = fitting::RationalArgs::default().spec(options.param)?;
+    let rational = super::fitting::RationalArgs::default().spec(options.param)?;
     let comparison = fit::compare(&domain, &options, Some(&rational))?;
     let mut facts = vec![
         ("head".to_string(), "simulated (gonio demo)".to_string()),
         ("virtual material".to_string(), truth.describe()),
-        (
-            "scan".to_string(),
-            if a.sweep {
-                format!(
-                    "{} rows of the Belcour grid swept, {} retro points and {} pattern points measured at rest: {} of them measured ({} swept samples), {} refused, {} flagged",
-                    spec.rows(),
-                    retro,
-                    spec.pattern_points(),
-                    outcome.measured,
-                    outcome.swept_samples,
-                    outcome.skipped,
-                    outcome.flagged
-                )
-            } else {
-                format!(
-                    "{} points of the Belcour grid: {} measured, {} unreachable, {} flagged",
-                    outcome.points, outcome.measured, outcome.skipped, outcome.flagged
-                )
-            },
-        ),
-        (
-            "calibration".to_string(),
-            format!(
-                "reference plate ρ = {}: K = {} A·sr, splitter {} (± k = 1)",
-                gonio_sim::PLATE_RHO,
-                with_uncertainty(cal.scale_a_sr, cal.scale_a_sr * cal.scale_rel_sd),
-                with_uncertainty(cal.splitter, cal.splitter * cal.splitter_rel_sd)
-            ),
-        ),
+        ("scan".to_string(), outcome.measured_text(&spec)),
+        ("calibration".to_string(), cal.plate_text(gonio_sim::PLATE_RHO)),
         ("data".to_string(), calibrated.summary.file.display().to_string()),
     ];
-    if let Some(bound) = outcome.lower_bound_s {
-        facts.push(("scan time".to_string(), against_bound(outcome.head_time_s, bound)));
-    }
+    facts.extend(outcome.against_bound().map(|b| ("scan time".to_string(), b)));
     let report = comparison.report(
         &a.out,
         format!("gonio demo: {}", truth.describe()),
@@ -125,15 +94,11 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         &domain,
         &calibrated.summary.budget,
     )?;
-    let rows = &comparison.rows;
-    let best = rows
-        .iter()
-        .min_by(|x, y| x.fit.metrics().rmse.total_cmp(&y.fit.metrics().rmse))
-        .context("no model fitted")?;
+    let best = comparison.best().context("no model fitted")?;
     if json {
         let mut v = serde_json::to_value(&outcome)?;
         v["calibration"] = serde_json::to_value(&calibrated.summary)?;
-        v["models"] = rows.iter().map(|r| r.json.clone()).collect();
+        v["models"] = comparison.rows.iter().map(|r| r.json.clone()).collect();
         v["material"] = truth.describe().into();
         v["unfitted"] = serde_json::json!(comparison.unfitted);
         v["best_model"] = best.fit.name().into();

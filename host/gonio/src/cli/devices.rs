@@ -27,14 +27,7 @@ pub fn devices(a: DevicesArgs) -> Result<()> {
         println!("no head found on USB (VID {USB_VID:04x}, PID {USB_PID:04x})");
     }
     for f in &found {
-        println!(
-            "{}  serial {}  bus {} address {}  port {}",
-            f.product.as_deref().unwrap_or("gonio head"),
-            f.serial.as_deref().unwrap_or("?"),
-            f.bus,
-            f.address,
-            f.port.as_deref().unwrap_or("(no tty)")
-        );
+        println!("{f}");
     }
     Ok(())
 }

@@ -5,15 +5,12 @@
 //! RGL tensor file that Mitsuba 3 and pbrt-v4 render; `.binary`, MERL's
 //! half-difference table (docs/render.md).
 
-use super::material;
-use anyhow::{bail, Context, Result};
-use gonio_analysis::fit::file::{read_fitted, FittedBrdf};
-use gonio_analysis::formats::export::{coarse_warning, write_brdf, write_bsdf, Written};
-use gonio_analysis::formats::merl::Merl;
-use gonio_analysis::formats::rgl::{self, Options, Spectrum};
-use gonio_brdf::Directions;
-use serde_json::json;
-use std::path::{Path, PathBuf};
+use anyhow::{bail, Result};
+use gonio_analysis::evaluation::Brdf;
+use gonio_analysis::formats::export::export;
+use gonio_analysis::formats::rgl::{Options, Spectrum};
+use gonio_brdf::Specimen;
+use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
 #[command(
@@ -53,77 +50,18 @@ pub struct ExportArgs {
     pub json: bool,
 }
 
-/// What is exported: a fit or a material, its name and where it came from.
-enum Source {
-    Fit(FittedBrdf),
-    Material(gonio_brdf::Specimen),
-}
-
-impl Source {
-    fn eval(&self, d: &Directions) -> f64 {
-        match self {
-            Source::Fit(f) => f.eval(d),
-            Source::Material(s) => s.eval(d),
-        }
-    }
-}
-
 pub fn export_cmd(a: ExportArgs) -> Result<()> {
-    let (source, name, origin, output) = match (&a.material, a.paths.as_slice()) {
+    let (what, origin, output) = match (&a.material, a.paths.as_slice()) {
         (Some(m), [out]) => {
-            let s = material::specimen(m, a.params.as_deref())?;
-            let described = s.describe();
-            (
-                Source::Material(s),
-                m.clone(),
-                format!("the simulated material {described}"),
-                out.clone(),
-            )
+            let s = Specimen::named(m, a.params.as_deref())?;
+            let origin = format!("the simulated material {}", s.describe());
+            (Brdf::Specimen(s), origin, out)
         }
-        (None, [fit, out]) => {
-            let f = read_fitted(fit)?;
-            let name = f.name().to_string();
-            (Source::Fit(f), name, format!("the fit {}", fit.display()), out.clone())
-        }
+        (None, [fit, out]) => (Brdf::fitted(fit)?, format!("the fit {}", fit.display()), out),
         (Some(_), _) => bail!("with --material give only OUTPUT (the material is the source)"),
         (None, _) => bail!("give FIT.json OUTPUT, or OUTPUT with --material NAME"),
     };
-    match output.extension().and_then(|e| e.to_str()) {
-        Some("brdf") => {
-            let Source::Fit(fitted) = &source else {
-                bail!("a BRDF Explorer .brdf is written from a fit (FIT.json), not from --material");
-            };
-            write_brdf(fitted, &origin, &output)?;
-            match a.json {
-                true => println!("{}", json!({ "written": output, "format": "brdf-explorer", "model": name })),
-                false => eprintln!("{name} written to {}", output.display()),
-            }
-        }
-        Some("bsdf") => export_bsdf(&a, &source, &name, &origin, &output)?,
-        Some("binary") => {
-            let merl = Merl::tabulate(&|d: &Directions| source.eval(d)).with_context(|| format!("{name} as MERL .binary"))?;
-            let bytes = merl.bytes();
-            std::fs::write(&output, &bytes).with_context(|| format!("cannot write {}", output.display()))?;
-            match a.json {
-                true => println!(
-                    "{}",
-                    json!({ "written": output, "format": "merl-binary", "model": name, "bytes": bytes.len() })
-                ),
-                false => eprintln!(
-                    "{name} written to {} (MERL 90 × 90 × 180, grey; isotropic and reciprocal by assumption: docs/render.md)",
-                    output.display()
-                ),
-            }
-        }
-        _ => bail!(
-            "{}: the extension must be .brdf (BRDF Explorer), .bsdf (RGL, for Mitsuba 3 and pbrt-v4) or .binary (MERL)",
-            output.display()
-        ),
-    }
-    Ok(())
-}
-
-fn export_bsdf(a: &ExportArgs, source: &Source, name: &str, origin: &str, output: &Path) -> Result<()> {
+    let name = what.name();
     let opt = Options {
         theta_i_step_deg: a.theta_step,
         spectra: a.grid,
@@ -131,40 +69,10 @@ fn export_bsdf(a: &ExportArgs, source: &Source, name: &str, origin: &str, output
         spectrum: a.spectrum,
         ..Options::default()
     };
-    let written = write_bsdf(&|d: &Directions| source.eval(d), name, origin, output, &opt)?;
-    report_bsdf(a.json, name, output, &written);
+    let written = export(&what, &name, &origin, output, &opt)?;
+    match a.json {
+        true => println!("{}", written.to_json(&name, output)),
+        false => written.lines(&name, output).iter().for_each(|l| eprintln!("{l}")),
+    }
     Ok(())
-}
-
-fn report_bsdf(json: bool, name: &str, output: &Path, w: &Written) {
-    let [median, p95, peak] = rgl::TOLERANCE;
-    let acc = &w.accuracy;
-    if json {
-        println!(
-            "{}",
-            json!({"written": output, "format": "rgl-bsdf", "model": name, "bytes": w.bytes, "incidences": w.incidences,
-                   "accuracy": acc, "tolerance": {"median": median, "p95": p95, "retro_peak": peak}, "within_tolerance": acc.within_tolerance()})
-        );
-        return;
-    }
-    eprintln!(
-        "{name} written to {} ({:.1} MB, {} incidences)",
-        output.display(),
-        w.bytes as f64 / 1e6,
-        w.incidences
-    );
-    eprintln!(
-        "read back as a renderer reads it, at {} direction pairs: median error {:.2} %, 95th percentile {:.2} %, largest {:.1} % (at θi {:.1}°, θo {:.1}°, Δφ {:.1}°), retro peak {:.2} %",
-        acc.pairs,
-        100.0 * acc.median,
-        100.0 * acc.p95,
-        100.0 * acc.max,
-        acc.worst_deg[0],
-        acc.worst_deg[1],
-        acc.worst_deg[2],
-        100.0 * acc.retro_peak
-    );
-    if let Some(w) = coarse_warning(acc) {
-        eprintln!("{w}");
-    }
 }

@@ -2,8 +2,8 @@
 //! object `{"error": …, "kind": …}` on stdout, and the exit code (1; 130
 //! for the operator's Ctrl-C; 2 for a command line clap refuses).
 
-use super::interrupt;
 use gonio_acquire::client::CallError;
+use gonio_acquire::interrupt;
 use gonio_acquire::scan::directory::Interrupted;
 use std::process::ExitCode;
 

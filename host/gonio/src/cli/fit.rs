@@ -1,20 +1,16 @@
 //! `gonio fit` and `gonio compare`: models fitted to a data file (ALTA `.dat`
 //! or the calibrated sample CSV).
 
-use super::fitting::{write_drawn, CompareArgs, FitArgs, FitOptions};
+use super::fitting::{kept, CompareArgs, FitArgs, FitOptions};
 use anyhow::{bail, Result};
 use gonio_acquire::operator::Operator;
-use gonio_analysis::coefficients::Support;
 use gonio_analysis::fit;
-use gonio_analysis::fit::compared::ComparedFit;
 use gonio_analysis::fit::comparison::{model_fit, Comparison};
 use gonio_analysis::fit::file::FittedBrdf;
-use gonio_analysis::fit::goodness::Goodness;
 use gonio_analysis::fit::selection::Selection;
+use gonio_analysis::fit::text::{box_notes, ComparisonTable, FitText};
 use gonio_analysis::rational::RationalSpec;
-use gonio_analysis::rounding::{figure, significant};
 use gonio_brdf::ModelId;
-use serde_json::Value;
 
 pub fn fit_cmd(a: FitArgs) -> Result<()> {
     if a.model == gonio_analysis::rational::file::MODEL {
@@ -29,77 +25,28 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     let model = ModelId::parse(&a.model)
         .map_err(|e| anyhow::anyhow!("{e}, or `{}` (the rational function)", gonio_analysis::rational::file::MODEL))?;
     let d = a.options.select(&a.file)?;
-    let (f, holdout) = model_fit(&d, &a.options.settings(&a.fix)?, model, false)?;
-    let mut v = fit::file::to_json(&f, d.train.units, holdout.as_ref());
-    if !d.train.warnings.is_empty() {
-        v["warnings"] = serde_json::json!(d.train.warnings);
-    }
-    if let Some(out) = &a.out {
-        fit::file::write_with_support(out, &v, &Support::of(&d.train)?)?;
-    }
-    write_drawn(&FittedBrdf::Model(f.material.clone()), &a, &d.train)?;
+    let settings = a.options.settings(&a.fix)?;
+    let (f, holdout) = model_fit(&d, &settings, model, false)?;
+    let v = fit::file::to_json(&f, d.train.units, holdout.as_ref());
+    let v = kept(&a, &d, v, &FittedBrdf::Model(f.material.clone()))?;
     if a.options.json {
         println!("{v}");
         return Ok(());
     }
-    println!("{} ({} samples, {:.2} s)", model.name(), f.samples, f.seconds);
-    for (k, n) in model.param_names().iter().enumerate() {
-        let fixed = a.fix.iter().any(|s| s.split('=').next().map(str::trim) == Some(n));
-        println!("  {n:>8} = {}{}", f.parameter_text(k), if fixed { " (fixed)" } else { "" });
-    }
-    println!("  {}  AIC {:.1}  BIC {:.1}", f.metrics.summary(), f.aic, f.bic);
-    if let Some(g) = &f.goodness {
-        println!("  {}", goodness_text(g));
-    }
-    if let Some(c) = &f.correlation {
-        for (a, b, r) in c.strong(STRONG_CORRELATION) {
-            println!(
-                "  {a} and {b} are correlated, ρ = {}: the data tell mostly their combination",
-                figure(r, 3)
-            );
+    let fixed: Vec<String> = settings.fixed.iter().map(|(n, _)| n.clone()).collect();
+    let holdout = holdout.as_ref().map(|h| (a.options.holdout_theta_i.as_slice(), h));
+    print!(
+        "{}",
+        FitText {
+            fit: &f,
+            fixed: &fixed,
+            holdout
         }
-    }
-    for (name, b) in &f.widened {
-        eprintln!(
-            "note: {name} ended on the edge of its default box, which is no physical limit: the box grew to [{}, {}] and the fit went on",
-            significant(b.lo, 3),
-            significant(b.hi, 3)
-        );
-    }
-    for name in &f.at_bound {
-        eprintln!(
-            "warning: {name} ended on the edge of its search box: the optimum may lie beyond it (widen the box with --bounds {name}=LO:HI)"
-        );
-    }
-    if let Some(h) = &holdout {
-        println!("  held out θi {:?}°: {}", a.options.holdout_theta_i, h.summary());
+    );
+    for n in box_notes(&f) {
+        eprintln!("{n}");
     }
     Ok(())
-}
-
-/// |ρ| beyond which two parameters are named as correlated.
-const STRONG_CORRELATION: f64 = 0.95;
-
-/// χ² in words: its degrees of freedom, the reduced value against its 99 %
-/// interval for a right model with right σ, and the p-value.
-fn goodness_text(g: &Goodness) -> String {
-    let (lo, hi) = Goodness::interval(g.dof, 0.99);
-    let verdict = if g.reduced_chi2 > hi {
-        "the model misses the data by more than their uncertainty"
-    } else if g.reduced_chi2 < lo {
-        "closer than the uncertainties allow: they are overstated"
-    } else {
-        "adequate within the stated uncertainties"
-    };
-    format!(
-        "χ² = {} for {} degrees of freedom: reduced {} (99 % of a right fit: {}–{}), p = {}; {verdict}",
-        significant(g.chi2, 4),
-        g.dof,
-        significant(g.reduced_chi2, 3),
-        significant(lo, 2),
-        significant(hi, 2),
-        significant(g.p_value, 2)
-    )
 }
 
 /// Every model fitted to the same data, in catalogue order, then the
@@ -139,61 +86,17 @@ pub fn compare_cmd(a: CompareArgs) -> Result<()> {
             eprintln!("report: {}", path.display());
         }
     }
-    let ranks = comparison.ranks();
-    let Comparison { rows, unfitted } = comparison;
     if a.options.json {
-        let fits: Vec<Value> = rows
-            .into_iter()
-            .zip(&ranks)
-            .map(|(r, k)| {
-                let mut v = r.json;
-                v["rank"] = serde_json::json!({"rmse": k[0], "aic": k[1], "bic": k[2]});
-                v
-            })
-            .collect();
-        println!("{}", serde_json::json!({"fits": fits, "unfitted": unfitted}));
+        println!("{}", comparison.into_json());
         return Ok(());
     }
-    println!(
-        "{} samples ({}); best first by RMSE, with the ranks by AIC and BIC (which charge each coefficient)",
-        d.train.observations.len(),
-        d.train.units.label()
-    );
-    println!(
-        "{:<18} {:>6} {:>12} {:>12} {:>9} {:>13} {:>13} {:>4} {:>4} {:>8} {:>8}  at bound",
-        "model", "coeffs", "RMSE", "NRMSE", "NCC", "AIC", "BIC", "#AIC", "#BIC", "s", "χ²/dof"
-    );
-    let mut order: Vec<usize> = (0..rows.len()).collect();
-    order.sort_by_key(|&i| ranks[i][0]);
-    for i in order {
-        let f = &rows[i].fit;
-        let (m, c) = (f.metrics(), f.criteria());
-        let (goodness, at_bound) = match f {
-            ComparedFit::Model(f) => (
-                f.goodness.map_or("–".to_string(), |g| significant(g.reduced_chi2, 3)),
-                f.at_bound.join(", "),
-            ),
-            ComparedFit::Rational { fit, .. } => (
-                "–".to_string(),
-                format!("(degree {}, segments {})", fit.function.degree, fit.segments),
-            ),
-        };
-        println!(
-            "{:<18} {:>6} {:>12} {:>12} {:>9} {:>13.1} {:>13.1} {:>4} {:>4} {:>8.2} {:>8}  {at_bound}",
-            f.name(),
-            f.coefficients(),
-            significant(m.rmse, 4),
-            significant(m.nrmse, 4),
-            figure(m.ncc, 5),
-            c.aic,
-            c.bic,
-            ranks[i][1],
-            ranks[i][2],
-            f.seconds(),
-            goodness,
-        );
-    }
-    for why in &unfitted {
+    let table = ComparisonTable {
+        comparison: &comparison,
+        samples: d.train.observations.len(),
+        units: d.train.units,
+    };
+    print!("{table}");
+    for why in &comparison.unfitted {
         eprintln!("note: not fitted: {why}");
     }
     Ok(())

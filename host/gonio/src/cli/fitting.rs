@@ -2,15 +2,16 @@
 //! commands (`fit.rs`) and the rational function's (`rational.rs`): the
 //! options, the data a fit sees, a fit's row, and the files drawn from it.
 
-use anyhow::{bail, Context, Result};
-use gonio_analysis::fit::comparison::{NamedBox, Settings};
+use anyhow::Result;
+use gonio_analysis::coefficients::Support;
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::selection::{select, Restriction, Selection};
-use gonio_analysis::fit::{Dataset, Units, Weighting};
-use gonio_analysis::formats::export;
-use gonio_analysis::moments::Parametrization;
+use gonio_analysis::fit::settings::{fixed, Settings};
+use gonio_analysis::fit::{self, Units, Weighting};
+use gonio_analysis::formats::export::Drawn;
 use gonio_analysis::rational::RationalSpec;
 use gonio_brdf::Param;
+use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// Which samples a fit sees, and how they are weighed.
@@ -18,7 +19,7 @@ use std::path::{Path, PathBuf};
 pub struct FitOptions {
     /// Cosine of the retro lobes: `back` (cos_B) or `view` (cos_R = l·v).
     #[arg(long, value_enum, default_value = "view")]
-    pub param: ParamArg,
+    pub param: Param,
     /// Fit the retro half-space only (|Δφ| ≤ 90°).
     #[arg(long)]
     pub retro_only: bool,
@@ -52,36 +53,14 @@ pub struct FitOptions {
 }
 
 impl Default for FitOptions {
-    /// The command line's defaults: the whole data set, uniform weights,
-    /// the view cosine, the file's units.
+    /// The command line's defaults, as its attributes give them.
     fn default() -> Self {
-        FitOptions {
-            param: ParamArg::View,
-            retro_only: false,
-            theta_i: Vec::new(),
-            holdout_theta_i: Vec::new(),
-            weights: Weighting::Uniform,
-            units: None,
-            seed: 1,
-            bounds: Vec::new(),
-            instrument: Default::default(),
-            json: false,
+        #[derive(clap::Parser)]
+        struct Defaults {
+            #[command(flatten)]
+            options: FitOptions,
         }
-    }
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
-pub enum ParamArg {
-    Back,
-    View,
-}
-
-impl From<ParamArg> for Param {
-    fn from(p: ParamArg) -> Param {
-        match p {
-            ParamArg::Back => Param::Back,
-            ParamArg::View => Param::View,
-        }
+        <Defaults as clap::Parser>::parse_from(["gonio"]).options
     }
 }
 
@@ -138,30 +117,13 @@ pub struct CompareArgs {
 impl FitOptions {
     /// How the models are fitted, `fixes` (`NAME=VALUE`) held.
     pub fn settings(&self, fixes: &[String]) -> Result<Settings> {
-        let mut bounds = Vec::new();
-        for g in &self.bounds {
-            let parsed = g.split_once('=').and_then(|(n, r)| {
-                let (lo, hi) = r.split_once(':')?;
-                Some((n.trim(), lo.trim().parse::<f64>().ok()?, hi.trim().parse::<f64>().ok()?))
-            });
-            let Some((name, lo, hi)) = parsed else {
-                bail!("--bounds `{g}` is not NAME=LO:HI");
-            };
-            bounds.push(NamedBox { name: name.into(), lo, hi });
-        }
-        let mut fixed = Vec::new();
-        for f in fixes {
-            let (name, v) = f.split_once('=').with_context(|| format!("--fix `{f}` is not NAME=VALUE"))?;
-            let v: f64 = v.trim().parse().with_context(|| format!("--fix {name}: `{v}` is not a number"))?;
-            fixed.push((name.trim().to_string(), v));
-        }
         Ok(Settings {
-            param: self.param.into(),
+            param: self.param,
             units: self.units,
             weighting: self.weights,
             seed: self.seed,
-            bounds,
-            fixed,
+            bounds: self.bounds.iter().map(|b| b.parse()).collect::<Result<_>>()?,
+            fixed: fixes.iter().map(|f| fixed(f)).collect::<Result<_>>()?,
         })
     }
 
@@ -177,23 +139,25 @@ impl FitOptions {
     }
 }
 
-/// What `--brdf`, `--bsdf` and `--plot` ask of a fit: its shader, its
-/// renderer's file, its pictures over `data`.
-pub fn write_drawn(fitted: &FittedBrdf, a: &FitArgs, data: &Dataset) -> Result<()> {
-    let origin = format!("a fit to {}", a.file.display());
-    if let Some(out) = &a.brdf {
-        export::write_brdf(fitted, &origin, out)?;
+/// What `gonio fit` keeps of a fit (its file JSON `v`): the reader's
+/// warnings in it, the file `--out` with the data's support, and what
+/// `--brdf`, `--bsdf` and `--plot` ask; returns `v`.
+pub fn kept(a: &FitArgs, d: &Selection, mut v: Value, fitted: &FittedBrdf) -> Result<Value> {
+    if !d.train.warnings.is_empty() {
+        v["warnings"] = serde_json::json!(d.train.warnings);
     }
-    if let Some(out) = &a.bsdf {
-        let written = export::write_bsdf(&|d| fitted.eval(d), fitted.name(), &origin, out, &Default::default())?;
-        if let Some(w) = export::coarse_warning(&written.accuracy) {
-            eprintln!("{w}");
-        }
+    if let Some(out) = &a.out {
+        fit::file::write_with_support(out, &v, &Support::of(&d.train)?)?;
     }
-    if let Some(dir) = &a.plot {
-        gonio_analysis::plot::render(data, std::slice::from_ref(fitted), dir, &Default::default())?;
+    let drawn = Drawn {
+        brdf: a.brdf.clone(),
+        bsdf: a.bsdf.clone(),
+        plot: a.plot.clone(),
+    };
+    if let Some(w) = drawn.write(fitted, &format!("a fit to {}", a.file.display()), &d.train)? {
+        eprintln!("{w}");
     }
-    Ok(())
+    Ok(v)
 }
 
 /// The rational function's options, in `fit --model rational` and `compare`.
@@ -223,12 +187,9 @@ impl RationalArgs {
     }
 
     /// The fit these options ask for, in the plane `--param` names.
-    pub fn spec(&self, param: ParamArg) -> Result<RationalSpec> {
+    pub fn spec(&self, param: Param) -> Result<RationalSpec> {
         Ok(RationalSpec {
-            parametrization: match param {
-                ParamArg::Back => Parametrization::Back,
-                ParamArg::View => Parametrization::LightView,
-            },
+            parametrization: param.into(),
             segments: self.segments.as_deref().unwrap_or("sigma").parse()?,
             max_degree: self.max_degree.unwrap_or(RationalSpec::MAX_DEGREE),
             cosine: !self.no_cosine,

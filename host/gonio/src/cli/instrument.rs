@@ -26,18 +26,6 @@ impl InstrumentArgs {
         if self.instrument_source_deg.is_none() {
             return Ok(None);
         }
-        for v in [
-            self.instrument_source_deg,
-            self.instrument_receiver_deg,
-            self.instrument_wavelength_nm,
-        ]
-        .into_iter()
-        .flatten()
-        {
-            if !(v.is_finite() && v >= 0.0) {
-                anyhow::bail!("an instrument's apertures and wavelength are non-negative numbers, not {v}");
-            }
-        }
         Instrument::stated(
             self.instrument_source_deg,
             self.instrument_receiver_deg,

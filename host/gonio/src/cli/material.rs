@@ -1,12 +1,9 @@
 //! Options shared by the commands that start a simulated head.
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use gonio_analysis::uncertainty::HeadUncertainty;
-use gonio_brdf::{Material, ModelId, Specimen};
-use gonio_sim::{Imperfections, SimConfig, PLATE_RHO, PLATE_RHO_U};
-use rand::rngs::StdRng;
-use rand::{Rng, SeedableRng};
-use rand_distr::{Distribution, Normal};
+use gonio_brdf::Specimen;
+use gonio_sim::{Imperfections, SimConfig, PLATE_RHO_U};
 
 #[derive(Debug, Clone, clap::Args)]
 pub struct SimHeadArgs {
@@ -50,39 +47,9 @@ pub struct SimHeadArgs {
     pub pace: f32,
 }
 
-/// A simulated head's material by name: `glass-beads` (no parameters: a
-/// physical retroreflector none of the models is) or a model id with its
-/// parameters (retro-phong's default: a retroreflective tape).
-pub fn specimen(material: &str, params: Option<&str>) -> Result<Specimen> {
-    if material == "glass-beads" {
-        if params.is_some() {
-            bail!("--material glass-beads takes no --params (its parameters are fixed: docs/architecture.md#the-simulated-head)");
-        }
-        return Ok(Specimen::default());
-    }
-    let model = ModelId::parse(material).context("--material: glass-beads or a model id")?;
-    Ok(Specimen::Model(match params {
-        Some(p) => Material::parse(model, p)?,
-        None if model == ModelId::RetroPhong => Material::tape(),
-        None => bail!("--params is required for --material {}", model.name()),
-    }))
-}
-
 impl SimHeadArgs {
     pub fn config(&self) -> Result<SimConfig> {
-        let material = specimen(&self.material, self.params.as_deref())?;
-        if !(0.0..0.5).contains(&self.laser_drift) {
-            bail!("--laser-drift {} must be in [0, 0.5)", self.laser_drift);
-        }
-        if !(self.clock_start_s.is_finite() && self.clock_start_s >= 0.0) {
-            bail!("--clock-start-s must be a finite time ≥ 0");
-        }
-        if !(self.pace.is_finite() && (0.0..=100.0).contains(&self.pace)) {
-            bail!(
-                "--pace {}: wall-clock seconds per simulated second, from 0 (as fast as it can) to 100",
-                self.pace
-            );
-        }
+        let material = Specimen::named(&self.material, self.params.as_deref())?;
         let mut cfg = SimConfig {
             material,
             seed: self.seed,
@@ -92,31 +59,19 @@ impl SimHeadArgs {
         };
         cfg.photodiode.laser_drift = self.laser_drift;
         if self.imperfect {
-            cfg.imperfections = Box::new(drawn_imperfections(self.seed, &HeadUncertainty::default(), PLATE_RHO_U));
+            let u = HeadUncertainty::default();
+            cfg.imperfections = Box::new(Imperfections::drawn(
+                self.seed,
+                u.zero_deg,
+                u.backlash_deg,
+                u.gain_rel,
+                u.stray_a,
+                PLATE_RHO_U,
+            ));
         }
         if let Some(f) = &self.inject {
             cfg.faults = gonio_sim::faults::Faults::parse(f).context("--inject")?;
         }
-        Ok(cfg)
-    }
-}
-
-/// One head drawn from the stated uncertainties: zeros and gains normal,
-/// stray light uniform within its bound, backlash as stated, the plate's
-/// reflectance normal about its certificate (standard uncertainty
-/// `plate_rho_u`). The same seed gives the same head.
-pub fn drawn_imperfections(seed: u64, u: &HeadUncertainty, plate_rho_u: f64) -> Imperfections {
-    let mut rng = StdRng::seed_from_u64(seed ^ 0x1a9e_77e3_5eed_0b1d);
-    let mut normal = |sd: f64| Normal::new(0.0, sd.max(0.0)).map_or(0.0, |d| d.sample(&mut rng));
-    let zero_offset_deg = [0, 1, 2].map(|a| normal(u.zero_deg[a]));
-    let gain_scale = [0; 4].map(|_| 1.0 + normal(u.gain_rel));
-    let plate_rho = (PLATE_RHO + normal(plate_rho_u)).min(1.0);
-    let stray_a = rng.random_range(-1.0..=1.0) * u.stray_a;
-    Imperfections {
-        zero_offset_deg,
-        backlash_deg: u.backlash_deg,
-        gain_scale,
-        stray_a,
-        plate_rho,
+        cfg.checked()
     }
 }

@@ -5,7 +5,7 @@ mod coefficients;
 mod control;
 mod convert;
 pub mod demo;
-mod detector;
+pub mod detector;
 mod devices;
 mod export;
 pub mod failure;
@@ -13,8 +13,6 @@ pub mod fit;
 pub mod fitting;
 pub mod grid;
 pub mod instrument;
-pub mod interrupt;
-pub mod live;
 pub mod material;
 mod model_eval;
 mod moments;
@@ -27,6 +25,9 @@ pub mod simulated;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
+use gonio_acquire::scan::page::Steer;
+use gonio_analysis::fit::{Dataset, Units};
+use std::path::Path;
 
 #[derive(Debug, Parser)]
 #[command(
@@ -111,18 +112,10 @@ impl Command {
     }
 }
 
-/// Reads a data file for a command (`formats::load`), with the instrument
-/// the user stated; what the reader assumed or doubts goes to stderr.
-pub(crate) fn load_data(
-    path: &std::path::Path,
-    units: Option<gonio_analysis::fit::Units>,
-    instrument: &instrument::InstrumentArgs,
-) -> Result<gonio_analysis::fit::Dataset> {
-    let mut data = gonio_analysis::formats::load(path, units)?;
-    if let Some(i) = instrument.stated()? {
-        data.instrument = i;
-    }
-    data.warnings.extend(data.doubts());
+/// Reads a data file for a command, with the instrument the user stated;
+/// what the reader assumed or doubts goes to stderr.
+pub(crate) fn load_data(path: &Path, units: Option<Units>, instrument: &instrument::InstrumentArgs) -> Result<Dataset> {
+    let data = gonio_analysis::formats::load_stated(path, units, instrument.stated()?)?;
     for w in &data.warnings {
         eprintln!("warning: {}: {w}", path.display());
     }
@@ -151,9 +144,9 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Dhr(a) => model_eval::dhr_cmd(a),
         Command::Moments(a) => moments::moments_cmd(a),
         Command::Repeatability(a) => repeatability::repeatability_cmd(a),
-        Command::Pause(a) => control::control_cmd(control::Request::Pause, a),
-        Command::Continue(a) => control::control_cmd(control::Request::Continue, a),
-        Command::Abort(a) => control::control_cmd(control::Request::Abort, a),
+        Command::Pause(a) => control::control_cmd(Steer::Pause, a),
+        Command::Continue(a) => control::control_cmd(Steer::Continue, a),
+        Command::Abort(a) => control::control_cmd(Steer::Abort, a),
         Command::Rearm(a) => rt.block_on(control::rearm_cmd(a)),
     }
 }

@@ -21,7 +21,7 @@ pub struct PlotArgs {
     pub scale: plot::Scale,
     /// The maps' colour range of f_r, LO:HI in sr⁻¹ (default: the data's 1st
     /// to 99th percentile, so that a mirror lobe does not set it).
-    #[arg(long, value_name = "LO:HI", value_parser = colour_range)]
+    #[arg(long, value_name = "LO:HI", value_parser = plot::colour_range)]
     pub range: Option<(f64, f64)>,
     /// Print one JSON object: the files written (errors too: `{"error", "kind"}`).
     #[arg(long)]
@@ -43,16 +43,4 @@ pub fn plot_cmd(a: PlotArgs) -> Result<()> {
         false => eprintln!("{} pictures written to {}", files.len(), a.out.display()),
     }
     Ok(())
-}
-
-/// `LO:HI`, two finite values with LO < HI, both > 0 (a log scale needs it,
-/// and f_r is not negative).
-fn colour_range(s: &str) -> Result<(f64, f64), String> {
-    let (lo, hi) = s.split_once(':').ok_or_else(|| format!("`{s}` is not LO:HI"))?;
-    let num = |x: &str| x.trim().parse::<f64>().map_err(|_| format!("`{x}` is not a number"));
-    let (lo, hi) = (num(lo)?, num(hi)?);
-    if !(lo.is_finite() && hi.is_finite() && lo > 0.0 && lo < hi) {
-        return Err(format!("{lo}:{hi} must be finite with 0 < LO < HI (sr⁻¹)"));
-    }
-    Ok((lo, hi))
 }

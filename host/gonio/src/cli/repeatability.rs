@@ -1,9 +1,8 @@
 //! `gonio repeatability DIR1 DIR2 …`: repeated scans of one sample compared
 //! geometry by geometry against the budget's prediction.
 
-use anyhow::{Context, Result};
-use gonio_analysis::repeatability::{self, Repeatability, REPEATING};
-use gonio_analysis::rounding::{figure, significant};
+use anyhow::Result;
+use gonio_analysis::repeatability::{self, REPEATING};
 use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
@@ -26,7 +25,7 @@ pub struct RepeatabilityArgs {
 pub fn repeatability_cmd(a: RepeatabilityArgs) -> Result<()> {
     let r = repeatability::compare(&a.scans)?;
     if let Some(path) = &a.csv {
-        write_csv(&r, path)?;
+        r.write_csv(path)?;
     }
     let pictures = match &a.plot {
         Some(dir) => gonio_analysis::plot::repeatability::render(&r, dir)?,
@@ -39,49 +38,6 @@ pub fn repeatability_cmd(a: RepeatabilityArgs) -> Result<()> {
         println!("{v}");
         return Ok(());
     }
-    println!(
-        "{} scans, {} geometries in common; the prediction: {} in quadrature",
-        r.scans.len(),
-        r.geometries.len(),
-        REPEATING.join(", ")
-    );
-    println!(
-        "s / predicted σ: median {}, pooled {}, at the peaks (the top {} % of values) {}; relative repeatability s / mean: median {} %",
-        figure(r.median_ratio, 2),
-        figure(r.pooled_ratio, 2),
-        figure(100.0 * gonio_analysis::repeatability::PEAK_SHARE, 0),
-        figure(r.peak_median_ratio, 2),
-        significant(100.0 * r.median_relative_s, 2)
-    );
-    let mut incidences: Vec<f64> = r.geometries.iter().map(|g| g.theta_i_deg).collect();
-    incidences.sort_by(f64::total_cmp);
-    incidences.dedup();
-    for ti in incidences {
-        let mut ratios: Vec<f64> = r.geometries.iter().filter(|g| g.theta_i_deg == ti).map(|g| g.ratio()).collect();
-        ratios.sort_by(f64::total_cmp);
-        println!(
-            "  θi = {ti:>5}°: {:>5} geometries, s / σ median {}",
-            ratios.len(),
-            figure(ratios[ratios.len() / 2], 2)
-        );
-    }
-    Ok(())
-}
-
-fn write_csv(r: &Repeatability, path: &PathBuf) -> Result<()> {
-    let mut w = csv::Writer::from_path(path).with_context(|| format!("cannot write {}", path.display()))?;
-    w.write_record(["theta_i_deg", "theta_o_deg", "dphi_deg", "n", "mean_sr", "s_sr", "u_predicted_sr"])?;
-    for g in &r.geometries {
-        w.write_record([
-            g.theta_i_deg.to_string(),
-            g.theta_o_deg.to_string(),
-            g.dphi_deg.to_string(),
-            g.n.to_string(),
-            g.mean_sr.to_string(),
-            g.s_sr.to_string(),
-            g.u_predicted_sr.to_string(),
-        ])?;
-    }
-    w.flush().with_context(|| format!("cannot write {}", path.display()))?;
+    print!("{r}");
     Ok(())
 }

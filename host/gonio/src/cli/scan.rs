@@ -2,19 +2,35 @@
 
 use super::detector::DetectorArgs;
 use super::grid::GridArgs;
-use super::live::LiveArgs;
 use super::material::SimHeadArgs;
-use super::{interrupt, simulated};
+use super::simulated;
 use anyhow::{bail, Context, Result};
+use gonio_acquire::interrupt;
 use gonio_acquire::operator::Operator;
-use gonio_acquire::scan::directory::{positions, resume_from, scan_into, Destination};
-use gonio_acquire::scan::progress::hms;
+use gonio_acquire::scan::directory::{resume_from, scan_into, Destination};
+use gonio_acquire::scan::page;
 use gonio_scan_dir::record::{parse_geometry, Monitor, RecordedHead, ScanRecord};
 use gonio_scan_dir::run::ScanOutcome;
 use gonio_shared::ScanSpec;
 use gonio_sim::faults::Faults;
 use gonio_sim::SimConfig;
 use std::path::{Path, PathBuf};
+
+/// Where every scan serves its live page, on this machine (so that `gonio
+/// pause DIR` reaches it from another terminal); `--live` says where, for a
+/// browser.
+#[derive(Debug, Clone, clap::Args)]
+pub struct LiveArgs {
+    /// Print the address of the scan's live page (the hemisphere map filling
+    /// in, signal, gain, state, time left; pause, continue and abort
+    /// buttons) to open in a browser.
+    #[arg(long)]
+    pub live: bool,
+    /// Where the live page and `gonio pause|continue|abort DIR` reach the
+    /// scan: this machine only, any free port unless given.
+    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:0")]
+    pub live_addr: std::net::SocketAddr,
+}
 
 /// How results are written.
 #[derive(Debug, clap::Args)]
@@ -139,7 +155,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
 async fn scan_and_summarise(record: &ScanRecord, faults: Faults, to: Destination<'_>, a: &ScanArgs) -> Result<()> {
     let operator = Operator::for_json(a.output.json);
     let target = simulated::target(&record.head, faults, a.sim_head.pace);
-    let live = super::live::start(&a.live, operator).await?;
+    let live = page::start(a.live.live_addr, a.live.live, operator).await?;
     let (outcome, samples) = scan_into(record, target, to, operator, &live, interrupt::requested()).await?;
     summarise(&record.spec, &outcome, &samples, a.output.json)
 }
@@ -157,43 +173,11 @@ fn positive_mm(s: &str) -> Result<f64, String> {
     }
 }
 
-/// Head time against the lower bound, in words.
-pub fn against_bound(head_time_s: f64, bound_s: f64) -> String {
-    format!(
-        "{} of head time; no stop-and-go order of the grid's points takes less than {} (× {:.3})",
-        hms(head_time_s),
-        hms(bound_s),
-        head_time_s / bound_s
-    )
-}
-
+/// Prints what the scan did (one JSON object with `json`).
 pub fn summarise(spec: &ScanSpec, o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
-    if json {
-        println!("{}", serde_json::to_string_pretty(o)?);
-        return Ok(());
+    match json {
+        true => println!("{}", serde_json::to_string_pretty(o)?),
+        false => print!("{}", o.summary(spec, samples)),
     }
-    println!(
-        "{} {}: {} measured, {} unreachable, {} flagged; {:.0} s of head time in {:.1} s",
-        o.points,
-        positions(spec),
-        o.measured,
-        o.skipped,
-        o.flagged,
-        o.head_time_s,
-        o.wall_time_s
-    );
-    if let Some(bound) = o.lower_bound_s {
-        println!("  {}", against_bound(o.head_time_s, bound));
-    }
-    for (reason, n) in &o.skipped_by_reason {
-        println!("  {n:5} × {reason}");
-    }
-    for (why, n) in &o.recoveries {
-        println!("  recovered {n} × {why}");
-    }
-    if o.duplicates_dropped > 0 {
-        println!("  {} duplicate events dropped", o.duplicates_dropped);
-    }
-    println!("samples: {}", samples.display());
     Ok(())
 }

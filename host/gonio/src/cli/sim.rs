@@ -18,7 +18,7 @@ pub fn sim(a: SimArgs) -> Result<()> {
     serve_pty(a.sim_head.config()?, &a.link, |p| {
         // Stopped, it leaves no link behind that a later `--port` could
         // follow to a terminal someone else has opened since.
-        super::interrupt::remove_on_exit(p.to_path_buf());
+        gonio_acquire::interrupt::remove_on_exit(p.to_path_buf());
         eprintln!("simulated head listening on {} (Ctrl-C to stop)", p.display());
     })
 }

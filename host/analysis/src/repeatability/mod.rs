@@ -10,6 +10,8 @@
 //! out what repeats identically: the plate's certificate, the stage angles
 //! (the same zeros after every homing), the gain range, stray light.
 
+mod text;
+
 use anyhow::{bail, Context, Result};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;

@@ -17,6 +17,13 @@
 //! the token in a header and a JSON body: a cross-origin page can send
 //! neither without a preflight, which this server does not answer.
 
+use super::live::{Live, Served};
+use crate::operator::Operator;
+use anyhow::bail;
+mod remote;
+
+pub use remote::{ask, Steer};
+
 use anyhow::{Context, Result};
 use axum::extract::{Request, State};
 use axum::http::{header, Method, StatusCode};
@@ -26,7 +33,6 @@ use axum::response::{Html, IntoResponse, Json, Response};
 use axum::routing::{get, post};
 use axum::Router;
 use futures_util::stream::{self, Stream, StreamExt};
-use gonio_acquire::scan::live::{Live, Served};
 use std::convert::Infallible;
 use std::net::SocketAddr;
 use std::sync::Arc;
@@ -37,6 +43,21 @@ use tokio_stream::wrappers::BroadcastStream;
 pub const TOKEN_HEADER: &str = "x-gonio-token";
 
 static PAGE: &str = include_str!("page.html");
+
+/// Serves a new live scan's page at `addr` (this machine only), and says
+/// where when `announce`d: every scan serves it, so that `gonio pause DIR`
+/// reaches the scan from another terminal.
+pub async fn start(addr: SocketAddr, announce: bool, operator: Operator) -> Result<Live> {
+    if !addr.ip().is_loopback() {
+        bail!("--live-addr {addr}: the live page pauses and aborts the scan; it listens on this machine only (127.0.0.1 or [::1])");
+    }
+    let live = Live::default();
+    let served = serve(live.clone(), addr).await?;
+    if announce {
+        operator.notice(format_args!("live view: {}", served.url));
+    }
+    Ok(live.served_at(served))
+}
 
 /// Serves `live` at `addr` (port 0: any free one) on the current runtime,
 /// under a new token; returns where.
@@ -136,7 +157,7 @@ async fn state(State(live): State<Live>) -> impl IntoResponse {
 
 async fn events(State(live): State<Live>) -> Sse<impl Stream<Item = Result<Event, Infallible>>> {
     let (seen, rx) = live.subscribe();
-    let snapshot = |seen: &gonio_acquire::scan::live::Seen| Event::default().event("snapshot").json_data(seen).unwrap_or_default();
+    let snapshot = |seen: &super::live::Seen| Event::default().event("snapshot").json_data(seen).unwrap_or_default();
     let first = stream::once(std::future::ready(Ok(snapshot(&seen))));
     let rest = BroadcastStream::new(rx).map(move |u| {
         Ok(match u {
