@@ -1,6 +1,6 @@
 //! Faults the simulated head can be made to suffer (the fault
 //! matrix of docs/faults.md, `gonio scan --sim --inject`): on its link to the host, and in its
-//! hardware. The plan is shared (`Arc`) between the host and every head
+//! hardware. The schedule is shared (`Arc`) between the host and every head
 //! built from the same `SimConfig`, so a one-off fault fires once even when
 //! the host reconnects to a fresh head, and a test can clear a lasting fault
 //! (the operator's repair) before resuming.
@@ -9,7 +9,7 @@ use anyhow::{bail, Context, Result};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 /// A fault of the link, hitting the `at`-th frame the head sends or (a
-/// request fault) receives, from 1, counted over the whole plan.
+/// request fault) receives, from 1, counted over the whole schedule.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LinkFault {
     /// The frame is lost.
@@ -56,34 +56,36 @@ pub enum Direction {
 }
 
 #[derive(Debug, Default)]
-pub struct FaultPlan {
+pub struct FaultSchedule {
     /// Link faults by direction and frame number, not yet fired.
     pub link: Vec<(Direction, u64, LinkFault)>,
     /// Hardware faults by lit move number (switch faults: from the start).
     pub hardware: Vec<(u64, HardwareFault)>,
-    /// Frames the heads of this plan have sent.
+    /// Frames the heads of this schedule have sent.
     pub frames_sent: u64,
-    /// Frames the heads of this plan have received.
+    /// Frames the heads of this schedule have received.
     pub frames_received: u64,
 }
 
-/// The shared plan.
+/// The shared schedule.
 #[derive(Debug, Clone, Default)]
-pub struct Faults(Arc<Mutex<FaultPlan>>);
+pub struct Faults(Arc<Mutex<FaultSchedule>>);
 
 impl Faults {
-    pub fn plan(&self) -> MutexGuard<'_, FaultPlan> {
+    /// The schedule, held while the guard lives (a poisoned lock still
+    /// gives it: the faults are plain data).
+    pub fn lock(&self) -> MutexGuard<'_, FaultSchedule> {
         self.0.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Removes every hardware fault: the repair before a resume.
     pub fn repair(&self) {
-        self.plan().hardware.clear();
+        self.lock().hardware.clear();
     }
 
     /// Counts a frame travelling `way`; returns the link fault that hits it.
     pub fn next_frame(&self, way: Direction) -> Option<LinkFault> {
-        let mut p = self.plan();
+        let mut p = self.lock();
         let count = match way {
             Direction::ToHost => &mut p.frames_sent,
             Direction::ToHead => &mut p.frames_received,
@@ -96,12 +98,12 @@ impl Faults {
 
     /// Whether a hardware fault is active after `moves` moves.
     pub fn active(&self, moves: u64, f: impl Fn(&HardwareFault) -> bool) -> bool {
-        self.plan().hardware.iter().any(|(at, h)| moves >= *at && f(h))
+        self.lock().hardware.iter().any(|(at, h)| moves >= *at && f(h))
     }
 
     /// Takes one lost ADC block, if a DMA overrun is due after `moves` moves.
     pub fn take_overrun(&self, moves: u64) -> bool {
-        let mut p = self.plan();
+        let mut p = self.lock();
         let Some(i) = p
             .hardware
             .iter()
@@ -117,7 +119,7 @@ impl Faults {
 
     /// Fires a stall due by move `moves`, once.
     pub fn take_stall(&self, moves: u64) -> bool {
-        let mut p = self.plan();
+        let mut p = self.lock();
         match p.hardware.iter().position(|(at, h)| *at <= moves && *h == HardwareFault::Stall) {
             Some(i) => {
                 p.hardware.remove(i);
@@ -136,7 +138,7 @@ impl Faults {
     pub fn parse(spec: &str) -> Result<Faults> {
         let faults = Faults::default();
         {
-            let mut p = faults.plan();
+            let mut p = faults.lock();
             for item in spec.split(',').map(str::trim).filter(|s| !s.is_empty()) {
                 let (kind, rest) = item.split_once('@').with_context(|| format!("fault `{item}` is not KIND@N"))?;
                 let (n, arg) = match rest.split_once(':') {

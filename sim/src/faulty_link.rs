@@ -1,4 +1,4 @@
-//! The link faults of a fault plan, applied to any link of the simulated
+//! The link faults of a fault schedule, applied to any link of the simulated
 //! head (in-process channels, pseudo-terminal): frames the head sends and
 //! requests it receives are dropped, corrupted, duplicated, reordered or
 //! delayed, or the link is cut, at the frame numbers of the plan.

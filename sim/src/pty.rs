@@ -143,7 +143,7 @@ pub fn serve_pty(cfg: SimConfig, link: &Path, on_ready: impl FnOnce(&Path)) -> R
     let flags = fcntl(&pty.master, FcntlArg::F_GETFL).context("reading descriptor flags")?;
     fcntl(&pty.master, FcntlArg::F_SETFL(OFlag::from_bits_truncate(flags) | OFlag::O_NONBLOCK)).context("setting non-blocking mode")?;
     let (mut head, world) = build(&cfg);
-    // A cut link (fault plan) leaves the head silent until the host's next request.
+    // A cut link (fault schedule) leaves the head silent until the host's next request.
     let pty_link = PtyLink {
         master: File::from(pty.master),
         decoder: Decoder::new(),
