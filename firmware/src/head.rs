@@ -6,6 +6,7 @@
 //! Every change of what the head does goes through the state table
 //! ([`crate::state`]) in [`Head::apply`].
 
+use crate::active_scan::ActiveScan;
 use crate::config::HeadConfig;
 use crate::conversation::Conversation;
 use crate::detector::Detector;
@@ -14,7 +15,6 @@ use crate::kinematics;
 use crate::motion::{self, Position};
 use crate::sanity::geometry::FixedGeometry;
 use crate::sanity::Sanity;
-use crate::scan_run::ScanRun;
 use crate::state::{self, Drivers, Event, Laser, Mode};
 use crate::{homing, units};
 use embedded_hal::digital::OutputPin;
@@ -43,7 +43,7 @@ pub struct Head<B: Board> {
     pub(crate) pos: Position,
     pub(crate) detector: Detector,
     sanity: Option<Sanity>,
-    pub(crate) scan: Option<ScanRun>,
+    pub(crate) scan: Option<ActiveScan>,
     laser_on: bool,
     pub(crate) seq: u32,
     /// What the serve loop keeps of the conversation with the host.
@@ -224,7 +224,7 @@ impl<B: Board> Head<B> {
     }
 
     pub fn status(&self) -> Status {
-        let (run, next_order, total) = self.scan.as_ref().map_or((0, 0, 0), ScanRun::progress);
+        let (run, next_order, total) = self.scan.as_ref().map_or((0, 0, 0), ActiveScan::progress);
         Status {
             state: match self.mode {
                 Mode::Idle => HeadState::Idle,
@@ -423,7 +423,7 @@ impl<B: Board> Head<B> {
         let first_order = spec.first_order;
         self.last_heard_us = self.hw.clock.now_us();
         self.runs = self.runs.wrapping_add(1);
-        self.scan = Some(ScanRun::new(self.runs, spec, total));
+        self.scan = Some(ActiveScan::new(self.runs, spec, total));
         Ok(ScanAccepted {
             points: total,
             first_order,

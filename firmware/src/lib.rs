@@ -15,6 +15,7 @@
 
 pub mod log;
 
+pub mod active_scan;
 pub mod config;
 mod conversation;
 pub mod demod;
@@ -30,7 +31,6 @@ pub mod link;
 pub mod math;
 pub mod motion;
 pub mod sanity;
-pub mod scan_run;
 mod serve;
 pub mod state;
 pub mod sweep;

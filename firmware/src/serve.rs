@@ -12,13 +12,13 @@
 //! where it started, its state is the operation's); other requests that
 //! arrive meanwhile are kept and answered when the operation ends.
 
+use crate::active_scan::{Next, Recorded};
 use crate::dispatch::{decode, encode, midway, request_id, Command, DecodeError, Midway};
 use crate::head::Head;
 use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
-use crate::scan_run::{Next, Recorded};
 use crate::state::{Event, Mode};
-use crate::sweep::run::SweepTurn;
+use crate::sweep::turns::SweepTurn;
 use embassy_futures::select::{select, Either};
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{

@@ -19,7 +19,7 @@ const SHADOWED: u32 = 2;
 const MEASURED: usize = 143 - SHADOWED as usize;
 
 /// 143 points at θi = 30°.
-fn spec() -> ScanSpec {
+fn scan_spec() -> ScanSpec {
     ScanSpec {
         theta_o: AngleRange::new(0.0, 60.0, 6.0),
         dphi: AngleRange::new(-180.0, 180.0, 30.0),
@@ -45,7 +45,7 @@ fn scan(faults: &str, host_timeout_s: f32) -> (FrameHead, Vec<Sent>) {
             ..SafetySettings::default()
         }),
     ];
-    let sent = head.serve_open(setup.into_iter().chain(scan_frames(&spec())));
+    let sent = head.serve_open(setup.into_iter().chain(scan_frames(&scan_spec())));
     (head, sent)
 }
 
@@ -128,7 +128,7 @@ fn a_saturated_adc_stops_the_scan_after_a_run_of_saturated_points() {
     let (reason, next, samples) = stopped(&scan("saturated@30", 0.0).1);
     assert_eq!(reason, Fault::Saturated);
     // Points 30..37 saturate; the eighth stops the scan and is measured again on resume.
-    assert_eq!(next, SHADOWED + 30 + gonio_firmware::scan_run::SUSPECT_RUN - 1);
+    assert_eq!(next, SHADOWED + 30 + gonio_firmware::active_scan::SUSPECT_STREAK - 1);
     assert_eq!(samples, (next - SHADOWED) as usize);
 }
 
@@ -136,7 +136,7 @@ fn a_saturated_adc_stops_the_scan_after_a_run_of_saturated_points() {
 fn a_dead_laser_stops_the_scan_after_a_run_of_dark_points() {
     let (reason, next, _) = stopped(&scan("laser-dead@30", 0.0).1);
     assert_eq!(reason, Fault::NoSignal);
-    assert_eq!(next, SHADOWED + 30 + gonio_firmware::scan_run::SUSPECT_RUN - 1);
+    assert_eq!(next, SHADOWED + 30 + gonio_firmware::active_scan::SUSPECT_STREAK - 1);
 }
 
 #[test]
@@ -173,7 +173,7 @@ fn host_silence_stops_the_scan_when_watched() {
 fn a_pulled_cable_leaves_the_head_safe() {
     let mut head = FrameHead::new(&SimConfig::default());
     let home = send::<HomeEndpoint>(&HomeRequest::ALL);
-    let sent = head.serve_cut(std::iter::once(home).chain(scan_frames(&spec())), 40);
+    let sent = head.serve_cut(std::iter::once(home).chain(scan_frames(&scan_spec())), 40);
     let (last, at) = scan_events(&sent).pop().unwrap();
     assert!(matches!(last, ScanEvent::Sample(_)) && at.laser, "the cable was pulled mid-scan");
     let w = head.world();

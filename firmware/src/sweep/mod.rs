@@ -6,7 +6,7 @@
 //! [`plan`] works out its speeds, a sweep scan's rows and the checks.
 
 pub mod plan;
-pub(crate) mod run;
 pub(crate) mod sweeping;
+pub(crate) mod turns;
 
 pub use plan::{check, check_path, limits, row_ends, row_levels, row_plan, row_speed, tag, RowPlan};

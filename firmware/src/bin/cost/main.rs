@@ -14,6 +14,6 @@ mod probes;
 
 #[cfg(not(target_os = "none"))]
 fn main() {
-    eprintln!("gonio-cost runs on an emulated Cortex-M4F: `cargo run --release -p tests --bin chip-bench`");
+    eprintln!("gonio-cost runs on an emulated Cortex-M4F: `cargo run --release -p gonio-bench --bin chip-bench`");
     std::process::exit(2);
 }

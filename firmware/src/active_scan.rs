@@ -1,6 +1,6 @@
 //! A scan in progress, apart from the head that runs it: its visit order as
 //! the host has queued it, where it stands, what it has counted (its points,
-//! its runs of suspect samples), the row it is sweeping between two turns,
+//! its streaks of suspect samples), the row it is sweeping between two turns,
 //! and the events that say so. The head decides *when* (its state table, the
 //! serve loop's watch) and does the moving and measuring; this says *what
 //! comes next*, in a few integer steps per operation.
@@ -12,17 +12,17 @@ use heapless::Deque;
 /// Consecutive scan points that may all be saturated at the lowest gain, or
 /// all below the noise floor, before the head stops the scan (stray light or
 /// a failed amplifier; a dead laser or a blocked beam). A retroreflector's
-/// scan has neither run; a black sample needs the dark-run limit relaxed.
-pub const SUSPECT_RUN: u32 = 8;
+/// scan has neither streak; a black sample needs the dark limit relaxed.
+pub const SUSPECT_STREAK: u32 = 8;
 
-/// Runs of suspect samples in a scan.
+/// Streaks of suspect samples in a scan.
 #[derive(Debug, Default, Clone, Copy)]
-struct SuspectRuns {
+struct SuspectStreaks {
     saturated: u32,
     dark: u32,
 }
 
-pub(crate) struct ScanRun {
+pub(crate) struct ActiveScan {
     /// Number of the run since power-up (`ScanAccepted::run`).
     run: u32,
     spec: ScanSpec,
@@ -38,7 +38,7 @@ pub(crate) struct ScanRun {
     /// middle of it leaves it here, and continuing visits it again (a row
     /// from its start: the host keeps a row's samples only once it is done).
     current: Option<(u32, Visit)>,
-    suspect: SuspectRuns,
+    suspect: SuspectStreaks,
     /// The row a sweep scan is sweeping, between two turns of the serve
     /// loop; any stop ends it (the row is swept again on continuing).
     pub(crate) sweeping: Option<Sweeping>,
@@ -62,12 +62,12 @@ pub(crate) enum Recorded {
     Ends(Fault, ScanEvent),
 }
 
-impl ScanRun {
+impl ActiveScan {
     /// Run `run` of `spec` (already validated: `total` points), from its
     /// `first_order`.
     pub(crate) fn new(run: u32, spec: ScanSpec, total: u32) -> Self {
         let first = spec.first_order;
-        ScanRun {
+        ActiveScan {
             run,
             spec,
             queue: Deque::new(),
@@ -77,22 +77,22 @@ impl ScanRun {
             measured: 0,
             skipped: 0,
             current: None,
-            suspect: SuspectRuns::default(),
+            suspect: SuspectStreaks::default(),
             sweeping: None,
         }
     }
 
-    /// Counts runs of saturated and of dark samples; a run of
-    /// [`SUSPECT_RUN`] stops the scan.
+    /// Counts streaks of saturated and of dark samples; a streak of
+    /// [`SUSPECT_STREAK`] stops the scan.
     pub(crate) fn count_suspect(&mut self, flags: SampleFlags) -> Result<(), Fault> {
-        let run = |n: &mut u32, hit: bool| {
+        let streak = |n: &mut u32, hit: bool| {
             *n = if hit { *n + 1 } else { 0 };
-            *n >= SUSPECT_RUN
+            *n >= SUSPECT_STREAK
         };
-        if run(&mut self.suspect.saturated, flags.contains(SampleFlags::SATURATED)) {
+        if streak(&mut self.suspect.saturated, flags.contains(SampleFlags::SATURATED)) {
             return Err(Fault::Saturated);
         }
-        if run(&mut self.suspect.dark, flags.contains(SampleFlags::BELOW_NOISE)) {
+        if streak(&mut self.suspect.dark, flags.contains(SampleFlags::BELOW_NOISE)) {
             return Err(Fault::NoSignal);
         }
         Ok(())
@@ -202,10 +202,10 @@ mod tests {
     use super::*;
     use gonio_shared::Unreachable;
 
-    fn belcour_run(indices: &[u32]) -> ScanRun {
+    fn belcour_run(indices: &[u32]) -> ActiveScan {
         let spec = ScanSpec::belcour();
         let total = spec.validate().unwrap();
-        let mut run = ScanRun::new(1, spec, total);
+        let mut run = ActiveScan::new(1, spec, total);
         let chunk = VisitChunk {
             run: 1,
             first_order: 0,
@@ -215,7 +215,7 @@ mod tests {
         run
     }
 
-    fn visit(run: &mut ScanRun) -> (u32, u32) {
+    fn visit(run: &mut ActiveScan) -> (u32, u32) {
         match run.next() {
             Next::Visit { index, order, .. } => (index, order),
             _ => panic!("a queued point is visited next"),

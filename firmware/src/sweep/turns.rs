@@ -4,11 +4,11 @@
 
 use super::plan as sweep;
 use super::sweeping::Sweeping;
+use crate::active_scan::ActiveScan;
 use crate::head::Head;
 use crate::hw::{Board, Clock, StepTimer};
 use crate::kinematics;
 use crate::motion;
-use crate::scan_run::ScanRun;
 use crate::state::{self, Event};
 use crate::units;
 use embedded_hal_async::delay::DelayNs;
@@ -94,7 +94,7 @@ impl<B: Board> Head<B> {
     /// works out and begins the sweep (the arm alone moves, at the row's
     /// speed or its limit), every other one takes one sample; the last ends
     /// the sweep. A row refused (beyond the travel) changes nothing.
-    pub(crate) async fn sweep_turn(&mut self, scan: &mut ScanRun, row: &SweepRow, at: ScanPosition) -> Reply<SweepTurn> {
+    pub(crate) async fn sweep_turn(&mut self, scan: &mut ActiveScan, row: &SweepRow, at: ScanPosition) -> Reply<SweepTurn> {
         let Some(mut sw) = scan.sweeping.take() else {
             self.check_sweep(row.periods_per_sample, row.speed_dps, row.lobe.as_ref())?;
             let p = sweep::row_plan(&self.cfg, row, self.detector.settings().chop_hz)?;
