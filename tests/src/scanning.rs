@@ -19,7 +19,7 @@ pub async fn scan_and_read(session: &mut Session, spec: &ScanSpec, dir: &Path) -
     let mut out = SampleWriter::create(dir).unwrap();
     let progress = scan::progress::Progress::new(Operator::Silent, vec![0.0], spec.first_order, "points", Default::default());
     let order = visit_order(session.head().config(), spec, PARK).collect();
-    let outcome = scan::run(session, spec, order, &mut out, &progress, None).await.unwrap();
+    let outcome = scan::drive(session, spec, order, &mut out, &progress, None).await.unwrap();
     let rows = samples::read(&out.finish().unwrap()).unwrap();
     (outcome, rows)
 }

@@ -2,7 +2,7 @@
 //! on a link, the firmware's dispatcher, motion, auto-range and demodulation,
 //! and the virtual photodiode.
 
-use gonio::cli::simulated::Simulated;
+use gonio::cli::in_process::Simulated;
 use gonio_acquire::client::HeadClient;
 use gonio_acquire::scan;
 use gonio_acquire::scan_order::{dwell_s, scan_time, time_left_s, visit_order};

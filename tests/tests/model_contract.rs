@@ -1,6 +1,6 @@
 //! One model contract (`docs/models.md`): its table of ids and parameters,
 //! the shared table in code (`gonio_shared::MODELS`), the host's catalog, the
-//! head's sanity models and the scipy peer (`tests/python/fit_scipy.py`) name
+//! head's sanity models and the scipy peer (`bench/python/fit_scipy.py`) name
 //! the same models with the same parameters in the same order.
 
 use gonio_brdf::ModelId;
@@ -91,7 +91,7 @@ fn the_sanity_models_follow_the_table() {
 
 #[test]
 fn the_scipy_peer_unpacks_the_table() {
-    let text = repo_file("tests/python/fit_scipy.py");
+    let text = repo_file("bench/python/fit_scipy.py");
     let lines: Vec<&str> = text.lines().map(str::trim).collect();
     let mut seen = Vec::new();
     for (k, line) in lines.iter().enumerate() {

@@ -7,7 +7,7 @@ use embedded_hal::digital::{ErrorType, InputPin};
 use embedded_hal_async::delay::DelayNs;
 use embedded_hal_mock::eh1::digital::{Mock as PinMock, State, Transaction as Pin};
 use futures::executor::block_on;
-use gonio::cli::simulated::Simulated;
+use gonio::cli::in_process::Simulated;
 use gonio_acquire::client::HeadClient;
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::hw::{Board, Hardware, QueueFull, StepBlock, StepTimer};

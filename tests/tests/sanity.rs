@@ -2,7 +2,7 @@
 //! loaded and a 3σ band, dust specks (five times the model value at a few
 //! points) are flagged and measured again, and clean points are not flagged.
 
-use gonio::cli::simulated::Simulated;
+use gonio::cli::in_process::Simulated;
 use gonio_acquire::operator::Operator;
 use gonio_acquire::session::{Session, Setup};
 use gonio_brdf::{Directions, Material, Specimen};

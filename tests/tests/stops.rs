@@ -15,7 +15,7 @@ use gonio_shared::icd::{
 };
 use gonio_shared::{Fault, Geometry, HeadState, SafetySettings, ScanEvent};
 use gonio_sim::{Cue, FrameHead, SimConfig};
-use gonio_tests::stops::{accel_steps, decel_s_max, ready, small_scan, small_sweep_scan, speed_jump, trial, Activity, Trigger};
+use gonio_tests::stopping::{accel_steps, decel_s_max, ready, small_scan, small_sweep_scan, speed_jump, trial, Activity, Trigger};
 use std::cell::Cell;
 use std::convert::Infallible;
 use std::rc::Rc;
@@ -209,7 +209,7 @@ fn far_move() -> Geometry {
 fn an_abort_mid_move_brakes_from_the_current_speed_and_the_head_stays_homed() {
     let mut head = FrameHead::new(&SimConfig::default());
     ready(&mut head);
-    let tau = 0.5 * gonio_tests::stops::duration_s(&mut head, Activity::Move(far_move()));
+    let tau = 0.5 * gonio_tests::stopping::duration_s(&mut head, Activity::Move(far_move()));
     ready(&mut head);
     let back = Geometry::new(5.0, 5.0, 0.0);
     let s = trial(&mut head, Activity::Move(back), Trigger::Abort, tau.min(1.5));
@@ -444,7 +444,7 @@ fn a_move_starts_once_the_chip_has_planned_it() {
 /// (the binary runs 1 000 per trigger).
 #[test]
 fn the_safety_bench_bars_hold_on_a_sample_of_its_trials() {
-    let out = gonio_tests::safety_bench::run(25);
+    let out = gonio_tests::safety_trials::run(25);
     assert_eq!(out["all_bars_met"], true, "{out:#}");
 }
 
@@ -455,8 +455,8 @@ fn the_safety_bench_bars_hold_on_a_sample_of_its_trials() {
 fn an_abort_during_a_move_in_a_pause_brakes_before_the_drivers_let_go() {
     let mut head = FrameHead::new(&SimConfig::default());
     ready(&mut head);
-    let (st, _) = gonio_tests::stops::status(&mut head);
-    let before = gonio_tests::stops::offset(&head, &st);
+    let (st, _) = gonio_tests::stopping::status(&mut head);
+    let before = gonio_tests::stopping::offset(&head, &st);
     let t = head.now();
     let scan = scan_frames(&small_scan()).into_iter().map(|f| (t, Cue::Frame(f)));
     let sent = head.serve_timed(
@@ -469,8 +469,8 @@ fn an_abort_during_a_move_in_a_pause_brakes_before_the_drivers_let_go() {
     );
     assert!(matches!(replies::<PauseEndpoint>(&sent).as_slice(), [Ok(_)]));
     assert_eq!(replies::<MoveEndpoint>(&sent), vec![Err(Fault::Aborted)]);
-    let (st, _) = gonio_tests::stops::status(&mut head);
-    assert_eq!(gonio_tests::stops::offset(&head, &st), before, "a step lost in the stop");
+    let (st, _) = gonio_tests::stopping::status(&mut head);
+    assert_eq!(gonio_tests::stopping::offset(&head, &st), before, "a step lost in the stop");
     assert_eq!(st.state, HeadState::Idle);
     assert!(st.homed && !st.drivers_enabled && !st.laser_on);
     assert!(matches!(

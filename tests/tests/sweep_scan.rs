@@ -5,7 +5,7 @@
 //! duplicated and reordered frames and a pulled cable are recovered by
 //! sweeping the row again.
 
-use gonio::cli::simulated::Simulated;
+use gonio::cli::in_process::Simulated;
 use gonio_brdf::{Material, Specimen};
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::motion::{self, executor::QUEUE};

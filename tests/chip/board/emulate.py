@@ -1,6 +1,6 @@
 """Runs a Cortex-M4F image on the unicorn engine and counts its instructions.
 
-Used by `chip-bench` (tests/src/bin/chip_bench.rs); the unicorn engine comes
+Used by `chip-bench` (bench/src/bin/chip_bench.rs); the unicorn engine comes
 from PyPI (`pip install unicorn`), a prebuilt wheel: the `unicorn-engine`
 crate would build the engine's C sources with cmake on every clean machine.
 Run from tests/chip (or with the package installed):

@@ -1,7 +1,7 @@
-//! The bodies of the fuzz targets (`tests/fuzz`, cargo-fuzz): each takes
+//! The bodies of the fuzz targets (`fuzz`, cargo-fuzz): each takes
 //! arbitrary bytes and panics only on a real defect. They live here so that
 //! `cargo test` runs every committed seed through them on stable Rust
-//! (tests/tests/fuzz_seeds.rs), and `fuzz-seeds` writes those seeds.
+//! (tests/fuzz_corpus.rs), and `fuzz-seeds` writes those seeds.
 
 use crate::{request, sealed};
 use gonio_analysis::formats::{alta, brdf_csv};

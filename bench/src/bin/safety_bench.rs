@@ -1,4 +1,4 @@
-//! `cargo run --release -p tests --bin safety-bench [TRIALS_PER_TRIGGER]`:
+//! `cargo run --release -p gonio-bench --bin safety-bench [TRIALS_PER_TRIGGER]`:
 //! how fast and how surely the head stops, one JSON object on stdout (progress on stderr).
 //!
 //! The firmware on the simulated head, in simulated time, is stopped at
@@ -17,7 +17,7 @@
 //!   position) over a trial; bar 0.
 //! - `speed_jump_max`: largest step-interval change relative to a ramp at
 //!   the axis's acceleration limit, over the stop and the 4 steps before it
-//!   (`gonio_tests::stops::speed_jump`); bar ≤ 1.05.
+//!   (`gonio_tests::stopping::speed_jump`); bar ≤ 1.05.
 //! - `continue_after_abort_ok`: a scan aborted mid-move, then continued from
 //!   its `Stopped` position, stores every point once, without homing.
 //! - `pause_continue_ok`: the same with pause and continue, the head
@@ -29,6 +29,6 @@
 
 fn main() {
     let per_trigger: u32 = std::env::args().nth(1).and_then(|a| a.parse().ok()).unwrap_or(1000);
-    let out = gonio_tests::safety_bench::run(per_trigger);
+    let out = gonio_tests::safety_trials::run(per_trigger);
     println!("{}", serde_json::to_string_pretty(&out).expect("JSON"));
 }

@@ -1,4 +1,4 @@
-//! `cargo run --release -p tests --bin fixed-bench`: accuracy of the head's
+//! `cargo run --release -p gonio-bench --bin fixed-bench`: accuracy of the head's
 //! fixed-point models against the host's f64 models of `models.md`, as one
 //! JSON object on stdout (a table on stderr): every case of
 //! `gonio_tests::fixed_agreement` over its whole grid (`cargo test` checks a

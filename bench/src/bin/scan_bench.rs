@@ -1,4 +1,4 @@
-//! `cargo run --release -p tests --bin scan-bench`: how close a scan comes
+//! `cargo run --release -p gonio-bench --bin scan-bench`: how close a scan comes
 //! to the physical limit, as one JSON object on stdout (a table on stderr).
 //!
 //! - `plan_over_lower_bound`: head time of the planned Belcour grid (moves
@@ -22,7 +22,7 @@
 //!   (`periods_per_sample`, `grid_periods_per_point`), so it is noisier. A
 //!   refused arc is listed with its reason and counted in `refused_arcs`.
 //! - `sweep_scan`: the Belcour coverage scanned both ways through the host on
-//!   the simulated head (`scan::run`, as `gonio scan` does): stop-and-go at
+//!   the simulated head (`scan::drive`, as `gonio scan` does): stop-and-go at
 //!   its 3 441 points, and swept row by row, each incidence's retro point
 //!   measured at rest (`gonio demo --sweep`'s settings); `sweep_time_ratio`
 //!   is the sweep scan's head time over the grid scan's, beside the samples
@@ -56,8 +56,8 @@
 
 use anyhow::Result;
 use gonio::cli::demo::{demo_scan, DEMO_SWEEP};
-use gonio::cli::scan::OutputArgs;
-use gonio::cli::simulated::Simulated;
+use gonio::cli::in_process::Simulated;
+use gonio::cli::output::OutputArgs;
 use gonio_acquire::grid::SWEEP_EXTENT;
 use gonio_acquire::scan_order::{lower_bound, move_s, scan_time, stage_targets, visit_order};
 use gonio_analysis::calibration::directory::{calibrate, Request};

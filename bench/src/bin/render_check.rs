@@ -2,7 +2,7 @@
 //! #60). For every model (at the parameters `fit-bench` recovers), retro
 //! lobes from broad (`cos^10`, both parametrizations) to narrow (`cos^10000`),
 //! and the glass-bead material (none of the models), it writes the RGL file,
-//! then has `tests/render/mitsuba_check.py` load it with Mitsuba's
+//! then has `bench/render/mitsuba_check.py` load it with Mitsuba's
 //! `measured` plugin (`scalar_spectral`) and evaluate it at 2 000 direction
 //! pairs (`rgl::pairs`: the viewer, and half the lights, drawn in
 //! proportion to cos θ up to 80°; a quarter of the lights within 3° of the

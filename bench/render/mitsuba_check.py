@@ -1,4 +1,4 @@
-"""Mitsuba 3's side of `render-check` (tests/src/bin/render_check.rs).
+"""Mitsuba 3's side of `render-check` (bench/src/bin/render_check.rs).
 
 Reads the cases the Rust side wrote (each a `.bsdf` file, direction pairs
 and retro directions), loads every file with Mitsuba's `measured` plugin in

@@ -23,13 +23,13 @@
 //! and the samples within 5° of the laser per
 //! incidence. One JSON object on stdout.
 //!
-//! `cargo run --release -p tests --bin coverage-bench [-- SCANS [NONMODEL_SCANS [RL_SCANS]]]`
+//! `cargo run --release -p gonio-bench --bin coverage-bench [-- SCANS [NONMODEL_SCANS [RL_SCANS]]]`
 //! (default 100, 20 and 500).
 
 use gonio::cli::demo::demo_scan;
-use gonio::cli::fit::compare;
-use gonio::cli::fitting::FitOptions;
-use gonio::cli::scan::OutputArgs;
+use gonio::cli::fitting::compare;
+use gonio::cli::fit_args::FitOptions;
+use gonio::cli::output::OutputArgs;
 use gonio_analysis::calibration;
 use gonio_analysis::calibration::directory::{self, calibrate, Calibrated};
 use gonio_analysis::coefficients::{self, Cie, Fitted, Provenance, Request, Source, Support};
@@ -312,7 +312,7 @@ fn imperfect_scan(
         seed,
         imperfections: Box::new(imperfections.clone()),
         material: material.clone(),
-        sample_mm: Some(gonio::cli::scan::SAMPLE_MM),
+        sample_mm: Some(gonio_scan_dir::record::SAMPLE_MM),
         ..SimConfig::default()
     };
     rt.block_on(demo_scan(

@@ -1,4 +1,4 @@
-//! `cargo run --release -p tests --bin motion-bench`: figures of the stage
+//! `cargo run --release -p gonio-bench --bin motion-bench`: figures of the stage
 //! control, as one JSON object on stdout (a table on stderr).
 //!
 //! - `ik_max_error_deg`: largest |FK(IK(g)) − g| over the reachable Belcour
@@ -20,6 +20,7 @@
 //!   the reference axis limits plus 50 ms settle and 100 ms integration per point.
 
 use gonio_acquire::scan_order::{scan_time, visit_order};
+use gonio_bench::chip_costs::{self, EXCEPTION_CYCLES};
 use gonio_firmware::config::{HeadConfig, REFERENCE};
 use gonio_firmware::hw::StepBlock;
 use gonio_firmware::kinematics;
@@ -27,7 +28,6 @@ use gonio_firmware::motion::blocks::profile_blocks;
 use gonio_firmware::motion::{target_steps, trapezoid, Position, PARK};
 use gonio_firmware::units;
 use gonio_shared::{Axis, Geometry, ScanSpec};
-use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
 use gonio_tests::step_log::{executor, run, Scope};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};

@@ -61,7 +61,7 @@ struct Tape {
 }
 
 fn tapes(alta: &Alta) -> Vec<Tape> {
-    let ours = Path::new(env!("CARGO_MANIFEST_DIR")).join("data/tape-frcos.dat");
+    let ours = Path::new(env!("CARGO_MANIFEST_DIR")).join("../tests/data/tape-frcos.dat");
     let mut out = vec![Tape {
         name: "tape-frcos (ours, mimics a measured tape)".into(),
         file: ours,

@@ -25,11 +25,11 @@
 //!   µs): the longest the thread ran without a turn of its loop while the
 //!   laser was on, which the guard would take for a stuck thread;
 //! - `faults_survived` of `faults_tried` and `laser_off_us_max` (bar ≤
-//!   1 000): the fault trials (`gonio_tests::board_faults`), each a board of
+//!   1 000): the fault trials (`gonio_bench::fault_trials`), each a board of
 //!   its own;
 //! - `faulted_scans_complete` of `faulted_scans_tried`: scans a fault
 //!   strikes in the middle of, each ending with every position stored once
-//!   (`gonio_tests::board_scans`);
+//!   (`gonio_bench::board_scans`);
 //! - `emulated_s`, `wall_s` (of the scan; the trials' are in theirs).
 //!
 //! The board runs at most `PACE` times faster than the wall clock: the
@@ -38,12 +38,12 @@
 //! seconds, not the minutes of a full travel.
 
 use anyhow::{bail, Context, Result};
+use gonio_bench::board_scans::{self, gonio, stored};
+use gonio_bench::chip_costs;
+use gonio_bench::fault_trials;
+use gonio_bench::virtual_board::{board_plant, head_image, Board};
 use gonio_firmware::config::{CPU_HZ, REFERENCE};
 use gonio_firmware::guard::{STUCK_TICKS, TICK_US};
-use gonio_tests::board_faults;
-use gonio_tests::board_scans::{self, gonio, stored};
-use gonio_tests::chip_costs;
-use gonio_tests::virtual_board::{board_plant, head_image, Board};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -175,7 +175,7 @@ fn main() -> Result<()> {
     let turn_us = report["thread_turn_longest_laser_on_us"].as_f64();
     let turn_bar_us = (STUCK_TICKS * TICK_US) as f64;
 
-    let faults = board_faults::run(&root, &image, &plant)?;
+    let faults = fault_trials::run(&root, &image, &plant)?;
     let laser_off_us = faults["laser_off_us_max"].as_f64();
     let faults_all = faults["faults_survived"] == faults["faults_tried"];
     let scans = board_scans::run(&root, &image, &gonio_bin, &plant_cmd, &MATERIAL, work.path())?;

@@ -1,10 +1,10 @@
-//! Writes the fuzz targets' seed corpus (`tests/fuzz/seeds/TARGET/NAME`)
+//! Writes the fuzz targets' seed corpus (`fuzz/seeds/TARGET/NAME`)
 //! from `gonio_frames::fuzz::seeds`: run it again when a message type changes.
 
 use std::path::Path;
 
 fn main() -> std::io::Result<()> {
-    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/seeds");
+    let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz/seeds");
     let mut n = 0;
     for (target, name, bytes) in gonio_frames::fuzz::seeds() {
         let dir = root.join(target);

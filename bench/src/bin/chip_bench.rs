@@ -1,4 +1,4 @@
-//! `cargo run --release -p tests --bin chip-bench`: what the STM32F405 pays
+//! `cargo run --release -p gonio-bench --bin chip-bench`: what the STM32F405 pays
 //! for the core's hot paths, in instructions counted on an emulated
 //! Cortex-M4F, as one JSON object on stdout.
 //!
@@ -71,12 +71,12 @@
 //!   `probe_stack_bytes_max`: the probe image's own deepest point.
 
 use anyhow::{bail, Context, Result};
+use gonio_bench::chip_costs::{self, EXCEPTION_CYCLES};
+use gonio_bench::virtual_board::{board_plant, chip_images, Board};
 use gonio_firmware::config::CPU_HZ;
 use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
 use gonio_shared::scan::VISIT_CHUNK;
 use gonio_shared::SweepRequest;
-use gonio_tests::chip_costs::{self, EXCEPTION_CYCLES};
-use gonio_tests::virtual_board::{board_plant, chip_images, Board};
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::Command;

@@ -2,7 +2,7 @@
 //! runs a few of them and checks the same bars; the binary's doc says what
 //! each figure is.
 
-use crate::stops::{decel_s_max, duration_s, offset, ready, small_scan, status, trial, Activity, Stop, Trigger};
+use crate::stopping::{decel_s_max, duration_s, offset, ready, small_scan, status, trial, Activity, Stop, Trigger};
 use gonio_firmware::config::REFERENCE;
 use gonio_firmware::kinematics;
 use gonio_frames::{scan_events, scan_frames, send};

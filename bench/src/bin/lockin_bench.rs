@@ -1,4 +1,4 @@
-//! `cargo run --release -p tests --bin lockin-bench`: figures of merit of the
+//! `cargo run --release -p gonio-bench --bin lockin-bench`: figures of merit of the
 //! head's synchronous detector, as one JSON object on stdout (a table on
 //! stderr). Every figure is measured here, in this run:
 //!
@@ -31,9 +31,9 @@
 //! - `throughput_msps`, `idsp_throughput_msps`: host samples per second.
 
 use dsp_process::SplitProcess;
+use gonio_bench::chop_signal::ChopSignal;
 use gonio_firmware::demod::{Integrator, Learned, Learner, Reference};
 use gonio_shared::Reference as Kind;
-use gonio_tests::chop_signal::ChopSignal;
 use idsp::{Lockin, Lowpass, LowpassState};
 use rand::rngs::StdRng;
 use rand::{Rng, SeedableRng};
