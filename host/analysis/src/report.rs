@@ -10,7 +10,7 @@ use crate::fit::compared::{best_first, ComparedFit};
 use crate::fit::file::{self as fit_file, FittedBrdf};
 use crate::fit::goodness::{Adequacy, Goodness, ADEQUATE_P};
 use crate::fit::{Dataset, Metrics};
-use crate::formats::{brdf_explorer, rgl};
+use crate::formats::{export, rgl};
 use crate::plot;
 use crate::render;
 use crate::rounding;
@@ -342,6 +342,27 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     // What the data hold near the laser: kept in every fit file, and what
     // the coefficients rest on.
     let support = Support::of(r.data)?;
+    let mut html = head(r);
+    html.push_str(&models_section(r, &order, &fits_dir, &support)?);
+    if !r.fits.is_empty() {
+        html.push_str(&coefficients_section(r.fits, support, dir)?);
+    }
+    if !r.budget.is_empty() {
+        html.push_str(&budget_section(r.budget));
+    }
+    if let Some(&best) = order.first() {
+        html.push_str(&renders_section(&r.fits[best], &fits_dir, &dir.join("plots"))?);
+    }
+    html.push_str(&pictures_section(r, &order, &dir.join("plots"))?);
+    let _ = writeln!(html, "<p><small>gonio {}</small></p>\n</body>\n</html>", env!("CARGO_PKG_VERSION"));
+    let path = dir.join("report.html");
+    std::fs::write(&path, html).with_context(|| format!("cannot write {}", path.display()))?;
+    Ok(path)
+}
+
+/// The page's head, its title, the adequacy of the fits, and the facts of
+/// the data (what measured them, in which units).
+fn head(r: &Report) -> String {
     let mut html = String::new();
     let _ = write!(
         html,
@@ -378,47 +399,46 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         escape(&r.data.instrument.apertures_text()),
         escape(&r.data.instrument.wavelength_text())
     );
+    html
+}
+
+/// The table of models in `order`, each fit written to `fits_dir` as JSON
+/// (with the data's `support`) and as a BRDF Explorer shader.
+fn models_section(r: &Report, order: &[usize], fits_dir: &Path, support: &Support) -> Result<String> {
     let holdout = r.holdout.iter().any(Option::is_some);
-    html.push_str("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt); the rational function (Belcour et al. 2014 §5.B) is the least-norm one of the fewest terms that passes through every sample's segment.</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th><th>χ²/dof</th><th>p</th><th class=\"l\">adequacy</th>");
+    let mut html = String::from("<h2>Models</h2>\n<p>Best first by RMSE. Each model is fitted without a starting point (global search, then bounded Levenberg–Marquardt); the rational function (Belcour et al. 2014 §5.B) is the least-norm one of the fewest terms that passes through every sample's segment.</p>\n<table>\n<tr><th class=\"l\">model</th><th>coeffs</th><th>RMSE (sr⁻¹)</th><th>NRMSE</th><th>NCC</th><th>χ²/dof</th><th>p</th><th class=\"l\">adequacy</th>");
     if holdout {
         html.push_str("<th>held-out NRMSE</th><th>held-out NCC</th>");
     }
     html.push_str("<th>s</th><th class=\"l\">parameters</th><th class=\"l\">files</th></tr>\n");
     for (rank, &i) in order.iter().enumerate() {
         let f = &r.fits[i];
-        let name = f.name();
-        let json = fits_dir.join(format!("{name}.json"));
-        fit_file::write_with_support(&json, &f.to_json(r.data.units, r.holdout.get(i).and_then(Option::as_ref)), &support)?;
-        let m = f.metrics();
-        let brdf = fits_dir.join(format!("{name}.brdf"));
-        let comments = [format!("{}: RMSE {:.4e} sr^-1, NCC {:.5}", r.title, m.rmse, m.ncc)];
-        let text = match f.brdf() {
-            FittedBrdf::Model(material) => brdf_explorer::write(&material, &comments),
-            FittedBrdf::Rational(function) => brdf_explorer::write_rational(&function, &comments),
-        };
-        std::fs::write(&brdf, text).with_context(|| format!("cannot write {}", brdf.display()))?;
+        let (name, m) = (f.name(), f.metrics());
+        let held_out = r.holdout.get(i).and_then(Option::as_ref);
+        fit_file::write_with_support(&fits_dir.join(format!("{name}.json")), &f.to_json(r.data.units, held_out), support)?;
+        let comment = format!("{}: RMSE {:.4e} sr^-1, NCC {:.5}", r.title, m.rmse, m.ncc);
+        export::write_brdf(&f.brdf(), &comment, &fits_dir.join(format!("{name}.brdf")))?;
         let _ = write!(
             html,
-            "<tr{}><td class=\"l\">{name}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>",
+            "<tr{}><td class=\"l\">{name}</td><td>{}</td><td>{}</td><td>{}</td><td>{}</td>{}",
             if rank < DRAWN { " class=\"best\"" } else { "" },
             f.coefficients(),
             rounding::significant(m.rmse, 4),
             rounding::significant(m.nrmse, 4),
-            rounding::figure(m.ncc, 5)
+            rounding::figure(m.ncc, 5),
+            goodness_cells(f.goodness())
         );
-        let _ = write!(html, "{}", goodness_cells(f.goodness()));
-        if holdout {
-            match r.holdout.get(i).and_then(Option::as_ref) {
-                Some(h) => {
-                    let _ = write!(
-                        html,
-                        "<td>{}</td><td>{}</td>",
-                        rounding::significant(h.nrmse, 4),
-                        rounding::figure(h.ncc, 5)
-                    );
-                }
-                None => html.push_str("<td></td><td></td>"),
+        match held_out {
+            Some(h) => {
+                let _ = write!(
+                    html,
+                    "<td>{}</td><td>{}</td>",
+                    rounding::significant(h.nrmse, 4),
+                    rounding::figure(h.ncc, 5)
+                );
             }
+            None if holdout => html.push_str("<td></td><td></td>"),
+            None => {}
         }
         let _ = writeln!(
             html,
@@ -432,18 +452,16 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     for why in r.unfitted {
         let _ = writeln!(html, "<p>Not fitted: {}</p>", escape(why));
     }
-    if !r.fits.is_empty() {
-        html.push_str(&coefficients_section(r.fits, support, dir)?);
-    }
-    if !r.budget.is_empty() {
-        html.push_str(&budget_section(r.budget));
-    }
-    if let Some(&best) = order.first() {
-        html.push_str(&renders_section(&r.fits[best], &fits_dir, &dir.join("plots"))?);
-    }
+    Ok(html)
+}
+
+/// The best fits drawn over the data into `plots_dir`, a row of pictures
+/// per incidence.
+fn pictures_section(r: &Report, order: &[usize], plots_dir: &Path) -> Result<String> {
     let drawn: Vec<FittedBrdf> = order.iter().take(DRAWN).map(|&i| r.fits[i].brdf()).collect();
     let names: Vec<&str> = drawn.iter().map(FittedBrdf::name).collect();
-    let files = plot::render(r.data, &drawn, &dir.join("plots"), &plot::Options::default())?;
+    let files = plot::render(r.data, &drawn, plots_dir, &plot::Options::default())?;
+    let mut html = String::new();
     let _ = writeln!(
         html,
         "<h2>Pictures</h2>\n<p>Drawn: {}. One row per incidence angle (scroll it sideways); click a picture for \
@@ -466,8 +484,5 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
         }
         html.push_str("</div>\n");
     }
-    let _ = writeln!(html, "<p><small>gonio {}</small></p>\n</body>\n</html>", env!("CARGO_PKG_VERSION"));
-    let path = dir.join("report.html");
-    std::fs::write(&path, html).with_context(|| format!("cannot write {}", path.display()))?;
-    Ok(path)
+    Ok(html)
 }

@@ -185,17 +185,8 @@ impl<'a> Descent<'a> {
             // that went flat (a parameter at its bound) stays damped.
             *scale = scale.zip_map(&a.diagonal(), f64::max);
             let diag = scale.map(|d| d.max(1e-300));
-            // In the box, a parameter on a bound that the descent would push
-            // out of it is held there: no gradient, no coupling to the others.
             if space == Space::Box {
-                for (i, b) in bounds.iter().enumerate() {
-                    if (s.u[i] <= b.lo && g[i] > 0.0) || (s.u[i] >= b.hi && g[i] < 0.0) {
-                        g[i] = 0.0;
-                        a.row_mut(i).fill(0.0);
-                        a.column_mut(i).fill(0.0);
-                        a[(i, i)] = diag[i];
-                    }
-                }
+                hold_on_bounds(bounds, &s.u, &mut a, &mut g, &diag);
             }
             let orthogonality = g
                 .iter()
@@ -218,21 +209,7 @@ impl<'a> Descent<'a> {
                     }
                     continue;
                 };
-                let mut step = ch.solve(&(-&g));
-                let next = match space {
-                    // The transform is periodic: a step of more than a radian in `u`
-                    // jumps across the bounds into an arbitrary basin. Trust region of 1 rad.
-                    Space::Transformed => {
-                        let longest = step.amax();
-                        if longest > MAX_STEP {
-                            step *= MAX_STEP / longest;
-                        }
-                        &s.u + &step
-                    }
-                    // Clipped to the box, so a parameter lands exactly on its bound
-                    // (`u + (clamped − u)` can miss it by an ulp, either way).
-                    Space::Box => DVector::from_iterator(n, bounds.iter().enumerate().map(|(i, b)| (s.u[i] + step[i]).clamp(b.lo, b.hi))),
-                };
+                let next = proposal(space, bounds, &s.u, ch.solve(&(-&g)));
                 // The step actually taken.
                 let step = &next - &s.u;
                 // Clipped to nothing (a free parameter on a bound that the coupling
@@ -260,27 +237,8 @@ impl<'a> Descent<'a> {
                     *nu = 10.0;
                     let crawling = s.cost - trial.cost <= CRAWL * s.cost;
                     *s = trial;
-                    // The transform is flat at a bound: an optimum on it is
-                    // approached ever more slowly (the cost is quartic in `u`
-                    // there). Once progress has slowed to a crawl, try the
-                    // parameters that are nearly on a bound on it; keep that if
-                    // it is no worse.
-                    let near: Vec<usize> = (0..s.u.len())
-                        .filter(|_| crawling && space == Space::Transformed)
-                        .filter(|&i| {
-                            let d = (s.u[i].sin().abs().min(1.0)).acos();
-                            d > 1.5 * ON_BOUND && d < SNAP
-                        })
-                        .collect();
-                    if !near.is_empty() {
-                        let mut u = s.u.clone();
-                        for &i in &near {
-                            u[i] = (std::f64::consts::FRAC_PI_2 - ON_BOUND).copysign(s.u[i].sin());
-                        }
-                        let snapped = evaluate(u, true);
-                        if snapped.cost <= s.cost {
-                            *s = snapped;
-                        }
+                    if crawling && space == Space::Transformed {
+                        snap_to_bounds(s, &evaluate);
                     }
                     if small_f || small_x {
                         return false;
@@ -294,6 +252,61 @@ impl<'a> Descent<'a> {
             }
         }
         true
+    }
+}
+
+/// In the box, a parameter on a bound that the descent would push out of it
+/// is held there: no gradient, no coupling to the others.
+fn hold_on_bounds(bounds: &[Bound], u: &DVector<f64>, a: &mut DMatrix<f64>, g: &mut DVector<f64>, diag: &DVector<f64>) {
+    for (i, b) in bounds.iter().enumerate() {
+        if (u[i] <= b.lo && g[i] > 0.0) || (u[i] >= b.hi && g[i] < 0.0) {
+            g[i] = 0.0;
+            a.row_mut(i).fill(0.0);
+            a.column_mut(i).fill(0.0);
+            a[(i, i)] = diag[i];
+        }
+    }
+}
+
+/// Where the solved `step` from `u` lands.
+fn proposal(space: Space, bounds: &[Bound], u: &DVector<f64>, mut step: DVector<f64>) -> DVector<f64> {
+    match space {
+        // The transform is periodic: a step of more than a radian in `u`
+        // jumps across the bounds into an arbitrary basin. Trust region of 1 rad.
+        Space::Transformed => {
+            let longest = step.amax();
+            if longest > MAX_STEP {
+                step *= MAX_STEP / longest;
+            }
+            u + &step
+        }
+        // Clipped to the box, so a parameter lands exactly on its bound
+        // (`u + (clamped − u)` can miss it by an ulp, either way).
+        Space::Box => DVector::from_iterator(u.len(), bounds.iter().enumerate().map(|(i, b)| (u[i] + step[i]).clamp(b.lo, b.hi))),
+    }
+}
+
+/// The transform is flat at a bound: an optimum on it is approached ever
+/// more slowly (the cost is quartic in `u` there). Once progress has slowed
+/// to a crawl, the parameters that are nearly on a bound are tried on it;
+/// that is kept if it is no worse.
+fn snap_to_bounds(s: &mut State, evaluate: &impl Fn(DVector<f64>, bool) -> State) {
+    let near: Vec<usize> = (0..s.u.len())
+        .filter(|&i| {
+            let d = (s.u[i].sin().abs().min(1.0)).acos();
+            d > 1.5 * ON_BOUND && d < SNAP
+        })
+        .collect();
+    if near.is_empty() {
+        return;
+    }
+    let mut u = s.u.clone();
+    for &i in &near {
+        u[i] = (std::f64::consts::FRAC_PI_2 - ON_BOUND).copysign(s.u[i].sin());
+    }
+    let snapped = evaluate(u, true);
+    if snapped.cost <= s.cost {
+        *s = snapped;
     }
 }
 

@@ -163,6 +163,154 @@ struct Header {
     vs: usize,
 }
 
+/// How the data lines read, settled at the first of them.
+#[derive(Clone, Copy)]
+struct Layout {
+    param_in: ParamIn,
+    outputs: usize,
+    units: Option<Units>,
+    /// Confidence numbers per row (`#VS`).
+    vs: usize,
+    /// `#VS 2` holds the interval's ends, as gonio's older files (`ENDS_NOTE`).
+    ends: bool,
+}
+
+/// A header line's keyword, or `None` for a comment (kept as metadata).
+fn keyword(rest: &str) -> Option<(&str, &str)> {
+    let key = rest.split_whitespace().next().unwrap_or("");
+    let value = rest.trim_start().strip_prefix(key).unwrap_or("").trim();
+    (!rest.starts_with(char::is_whitespace) && matches!(key, "DIM" | "PARAM_IN" | "PARAM_OUT" | "VS")).then_some((key, value))
+}
+
+impl Header {
+    /// Takes `#KEY value` of `line`; what it doubts goes to `warnings`.
+    fn take(&mut self, key: &str, value: &str, line: &str, warnings: &mut Vec<String>, n: usize) -> Result<(), String> {
+        match key {
+            "DIM" => {
+                let parsed: Option<Vec<usize>> = value.split_whitespace().map(|w| w.parse().ok()).collect();
+                match parsed.as_deref() {
+                    Some([i, o]) if *i > 0 && *o > 0 => self.dim = Some((*i, *o)),
+                    _ => return Err(format!("expected `#DIM <inputs> <outputs>`, found `{line}`")),
+                }
+            }
+            "PARAM_IN" => {
+                self.param_in =
+                    Some(ParamIn::parse(value).ok_or_else(|| format!("unsupported #PARAM_IN `{value}`; supported: {SUPPORTED}"))?);
+            }
+            "PARAM_OUT" => {
+                let u = units(value);
+                if u.is_none() {
+                    warnings.push(format!(
+                        "line {n}: #PARAM_OUT {value} is not a unit of the BRDF (ALTA's UNKNOWN_OUTPUT)"
+                    ));
+                }
+                self.param_out = Some(u);
+            }
+            _ => {
+                self.vs = match value {
+                    "0" => 0,
+                    "1" => 1,
+                    "2" => 2,
+                    _ => {
+                        return Err(format!(
+                            "expected `#VS 0`, `#VS 1` or `#VS 2` (confidence numbers per row), found `{line}`"
+                        ))
+                    }
+                };
+            }
+        }
+        Ok(())
+    }
+
+    /// The layout of the data lines, once the header is over.
+    fn layout(&self, metadata: &[String], warnings: &mut Vec<String>) -> Result<Layout, String> {
+        let p = self
+            .param_in
+            .ok_or_else(|| format!("data before any #PARAM_IN: which parametrization are the inputs in? ({SUPPORTED})"))?;
+        let (d_in, outputs) = match self.dim {
+            Some(d) => d,
+            None => {
+                warnings.push(format!("no #DIM line: assumed `#DIM {} 1` from #PARAM_IN", p.dim()));
+                (p.dim(), 1)
+            }
+        };
+        if d_in != p.dim() {
+            return Err(format!("#DIM says {d_in} inputs but #PARAM_IN has {}", p.dim()));
+        }
+        if outputs > 1 {
+            warnings.push(format!("{outputs} outputs per sample: the first is used"));
+        }
+        Ok(Layout {
+            param_in: p,
+            outputs,
+            // No #PARAM_OUT: ALTA's UNKNOWN_OUTPUT (`units_stated` false).
+            units: self.param_out.flatten(),
+            vs: self.vs,
+            ends: metadata.iter().any(|m| m == ENDS_NOTE),
+        })
+    }
+}
+
+impl Layout {
+    /// One data line as a sample: its geometry, its value (the first
+    /// output), and its σ from the confidence numbers.
+    fn row(&self, line: &str) -> Result<Observation, String> {
+        let (d, outputs) = (self.param_in.dim(), self.outputs);
+        let fields: Vec<&str> = line.split_whitespace().collect();
+        let want = d + outputs + self.vs;
+        if fields.len() != want {
+            return Err(format!(
+                "expected {want} numbers ({d} inputs, {outputs} output{}, {} confidence), found {}",
+                if outputs == 1 { "" } else { "s" },
+                self.vs,
+                fields.len()
+            ));
+        }
+        let mut x = Vec::with_capacity(want);
+        for f in fields {
+            let v: f64 = f.parse().map_err(|_| format!("`{f}` is not a number"))?;
+            if !v.is_finite() {
+                return Err(format!("`{f}` is not a finite number"));
+            }
+            x.push(v);
+        }
+        let (l, v) = self.param_in.directions(&x);
+        let (theta_i, theta_o, dphi) = angles(l, v).ok_or_else(|| "a direction of length zero".to_string())?;
+        let (theta_i, theta_o, dphi) = check_angles(theta_i, theta_o, dphi)?;
+        Ok(Observation {
+            theta_i,
+            theta_o,
+            dphi,
+            value: x[d],
+            sigma: self.sigma(&x[d + outputs..])?,
+            shared: Default::default(),
+        })
+    }
+
+    /// σ of a row's confidence numbers (`#VS 1`: the k = 2 half-width; `#VS
+    /// 2`: how far below and above, or the ends in gonio's older files).
+    fn sigma(&self, conf: &[f64]) -> Result<Option<f64>, String> {
+        let sigma = match self.vs {
+            1 if conf[0] < 0.0 => return Err("the confidence half-width is negative".into()),
+            1 => Some(conf[0] / K_COVERAGE),
+            2 if self.ends && conf[1] < conf[0] => {
+                return Err("the confidence interval is negative (#VS 2 of gonio's older files: lower end, then upper end)".into())
+            }
+            2 if self.ends => Some((conf[1] - conf[0]) / (2.0 * K_COVERAGE)),
+            2 if conf[0] < 0.0 || conf[1] < 0.0 => {
+                return Err("a confidence offset is negative (#VS 2: how far the interval reaches below, then above the value)".into())
+            }
+            2 => Some((conf[0] + conf[1]) / (2.0 * K_COVERAGE)),
+            _ => None,
+        };
+        // The writer puts k·σ below and above; their sum must be a number too.
+        if sigma.is_some_and(|s| !(2.0 * K_COVERAGE * s).is_finite()) {
+            return Err("the confidence interval is wider than a number holds".into());
+        }
+        Ok(sigma)
+    }
+}
+
 /// Parses ALTA text held in memory.
 pub fn parse(text: &str) -> Result<Dataset> {
     read(text.as_bytes())
@@ -172,12 +320,8 @@ pub fn parse(text: &str) -> Result<Dataset> {
 /// and what was expected; what was assumed is in the data set's warnings.
 pub fn read(input: impl BufRead) -> Result<Dataset> {
     let mut h = Header::default();
-    let mut metadata = Vec::new();
-    let mut warnings = Vec::new();
-    let mut observations = Vec::new();
-    // Settled at the first data line: inputs, outputs, units, and whether
-    // `#VS 2` holds the interval's ends (`ENDS_NOTE`).
-    let mut layout: Option<(ParamIn, usize, Option<Units>, bool)> = None;
+    let (mut metadata, mut warnings, mut observations) = (Vec::new(), Vec::new(), Vec::new());
+    let mut layout: Option<Layout> = None;
     for (i, raw) in input.lines().enumerate() {
         let n = i + 1;
         let raw = raw.map_err(|e| guard::line_error(e, n))?;
@@ -187,142 +331,28 @@ pub fn read(input: impl BufRead) -> Result<Dataset> {
             continue;
         }
         if let Some(rest) = line.strip_prefix('#') {
-            let key = rest.split_whitespace().next().unwrap_or("");
-            let value = rest.trim_start().strip_prefix(key).unwrap_or("").trim();
-            let is_key = !rest.starts_with(char::is_whitespace) && matches!(key, "DIM" | "PARAM_IN" | "PARAM_OUT" | "VS");
-            if !is_key {
-                if !rest.trim().is_empty() {
-                    metadata.push(rest.trim().to_string());
+            match keyword(rest) {
+                None if !rest.trim().is_empty() => metadata.push(rest.trim().to_string()),
+                None => {}
+                Some((key, _)) if layout.is_some() => {
+                    return Err(err(format!(
+                        "#{key} after the data: header lines must come before the first sample"
+                    )))
                 }
-                continue;
-            }
-            if layout.is_some() {
-                return Err(err(format!(
-                    "#{key} after the data: header lines must come before the first sample"
-                )));
-            }
-            match key {
-                "DIM" => {
-                    let parsed: Option<Vec<usize>> = value.split_whitespace().map(|w| w.parse().ok()).collect();
-                    match parsed.as_deref() {
-                        Some([i, o]) if *i > 0 && *o > 0 => h.dim = Some((*i, *o)),
-                        _ => return Err(err(format!("expected `#DIM <inputs> <outputs>`, found `{line}`"))),
-                    }
-                }
-                "PARAM_IN" => {
-                    h.param_in =
-                        Some(ParamIn::parse(value).ok_or_else(|| err(format!("unsupported #PARAM_IN `{value}`; supported: {SUPPORTED}")))?);
-                }
-                "PARAM_OUT" => {
-                    let u = units(value);
-                    if u.is_none() {
-                        warnings.push(format!(
-                            "line {n}: #PARAM_OUT {value} is not a unit of the BRDF (ALTA's UNKNOWN_OUTPUT)"
-                        ));
-                    }
-                    h.param_out = Some(u);
-                }
-                _ => {
-                    h.vs = match value {
-                        "0" => 0,
-                        "1" => 1,
-                        "2" => 2,
-                        _ => {
-                            return Err(err(format!(
-                                "expected `#VS 0`, `#VS 1` or `#VS 2` (confidence numbers per row), found `{line}`"
-                            )))
-                        }
-                    };
-                }
+                Some((key, value)) => h.take(key, value, line, &mut warnings, n).map_err(err)?,
             }
             continue;
         }
-        let (p, outputs, _, ends) = match layout {
+        let l = match layout {
             Some(l) => l,
-            None => {
-                let p = h.param_in.ok_or_else(|| {
-                    err(format!(
-                        "data before any #PARAM_IN: which parametrization are the inputs in? ({SUPPORTED})"
-                    ))
-                })?;
-                let (d_in, outputs) = match h.dim {
-                    Some(d) => d,
-                    None => {
-                        warnings.push(format!("no #DIM line: assumed `#DIM {} 1` from #PARAM_IN", p.dim()));
-                        (p.dim(), 1)
-                    }
-                };
-                if d_in != p.dim() {
-                    return Err(err(format!("#DIM says {d_in} inputs but #PARAM_IN has {}", p.dim())));
-                }
-                if outputs > 1 {
-                    warnings.push(format!("{outputs} outputs per sample: the first is used"));
-                }
-                // No #PARAM_OUT: ALTA's UNKNOWN_OUTPUT (`units_stated` false).
-                let u = h.param_out.flatten();
-                let ends = metadata.iter().any(|m| m == ENDS_NOTE);
-                layout = Some((p, outputs, u, ends));
-                (p, outputs, u, ends)
-            }
+            None => *layout.insert(h.layout(&metadata, &mut warnings).map_err(err)?),
         };
-        let d = p.dim();
-        let fields: Vec<&str> = line.split_whitespace().collect();
-        let want = d + outputs + h.vs;
-        if fields.len() != want {
-            return Err(err(format!(
-                "expected {want} numbers ({d} inputs, {outputs} output{}, {} confidence), found {}",
-                if outputs == 1 { "" } else { "s" },
-                h.vs,
-                fields.len()
-            )));
-        }
-        let mut x = Vec::with_capacity(want);
-        for f in fields {
-            let v: f64 = f.parse().map_err(|_| err(format!("`{f}` is not a number")))?;
-            if !v.is_finite() {
-                return Err(err(format!("`{f}` is not a finite number")));
-            }
-            x.push(v);
-        }
-        let (l, v) = p.directions(&x);
-        let (theta_i, theta_o, dphi) = angles(l, v).ok_or_else(|| err("a direction of length zero".into()))?;
-        let (theta_i, theta_o, dphi) = check_angles(theta_i, theta_o, dphi).map_err(err)?;
-        let value = x[d];
-        let conf = &x[d + outputs..];
-        let sigma = match h.vs {
-            1 if conf[0] < 0.0 => return Err(err("the confidence half-width is negative".into())),
-            1 => Some(conf[0] / K_COVERAGE),
-            2 if ends && conf[1] < conf[0] => {
-                return Err(err(
-                    "the confidence interval is negative (#VS 2 of gonio's older files: lower end, then upper end)".into(),
-                ))
-            }
-            2 if ends => Some((conf[1] - conf[0]) / (2.0 * K_COVERAGE)),
-            2 if conf[0] < 0.0 || conf[1] < 0.0 => {
-                return Err(err(
-                    "a confidence offset is negative (#VS 2: how far the interval reaches below, then above the value)".into(),
-                ))
-            }
-            2 => Some((conf[0] + conf[1]) / (2.0 * K_COVERAGE)),
-            _ => None,
-        };
-        // The writer puts k·σ below and above; their sum must be a number too.
-        if sigma.is_some_and(|s| !(2.0 * K_COVERAGE * s).is_finite()) {
-            return Err(err("the confidence interval is wider than a number holds".into()));
-        }
         if observations.len() == MAX_ROWS {
             return Err(guard::too_many_rows());
         }
-        observations.push(Observation {
-            theta_i,
-            theta_o,
-            dphi,
-            value,
-            sigma,
-            shared: Default::default(),
-        });
+        observations.push(l.row(line).map_err(err)?);
     }
-    let Some((_, _, units, _)) = layout else {
+    let Some(Layout { units, .. }) = layout else {
         bail!("no data lines: the file holds no sample (a header at most)");
     };
     // A file says what measured it in a comment line of its own

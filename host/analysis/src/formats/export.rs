@@ -26,7 +26,7 @@ impl Drawn {
     /// returns the warning of a `.bsdf` too coarse for it, if any.
     pub fn write(&self, fitted: &FittedBrdf, origin: &str, data: &crate::fit::Dataset) -> Result<Option<String>> {
         if let Some(out) = &self.brdf {
-            write_brdf(fitted, origin, out)?;
+            write_brdf(fitted, &format!("from {origin}"), out)?;
         }
         let mut warning = None;
         if let Some(out) = &self.bsdf {
@@ -55,7 +55,7 @@ pub fn export(what: &Brdf, name: &str, origin: &str, output: &Path, opt: &rgl::O
             let Brdf::Fit(fitted) = what else {
                 bail!("a BRDF Explorer .brdf is written from a fit (FIT.json), not from --material");
             };
-            write_brdf(fitted, origin, output)?;
+            write_brdf(fitted, &format!("from {origin}"), output)?;
             Ok(Export::Brdf)
         }
         Some("bsdf") => Ok(Export::Bsdf(write_bsdf(&|d| what.eval(d), name, origin, output, opt)?)),
@@ -119,9 +119,9 @@ impl Export {
     }
 }
 
-/// Writes a fit as `.brdf`, naming where it came from in the header.
-pub fn write_brdf(fitted: &FittedBrdf, source: &str, out: &Path) -> Result<()> {
-    let comments = [format!("from {source}")];
+/// Writes a fit as `.brdf`, `comment` (where it came from) in its header.
+pub fn write_brdf(fitted: &FittedBrdf, comment: &str, out: &Path) -> Result<()> {
+    let comments = [comment.to_string()];
     let text = match fitted {
         FittedBrdf::Model(m) => brdf_explorer::write(m, &comments),
         FittedBrdf::Rational(r) => brdf_explorer::write_rational(r, &comments),

@@ -11,9 +11,43 @@ use crate::rounding::superscript;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::Result;
 use gonio_brdf::Directions;
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// The chart's polar frame: `decades` above `10^floor_exp`.
+#[derive(Clone, Copy)]
+struct Polar {
+    floor_exp: i32,
+    decades: f64,
+}
+
+impl Polar {
+    /// The frame that holds every positive value of `values`.
+    fn holding(values: impl Iterator<Item = f64>) -> Polar {
+        let (lo, hi) = values
+            .filter(|f| *f > 0.0)
+            .fold((f64::INFINITY, 0.0f64), |(lo, hi), f| (lo.min(f), hi.max(f)));
+        let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (1e-3, 1.0) };
+        let floor_exp = lo.log10().floor() as i32;
+        let decades = (hi / 10f64.powi(floor_exp)).log10().ceil().max(1.0);
+        Polar { floor_exp, decades }
+    }
+
+    /// Decades of `f` above the floor (0 below it).
+    fn radius(self, f: f64) -> f64 {
+        let floor = 10f64.powi(self.floor_exp);
+        (f.max(floor) / floor).log10()
+    }
+
+    /// The point at angle `t` (degrees) and radius `r`.
+    fn xy(t: f64, r: f64) -> (f64, f64) {
+        (r * t.to_radians().sin(), r * t.to_radians().cos())
+    }
+}
+
+type Chart<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
 
 pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, ti: f64, fits: &[FittedBrdf]) -> Result<()> {
     root.fill(&WHITE).map_err(err)?;
@@ -37,18 +71,8 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
             .collect()
     };
     let curves: Vec<Vec<(f64, f64)>> = fits.iter().map(curve).collect();
-    let all = points
-        .iter()
-        .map(|p| p.1)
-        .chain(curves.iter().flatten().map(|p| p.1))
-        .filter(|f| *f > 0.0);
-    let (lo, hi) = all.fold((f64::INFINITY, 0.0f64), |(lo, hi), f| (lo.min(f), hi.max(f)));
-    let (lo, hi) = if lo.is_finite() { (lo, hi) } else { (1e-3, 1.0) };
-    let floor_exp = lo.log10().floor() as i32;
-    let floor = 10f64.powi(floor_exp);
-    let decades = (hi / floor).log10().ceil().max(1.0);
-    let radius = |f: f64| (f.max(floor) / floor).log10();
-    let to_xy = |t: f64, r: f64| (r * t.to_radians().sin(), r * t.to_radians().cos());
+    let polar = Polar::holding(points.iter().map(|p| p.1).chain(curves.iter().flatten().map(|p| p.1)));
+    let decades = polar.decades;
     let mut chart = ChartBuilder::on(root)
         .caption(
             format!("incidence plane, θi = {ti}°: log-polar f_r (sr⁻¹)"),
@@ -57,62 +81,13 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         .margin(10)
         .build_cartesian_2d(-decades * 1.12..decades * 1.12, -0.06 * decades..decades * 1.1)
         .map_err(err)?;
-    let label = TextStyle::from(("sans-serif", STYLE.label).into_font());
-    let grey = RGBColor(200, 200, 200);
-    for d in 1..=decades as i32 {
-        let ring: Vec<(f64, f64)> = (-90..=90).map(|a| to_xy(a as f64, d as f64)).collect();
-        chart.draw_series(LineSeries::new(ring, grey)).map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(
-                format!("10{} sr⁻¹", superscript(floor_exp + d)),
-                (0.02 * decades, d as f64 - 0.02 * decades),
-                label.clone(),
-            )))
-            .map_err(err)?;
-    }
-    // θo ticks every 15°, + on the light's side.
-    for t in (-90..=90).step_by(15) {
-        let t = t as f64;
-        chart
-            .draw_series(LineSeries::new(vec![(0.0, 0.0), to_xy(t, decades)], grey.mix(0.6)))
-            .map_err(err)?;
-        let at = to_xy(t, decades * 1.03);
-        let pos = Pos::new(
-            if t > 5.0 {
-                HPos::Left
-            } else if t < -5.0 {
-                HPos::Right
-            } else {
-                HPos::Center
-            },
-            VPos::Bottom,
-        );
-        chart
-            .draw_series(std::iter::once(Text::new(format!("{t}°"), at, label.clone().pos(pos))))
-            .map_err(err)?;
-    }
-    chart
-        .draw_series(std::iter::once(Text::new(
-            "θo (°), + on the side of the light",
-            (-decades * 1.1, -0.04 * decades),
-            label.clone(),
-        )))
-        .map_err(err)?;
-    for (t, name) in [(ti, "retro"), (-ti, "mirror")] {
-        let end = to_xy(t, decades);
-        chart
-            .draw_series(LineSeries::new(vec![(0.0, 0.0), end], RGBColor(120, 120, 120).stroke_width(1)))
-            .map_err(err)?;
-        chart
-            .draw_series(std::iter::once(Text::new(name, to_xy(t + 2.0, decades * 0.9), label.clone())))
-            .map_err(err)?;
-    }
+    grid(&mut chart, polar, ti)?;
     for (k, (m, c)) in fits.iter().zip(&curves).enumerate() {
         let color = PALETTE[k % PALETTE.len()];
         for (j, run) in finite_runs(c).into_iter().enumerate() {
             let series = chart
                 .draw_series(LineSeries::new(
-                    run.iter().map(|&(t, f)| to_xy(t, radius(f))),
+                    run.iter().map(|&(t, f)| Polar::xy(t, polar.radius(f))),
                     color.stroke_width(2),
                 ))
                 .map_err(err)?;
@@ -125,14 +100,21 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
     }
     // The error bars: radial, from f − U to f + U (U = k·u, k = 2).
     chart
-        .draw_series(
-            points.iter().filter_map(|&(t, f, u)| {
-                u.map(|u| PathElement::new(vec![to_xy(t, radius(f - u)), to_xy(t, radius(f + u))], BLACK.mix(0.7)))
-            }),
-        )
+        .draw_series(points.iter().filter_map(|&(t, f, u)| {
+            u.map(|u| {
+                PathElement::new(
+                    vec![Polar::xy(t, polar.radius(f - u)), Polar::xy(t, polar.radius(f + u))],
+                    BLACK.mix(0.7),
+                )
+            })
+        }))
         .map_err(err)?;
     chart
-        .draw_series(points.iter().map(|&(t, f, _)| Circle::new(to_xy(t, radius(f)), 3, BLACK.filled())))
+        .draw_series(
+            points
+                .iter()
+                .map(|&(t, f, _)| Circle::new(Polar::xy(t, polar.radius(f)), 3, BLACK.filled())),
+        )
         .map_err(err)?
         .label(if points.iter().any(|p| p.2.is_some()) {
             format!("measured (± U, k = {K_COVERAGE})")
@@ -141,5 +123,62 @@ pub fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, data: &Dataset, t
         })
         .legend(|(x, y)| Circle::new((x + 10, y), 3, BLACK.filled()));
     legend(&mut chart, SeriesLabelPosition::UpperLeft)?;
+    Ok(())
+}
+
+/// The frame: a ring per decade, θo every 15° (+ on the light's side), and
+/// the retro and mirror directions of `ti`.
+fn grid<DB: DrawingBackend>(chart: &mut Chart<'_, DB>, polar: Polar, ti: f64) -> Result<()> {
+    let decades = polar.decades;
+    let label = TextStyle::from(("sans-serif", STYLE.label).into_font());
+    let grey = RGBColor(200, 200, 200);
+    for d in 1..=decades as i32 {
+        let ring: Vec<(f64, f64)> = (-90..=90).map(|a| Polar::xy(a as f64, d as f64)).collect();
+        chart.draw_series(LineSeries::new(ring, grey)).map_err(err)?;
+        chart
+            .draw_series(std::iter::once(Text::new(
+                format!("10{} sr⁻¹", superscript(polar.floor_exp + d)),
+                (0.02 * decades, d as f64 - 0.02 * decades),
+                label.clone(),
+            )))
+            .map_err(err)?;
+    }
+    for t in (-90..=90).step_by(15) {
+        let t = t as f64;
+        chart
+            .draw_series(LineSeries::new(vec![(0.0, 0.0), Polar::xy(t, decades)], grey.mix(0.6)))
+            .map_err(err)?;
+        let h = match t {
+            t if t > 5.0 => HPos::Left,
+            t if t < -5.0 => HPos::Right,
+            _ => HPos::Center,
+        };
+        let at = Polar::xy(t, decades * 1.03);
+        chart
+            .draw_series(std::iter::once(Text::new(
+                format!("{t}°"),
+                at,
+                label.clone().pos(Pos::new(h, VPos::Bottom)),
+            )))
+            .map_err(err)?;
+    }
+    chart
+        .draw_series(std::iter::once(Text::new(
+            "θo (°), + on the side of the light",
+            (-decades * 1.1, -0.04 * decades),
+            label.clone(),
+        )))
+        .map_err(err)?;
+    for (t, name) in [(ti, "retro"), (-ti, "mirror")] {
+        chart
+            .draw_series(LineSeries::new(
+                vec![(0.0, 0.0), Polar::xy(t, decades)],
+                RGBColor(120, 120, 120).stroke_width(1),
+            ))
+            .map_err(err)?;
+        chart
+            .draw_series(std::iter::once(Text::new(name, Polar::xy(t + 2.0, decades * 0.9), label.clone())))
+            .map_err(err)?;
+    }
     Ok(())
 }
