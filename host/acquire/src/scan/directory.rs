@@ -4,9 +4,9 @@
 //! `run.json`. Files are written only once the head answers and the scan is
 //! known to be possible; Ctrl-C stops the head and says how to resume.
 
+use super::drive;
 use super::live::Live;
 use super::progress::Progress;
-use super::run;
 use crate::operator::Operator;
 use crate::plate;
 use crate::scan_order::{dwell_s, lower_bound, time_left_s, visit_order};
@@ -58,28 +58,11 @@ pub async fn scan_into(
     if resume.is_none() {
         refuse_finished(dir, to.force)?;
     }
-    let det = &record.detector;
     let spec = &ScanSpec {
         first_order: resume.unwrap_or(0),
         ..record.spec.clone()
     };
-    let settings = det.settings();
-    let setup = Setup {
-        settings,
-        learn_at: det.learn_at,
-        learning_periods: settings.periods_for(LEARNING_S),
-    };
-    let mut session = Session::connect(target.clone(), setup, operator).await?;
-    reachable(session.head().config(), record)?;
-    let id = session.head().identity().clone();
-    operator.notice(format_args!(
-        "head: {} (serial {}, firmware {}, protocol v{}{})",
-        id.board,
-        id.serial,
-        id.firmware_version,
-        id.protocol_version,
-        if id.simulated { ", simulated" } else { "" }
-    ));
+    let mut session = connect(record, target.clone(), operator).await?;
     if resume.is_none() {
         prepare_dir(dir, to.force)?;
         record.write(dir)?;
@@ -102,37 +85,10 @@ pub async fn scan_into(
         live.clone(),
     );
     let estimate = progress.estimate_s();
-    if spec.sweep.is_some() {
-        operator.notice(format_args!(
-            "{} rows to sweep, {} retro points and {} pattern points to measure at rest; estimated duration {} (moves to their starts, {:.0} ms settle, the sweeps)",
-            spec.rows(),
-            spec.retro_points(),
-            spec.pattern_points(),
-            hms(estimate),
-            detection.settings.settle_s * 1e3,
-        ));
-    } else {
-        operator.notice(format_args!(
-            "{} points; estimated duration {} (moves, {:.0} ms settle and {:.0} ms integration per point)",
-            spec.len(),
-            hms(estimate),
-            detection.settings.settle_s * 1e3,
-            detection.integration_s * 1e3
-        ));
-    }
-    let mut writer = match resume {
-        Some(first) => {
-            operator.notice(format_args!("resuming at position {first} of {}", spec.len()));
-            if spec.sweep.is_some() {
-                // The row resuming sweeps again (`resume_from`).
-                drop_last_position(dir)?;
-            }
-            SampleWriter::append(dir)?
-        }
-        None => SampleWriter::create(dir)?,
-    };
+    operator.notice(estimate_text(spec, estimate, &detection));
+    let mut writer = writer(dir, resume, spec, operator)?;
     let ended = {
-        let scanning = run(&mut session, spec, order, &mut writer, &progress, record.monitor.as_ref());
+        let scanning = drive(&mut session, spec, order, &mut writer, &progress, record.monitor.as_ref());
         tokio::pin!(scanning);
         tokio::select! {
             r = &mut scanning => Some(r),
@@ -141,19 +97,7 @@ pub async fn scan_into(
         }
     };
     let Some(ended) = ended else {
-        progress.finish();
-        live.state("interrupted: stopped by the operator");
-        // The scan is dropped between two events: every row on disk is whole.
-        let safe = session.head().request::<AbortEndpoint>(&()).await.is_ok();
-        session.close().await;
-        let at = resume_from(dir, &record.spec)?;
-        return Err(Interrupted {
-            at,
-            of: spec.len(),
-            dir: dir.to_path_buf(),
-            head_safe: safe,
-        }
-        .into());
+        return Err(interrupted(session, &progress, live, dir, record).await);
     };
     let mut outcome = ended.with_context(|| {
         format!(
@@ -167,30 +111,110 @@ pub async fn scan_into(
             .insert("link lost while preparing the head".into(), reconnected_before_scan);
     }
     let samples = writer.finish()?;
-    if resume.is_none() && record.monitor.is_none() {
-        outcome.lower_bound_s = lower_bound_s(&config, spec, &detection);
+    match resume {
+        None if record.monitor.is_none() => outcome.lower_bound_s = lower_bound_s(&config, spec, &detection),
+        None => {}
+        Some(_) => whole_scan_counts(&mut outcome, &samples)?,
     }
-    if resume.is_some() {
-        // Counts of the whole scan, not only of this session.
-        let rows = samples::read(&samples)?;
-        outcome.measured = rows.iter().filter_map(|r| r.order).collect::<BTreeSet<_>>().len() as u32;
-        outcome.swept_samples = rows.iter().filter(|r| r.extent_deg.is_some()).count() as u32;
-        outcome.skipped = outcome.points - outcome.measured;
-        // Why the earlier sessions skipped theirs is not on disk: said so,
-        // so that the reasons add up to the count.
-        let known: u32 = outcome.skipped_by_reason.values().sum();
-        if outcome.skipped > known {
-            *outcome
-                .skipped_by_reason
-                .entry("skipped before the resume (reason not recorded)".into())
-                .or_default() += outcome.skipped - known;
-        }
-    }
+    let id = session.head().identity().clone();
     let mut run_record = RunRecord::new(&id, record.material(), spec, &detection, session.learned, outcome.clone());
     run_record.estimated_s = Some(estimate);
     run_record.write(dir)?;
     session.close().await;
     Ok((outcome, samples))
+}
+
+/// A session with the head `record` names, checked able to reach its
+/// grid, and named to the operator.
+async fn connect(record: &ScanRecord, target: Arc<dyn Target>, operator: Operator) -> Result<Session> {
+    let settings = record.detector.settings();
+    let setup = Setup {
+        settings,
+        learn_at: record.detector.learn_at,
+        learning_periods: settings.periods_for(LEARNING_S),
+    };
+    let session = Session::connect(target, setup, operator).await?;
+    reachable(session.head().config(), record)?;
+    let id = session.head().identity();
+    operator.notice(format_args!(
+        "head: {} (serial {}, firmware {}, protocol v{}{})",
+        id.board,
+        id.serial,
+        id.firmware_version,
+        id.protocol_version,
+        if id.simulated { ", simulated" } else { "" }
+    ));
+    Ok(session)
+}
+
+/// What the scan will measure and how long it should take, in words.
+fn estimate_text(spec: &ScanSpec, estimate_s: f64, detection: &DetectionReport) -> String {
+    let settle_ms = detection.settings.settle_s * 1e3;
+    match spec.sweep {
+        Some(_) => format!(
+            "{} rows to sweep, {} retro points and {} pattern points to measure at rest; estimated duration {} (moves to their starts, {settle_ms:.0} ms settle, the sweeps)",
+            spec.rows(),
+            spec.retro_points(),
+            spec.pattern_points(),
+            hms(estimate_s),
+        ),
+        None => format!(
+            "{} points; estimated duration {} (moves, {settle_ms:.0} ms settle and {:.0} ms integration per point)",
+            spec.len(),
+            hms(estimate_s),
+            detection.integration_s * 1e3
+        ),
+    }
+}
+
+/// The samples file of a new scan, or the one a resumed scan appends to
+/// (its last row swept again: [`resume_from`]).
+fn writer(dir: &Path, resume: Option<u32>, spec: &ScanSpec, operator: Operator) -> Result<SampleWriter> {
+    let Some(first) = resume else {
+        return SampleWriter::create(dir);
+    };
+    operator.notice(format_args!("resuming at position {first} of {}", spec.len()));
+    if spec.sweep.is_some() {
+        drop_last_position(dir)?;
+    }
+    SampleWriter::append(dir)
+}
+
+/// The operator stopped the scan: the head made safe, and where to resume.
+async fn interrupted(session: Session, progress: &Progress, live: &Live, dir: &Path, record: &ScanRecord) -> anyhow::Error {
+    progress.finish();
+    live.state("interrupted: stopped by the operator");
+    // The scan is dropped between two events: every row on disk is whole.
+    let safe = session.head().request::<AbortEndpoint>(&()).await.is_ok();
+    session.close().await;
+    match resume_from(dir, &record.spec) {
+        Ok(at) => Interrupted {
+            at,
+            of: record.spec.len(),
+            dir: dir.to_path_buf(),
+            head_safe: safe,
+        }
+        .into(),
+        Err(e) => e,
+    }
+}
+
+/// A resumed scan's counts over the whole scan, not only this session's.
+fn whole_scan_counts(outcome: &mut ScanOutcome, samples: &Path) -> Result<()> {
+    let rows = samples::read(samples)?;
+    outcome.measured = rows.iter().filter_map(|r| r.order).collect::<BTreeSet<_>>().len() as u32;
+    outcome.swept_samples = rows.iter().filter(|r| r.extent_deg.is_some()).count() as u32;
+    outcome.skipped = outcome.points - outcome.measured;
+    // Why the earlier sessions skipped theirs is not on disk: said so, so
+    // that the reasons add up to the count.
+    let known: u32 = outcome.skipped_by_reason.values().sum();
+    if outcome.skipped > known {
+        *outcome
+            .skipped_by_reason
+            .entry("skipped before the resume (reason not recorded)".into())
+            .or_default() += outcome.skipped - known;
+    }
+    Ok(())
 }
 
 /// The first visit position an interrupted scan of `spec` in `dir` has not

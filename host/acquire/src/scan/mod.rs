@@ -37,7 +37,7 @@ const POLL: Duration = Duration::from_secs(1);
 /// position) to `out`. Lost, damaged, duplicated or reordered events, a
 /// lost link and transient faults are recovered: no position is stored
 /// twice or left out.
-pub async fn run(
+pub async fn drive(
     session: &mut Session,
     spec: &ScanSpec,
     order: Vec<u32>,
@@ -111,7 +111,7 @@ pub async fn run(
 }
 
 /// The host's side of one scan: what every stretch, monitor visit and
-/// recovery shares (the head keeps its own `ScanRun`).
+/// recovery shares (the head keeps its own `ActiveScan`).
 struct ScanDriver<'a> {
     session: &'a mut Session,
     out: &'a mut SampleWriter,
