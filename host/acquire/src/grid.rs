@@ -83,7 +83,7 @@ impl Grid {
     /// The scan this grid asks for, `widen`ed (say, by what a set of
     /// coefficients needs measured) before its size and the head's limits
     /// are checked.
-    pub fn spec(&self, widen: impl FnOnce(&mut ScanSpec) -> Result<()>) -> Result<ScanSpec> {
+    pub fn scan_spec(&self, widen: impl FnOnce(&mut ScanSpec) -> Result<()>) -> Result<ScanSpec> {
         let theta_i_deg = heapless::Vec::from_slice(&self.theta_i_deg)
             .ok()
             .context("--theta-i: at most 8 incidence angles")?;

@@ -15,7 +15,7 @@ struct Grid {
 
 fn grid(args: &[&str]) -> Result<ScanSpec> {
     let g = Grid::try_parse_from(std::iter::once("grid").chain(args.iter().copied()))?;
-    g.grid.spec()
+    g.grid.scan_spec()
 }
 
 fn refused(args: &[&str], why: &str) {

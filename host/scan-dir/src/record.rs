@@ -10,6 +10,11 @@ use gonio_sim::{Imperfections, SimConfig};
 use serde::{Deserialize, Serialize};
 use std::path::Path;
 
+/// The sample a scan assumes unless told (mm): a 100 mm square holds the
+/// 1 mm beam's footprint at EN 1436's 88.76° (46 mm long at 1/e²) with
+/// all but 0.1 % of its light.
+pub const SAMPLE_MM: f64 = 100.0;
+
 /// Which head the scan runs on.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(rename_all = "lowercase")]

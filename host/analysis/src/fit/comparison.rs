@@ -29,7 +29,7 @@ pub struct Row {
 /// `model` fitted to `s` (its held-out samples evaluated): one fit's, or
 /// with `every_model` a comparison's row.
 pub fn model_fit(s: &Selection, settings: &Settings, model: ModelId, every_model: bool) -> Result<(Fit, Option<Metrics>)> {
-    let spec = settings.spec(model, s.train.units, every_model)?;
+    let spec = settings.fit_spec(model, s.train.units, every_model)?;
     let f = super::fit(&s.train, &spec).with_context(|| format!("fitting {}", model.name()))?;
     let holdout = s.holdout.as_ref().map(|h| super::evaluate(&f.material, h));
     Ok((f, holdout))

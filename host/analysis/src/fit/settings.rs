@@ -74,7 +74,7 @@ impl Settings {
     /// The fit of `model` to data in `units`. With `every_model` (a
     /// comparison), a box's name the model lacks is skipped, unless no
     /// model has it.
-    pub fn spec(&self, model: ModelId, units: Units, every_model: bool) -> Result<FitSpec> {
+    pub fn fit_spec(&self, model: ModelId, units: Units, every_model: bool) -> Result<FitSpec> {
         let mut bounds = Vec::new();
         for b in &self.bounds {
             if !(b.lo.is_finite() && b.hi.is_finite() && b.lo < b.hi) {

@@ -200,7 +200,7 @@ mod tests {
         Dataset::new(Units::Fr, observations)
     }
 
-    fn spec(segments: SegmentSource) -> RationalSpec {
+    fn back_spec(segments: SegmentSource) -> RationalSpec {
         RationalSpec {
             parametrization: Parametrization::Back,
             segments,
@@ -214,7 +214,7 @@ mod tests {
     fn a_cosine_product_is_degree_zero() {
         // f = 0.3 cosθi cosθo is the cosine factor times a constant.
         let d = data(|ti, to, _| 0.3 * ti.cos() * to.cos());
-        let f = fit(&d, &spec(SegmentSource::Relative(0.01))).unwrap();
+        let f = fit(&d, &back_spec(SegmentSource::Relative(0.01))).unwrap();
         assert_eq!(f.function.degree, 0);
         assert_eq!(f.worst_violation, 0.0);
         assert!(f.linf < 0.01 * 0.3, "{}", f.linf);
@@ -229,7 +229,7 @@ mod tests {
             0.1 + 2.0 * c.powi(8)
         };
         let d = data(lobe);
-        let f = fit(&d, &spec(SegmentSource::Relative(0.02))).unwrap();
+        let f = fit(&d, &back_spec(SegmentSource::Relative(0.02))).unwrap();
         assert!(f.function.degree >= 1, "{:?}", f.attempts);
         assert!(f.worst_violation <= super::super::programmes::VIOLATION_TOLERANCE);
         for (o, &v) in d
@@ -259,19 +259,19 @@ mod tests {
         let mut twin = d.observations[7];
         twin.value = 2.0;
         d.observations.push(twin);
-        let e = fit(&d, &spec(SegmentSource::Absolute(0.1))).unwrap_err().to_string();
+        let e = fit(&d, &back_spec(SegmentSource::Absolute(0.1))).unwrap_err().to_string();
         assert!(e.contains("no rational function of degree") && e.contains("sample"), "{e}");
         let one = Dataset {
             observations: d.observations[..1].to_vec(),
             ..d.clone()
         };
-        let e = fit(&one, &spec(SegmentSource::Absolute(0.1))).unwrap_err().to_string();
+        let e = fit(&one, &back_spec(SegmentSource::Absolute(0.1))).unwrap_err().to_string();
         assert!(e.contains("too few"), "{e}");
         let few = Dataset {
             observations: d.observations[..30].to_vec(),
             ..d
         };
-        let f = fit(&few, &spec(SegmentSource::Absolute(0.1))).unwrap();
+        let f = fit(&few, &back_spec(SegmentSource::Absolute(0.1))).unwrap();
         assert!(f.capped.is_some() && f.attempts.iter().all(|a| a.coefficients <= 30));
     }
 }

@@ -4,11 +4,11 @@
 //! rational function compared, R_A and R_L, and `report.html`.
 
 use super::detector::DetectorArgs;
-use super::fit;
-use super::fitting::FitOptions;
+use super::fit_args::{FitOptions, RationalArgs};
+use super::fitting::compare;
 use super::grid::LobeArgs;
-use super::scan::{summarise, LiveArgs, OutputArgs};
-use super::simulated;
+use super::in_process;
+use super::output::{summarise, LiveArgs, OutputArgs};
 use anyhow::{Context, Result};
 use gonio_acquire::interrupt;
 use gonio_acquire::operator::Operator;
@@ -50,7 +50,7 @@ pub struct DemoArgs {
 pub async fn demo(a: DemoArgs) -> Result<()> {
     let sim = SimConfig {
         seed: a.seed,
-        sample_mm: Some(super::scan::SAMPLE_MM),
+        sample_mm: Some(gonio_scan_dir::record::SAMPLE_MM),
         ..SimConfig::default()
     };
     let truth = sim.material.clone();
@@ -77,8 +77,8 @@ pub async fn demo(a: DemoArgs) -> Result<()> {
         ..FitOptions::default()
     };
     let domain = options.select(&calibrated.summary.file)?;
-    let rational = super::fitting::RationalArgs::default().spec(options.param)?;
-    let comparison = fit::compare(&domain, &options, Some(&rational))?;
+    let rational = RationalArgs::default().rational_spec(options.param)?;
+    let comparison = compare(&domain, &options, Some(&rational))?;
     let mut facts = vec![
         ("head".to_string(), "simulated (gonio demo)".to_string()),
         ("virtual material".to_string(), truth.describe()),
@@ -148,7 +148,7 @@ pub async fn demo_scan(sim: SimConfig, spec: &ScanSpec, dir: &Path, output: &Out
     };
     scan_into(
         &record,
-        simulated::target(&record.head, sim.faults, sim.pace),
+        in_process::target(&record.head, sim.faults, sim.pace),
         to,
         Operator::for_json(output.json),
         live,

@@ -1,21 +1,16 @@
 //! `gonio fit` and `gonio compare`: models fitted to a data file (ALTA `.dat`
 //! or the calibrated sample CSV).
 
-use super::fitting::{kept, CompareArgs, FitArgs, FitOptions};
+use super::fit_args::{CompareArgs, FitArgs};
+use super::fitting::{compare, kept};
 use anyhow::{bail, Result};
-use gonio_acquire::operator::Operator;
 use gonio_analysis::fit;
-use gonio_analysis::fit::comparison::{model_fit, Comparison};
+use gonio_analysis::fit::comparison::model_fit;
 use gonio_analysis::fit::file::FittedBrdf;
-use gonio_analysis::fit::selection::Selection;
 use gonio_analysis::fit::text::{box_notes, ComparisonTable, FitText};
-use gonio_analysis::rational::RationalSpec;
 use gonio_brdf::ModelId;
 
 pub fn fit_cmd(a: FitArgs) -> Result<()> {
-    if a.model == gonio_analysis::rational::file::MODEL {
-        return super::rational::fit_cmd(a);
-    }
     if a.rational.given() {
         bail!(
             "--segments, --max-degree and --no-cosine are options of --model rational, not of {}",
@@ -49,33 +44,11 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     Ok(())
 }
 
-/// Every model fitted to the same data, in catalogue order, then the
-/// rational function if asked for (`None`: models only), with progress
-/// bars. A rational function that no degree allowed can make is a note,
-/// not a failure of the comparison: the models still stand.
-pub fn compare(d: &Selection, o: &FitOptions, rational: Option<&RationalSpec>) -> Result<Comparison> {
-    let bar = Operator::for_json(o.json).bar(ModelId::ALL.len() as u64, "fitting", "models");
-    let mut done = 0;
-    let mut comparison = Comparison::of_models(d, &o.settings(&[])?, |model| {
-        bar.set_message(model.name());
-        bar.set_position(done);
-        done += 1;
-    })?;
-    bar.finish_and_clear();
-    if let Some(spec) = rational {
-        match super::rational::row(d, spec, o.units.unwrap_or(d.train.units), o.weights, o.json) {
-            Ok(row) => comparison.rows.push(row.into()),
-            Err(e) => comparison.unfitted.push(format!("{e:#}")),
-        }
-    }
-    Ok(comparison)
-}
-
 pub fn compare_cmd(a: CompareArgs) -> Result<()> {
     if let Some(dir) = a.report.as_ref().filter(|d| d.join("report.html").exists() && !a.force) {
         bail!("{} already holds a report; choose another --report or pass --force", dir.display());
     }
-    let rational = a.rational.spec(a.options.param)?;
+    let rational = a.rational.rational_spec(a.options.param)?;
     let d = a.options.select(&a.file)?;
     let comparison = compare(&d, &a.options, Some(&rational))?;
     if let Some(dir) = &a.report {

@@ -1,118 +1,21 @@
-//! What `gonio fit` and `compare` take and give, shared by the models'
-//! commands (`fit.rs`) and the rational function's (`rational.rs`): the
-//! options, the data a fit sees, a fit's row, and the files drawn from it.
+//! What `gonio fit`, `compare` and the demo share: the options turned into
+//! the library's settings and selection, the files a fit is kept as, and
+//! the comparison with its progress bars.
 
+use super::fit_args::{FitArgs, FitOptions};
 use anyhow::Result;
+use gonio_acquire::operator::Operator;
 use gonio_analysis::coefficients::Support;
+use gonio_analysis::fit::comparison::{rational_fit, Comparison, RationalRow};
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::selection::{select, Restriction, Selection};
 use gonio_analysis::fit::settings::{fixed, Settings};
 use gonio_analysis::fit::{self, Units, Weighting};
 use gonio_analysis::formats::export::Drawn;
 use gonio_analysis::rational::RationalSpec;
-use gonio_brdf::Param;
+use gonio_brdf::ModelId;
 use serde_json::Value;
-use std::path::{Path, PathBuf};
-
-/// Which samples a fit sees, and how they are weighed.
-#[derive(Debug, Clone, clap::Args)]
-pub struct FitOptions {
-    /// Cosine of the retro lobes: `back` (cos_B) or `view` (cos_R = l·v).
-    #[arg(long, value_enum, default_value = "view")]
-    pub param: Param,
-    /// Fit the retro half-space only (|Δφ| ≤ 90°).
-    #[arg(long)]
-    pub retro_only: bool,
-    /// Fit only these incidence angles (degrees, comma-separated).
-    #[arg(long, value_delimiter = ',')]
-    pub theta_i: Vec<f64>,
-    /// Leave these incidence angles (degrees) out of the fit and report how
-    /// well the fit predicts them (cross-validation, as Zhang et al.).
-    #[arg(long, value_delimiter = ',')]
-    pub holdout_theta_i: Vec<f64>,
-    /// Sample weights in the least-squares sum.
-    #[arg(long, value_enum, default_value = "uniform")]
-    pub weights: Weighting,
-    /// Units the residuals are taken in (default: the file's own); for a file
-    /// that does not say what its values are (ALTA without #PARAM_OUT), also
-    /// what they are.
-    #[arg(long, value_enum)]
-    pub units: Option<Units>,
-    /// Seed of the global search.
-    #[arg(long, default_value_t = 1)]
-    pub seed: u64,
-    /// Search boxes replacing the defaults, NAME=LO:HI,... (in `compare`,
-    /// each model takes the names it has).
-    #[arg(long, value_delimiter = ',', allow_hyphen_values = true, value_name = "NAME=LO:HI")]
-    pub bounds: Vec<String>,
-    #[command(flatten)]
-    pub instrument: super::instrument::InstrumentArgs,
-    /// Print one JSON object (errors too: `{"error", "kind"}`).
-    #[arg(long)]
-    pub json: bool,
-}
-
-impl Default for FitOptions {
-    /// The command line's defaults, as its attributes give them.
-    fn default() -> Self {
-        #[derive(clap::Parser)]
-        struct Defaults {
-            #[command(flatten)]
-            options: FitOptions,
-        }
-        <Defaults as clap::Parser>::parse_from(["gonio"]).options
-    }
-}
-
-#[derive(Debug, clap::Args)]
-pub struct FitArgs {
-    /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
-    pub file: PathBuf,
-    /// Model id (models.md): lambert, retro-phong, abc-retro, abc-retro-per-lobe, beckmann-retro, blinn-retro, lafortune, oren-nayar, five-param,
-    /// or `rational` (a rational function through every sample's segment, in the --param retro plane, back or view (light-view),
-    /// or in ALTA's view plane, whichever holds with fewer terms).
-    #[arg(long)]
-    pub model: String,
-    #[command(flatten)]
-    pub rational: RationalArgs,
-    /// Hold a parameter at a value, NAME=V (repeatable).
-    #[arg(long)]
-    pub fix: Vec<String>,
-    /// Write the fit as JSON to this file as well.
-    #[arg(long)]
-    pub out: Option<PathBuf>,
-    /// Write the fit as a Disney BRDF Explorer shader (.brdf) as well.
-    #[arg(long)]
-    pub brdf: Option<PathBuf>,
-    /// Write the fit as an RGL .bsdf for Mitsuba 3 and pbrt-v4 as well, at
-    /// `gonio export`'s default resolution (a warning on stderr if too coarse).
-    #[arg(long)]
-    pub bsdf: Option<PathBuf>,
-    /// Draw the data and the fit into this directory (PNG and SVG).
-    #[arg(long)]
-    pub plot: Option<PathBuf>,
-    #[command(flatten)]
-    pub options: FitOptions,
-}
-
-#[derive(Debug, clap::Args)]
-pub struct CompareArgs {
-    /// Data file: ALTA text (.dat) or calibrated sample CSV (.csv).
-    pub file: PathBuf,
-    /// Write DIR/report.html: the comparison table, every fit as JSON and
-    /// BRDF Explorer shader (DIR/fits), pictures of the best fits (DIR/plots).
-    #[arg(long, value_name = "DIR")]
-    pub report: Option<PathBuf>,
-    /// Overwrite a report already in the --report directory.
-    #[arg(long, requires = "report")]
-    pub force: bool,
-    /// The rational function's row (its segments: the samples' σ unless
-    /// --segments says otherwise; where none holds them all, a note says why).
-    #[command(flatten)]
-    pub rational: RationalArgs,
-    #[command(flatten)]
-    pub options: FitOptions,
-}
+use std::path::Path;
 
 impl FitOptions {
     /// How the models are fitted, `fixes` (`NAME=VALUE`) held.
@@ -160,40 +63,38 @@ pub fn kept(a: &FitArgs, d: &Selection, mut v: Value, fitted: &FittedBrdf) -> Re
     Ok(v)
 }
 
-/// The rational function's options, in `fit --model rational` and `compare`.
-#[derive(Debug, Clone, Default, clap::Args)]
-pub struct RationalArgs {
-    /// With the rational function: each sample's segment, `sigma` (value ± 2σ: the calibrated CSV's k = 2 interval, ALTA's #VS),
-    /// `abs:WIDTH` (value ± WIDTH, sr⁻¹, of the file's quantity: f_r, or f_r·cosθo as ALTA's tapes store it) or `rel:WIDTH` (value × (1 ± WIDTH)).
-    #[arg(long, value_name = "SOURCE")]
-    pub segments: Option<String>,
-    /// With the rational function: the highest total degree of numerator and denominator tried (8: 330 coefficients).
-    #[arg(long, value_name = "D")]
-    pub max_degree: Option<usize>,
-    /// With the rational function: fit P/Q alone, without the paper's cosθi·cosθo factor (ALTA's
-    /// rational_function_legendre; often fewer coefficients for absolute segments).
-    #[arg(long)]
-    pub no_cosine: bool,
-    /// With the rational function: fit a grid of DEG degrees interpolated between the samples at each θi, as
-    /// Belcour et al. 2014 did (§6.A), and say how many of the measured samples' segments the function still holds.
-    #[arg(long, value_name = "DEG")]
-    pub densify: Option<f64>,
+/// Every model fitted to the same data, in catalogue order, then the
+/// rational function if asked for (`None`: models only), with progress
+/// bars. A rational function that no degree allowed can make is a note,
+/// not a failure of the comparison: the models still stand.
+pub fn compare(d: &Selection, o: &FitOptions, rational: Option<&RationalSpec>) -> Result<Comparison> {
+    let bar = Operator::for_json(o.json).bar(ModelId::ALL.len() as u64, "fitting", "models");
+    let mut done = 0;
+    let mut comparison = Comparison::of_models(d, &o.settings(&[])?, |model| {
+        bar.set_message(model.name());
+        bar.set_position(done);
+        done += 1;
+    })?;
+    bar.finish_and_clear();
+    if let Some(spec) = rational {
+        match row(d, spec, o.units.unwrap_or(d.train.units), o.weights, o.json) {
+            Ok(row) => comparison.rows.push(row.into()),
+            Err(e) => comparison.unfitted.push(format!("{e:#}")),
+        }
+    }
+    Ok(comparison)
 }
 
-impl RationalArgs {
-    /// Whether any option was given.
-    pub fn given(&self) -> bool {
-        self.segments.is_some() || self.max_degree.is_some() || self.no_cosine || self.densify.is_some()
-    }
-
-    /// The fit these options ask for, in the plane `--param` names.
-    pub fn spec(&self, param: Param) -> Result<RationalSpec> {
-        Ok(RationalSpec {
-            parametrization: param.into(),
-            segments: self.segments.as_deref().unwrap_or("sigma").parse()?,
-            max_degree: self.max_degree.unwrap_or(RationalSpec::MAX_DEGREE),
-            cosine: !self.no_cosine,
-            densify: self.densify,
-        })
-    }
+/// The rational function through `d`'s segments as a comparison ranks it
+/// (its criteria in `units` under `weighting`), with a progress bar over
+/// the coefficients tried.
+pub fn row(d: &Selection, spec: &RationalSpec, units: Units, weighting: Weighting, json: bool) -> Result<RationalRow> {
+    let most = 2 * gonio_analysis::rational::basis::Basis::size(spec.max_degree);
+    let bar = Operator::for_json(json).bar(most as u64, "fitting rational", "coefficients");
+    let row = rational_fit(d, spec, units, weighting, |coefficients| {
+        bar.set_position(coefficients as u64);
+        bar.set_message(format!("{coefficients} coefficients"));
+    });
+    bar.finish_and_clear();
+    row
 }

@@ -125,7 +125,7 @@ fn finite_deg(s: &str) -> Result<f32, String> {
 
 impl GridArgs {
     /// The scan these flags ask for, with what `--for`'s sets need.
-    pub fn spec(&self) -> Result<ScanSpec> {
+    pub fn scan_spec(&self) -> Result<ScanSpec> {
         let p = &self.patterns;
         let grid = Grid {
             theta_i_deg: self.theta_i.clone(),
@@ -146,6 +146,6 @@ impl GridArgs {
                 mirror_azimuths: p.mirror_azimuths,
             }),
         };
-        grid.spec(|spec| measure_for(spec, &self.for_sets))
+        grid.scan_spec(|spec| measure_for(spec, &self.for_sets))
     }
 }

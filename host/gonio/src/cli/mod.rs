@@ -10,18 +10,20 @@ mod devices;
 mod export;
 pub mod failure;
 pub mod fit;
+pub mod fit_args;
 pub mod fitting;
 pub mod grid;
+pub mod in_process;
 pub mod instrument;
 pub mod material;
 mod model_eval;
 mod moments;
+pub mod output;
 mod plot;
 mod rational;
 mod repeatability;
 pub mod scan;
 mod sim;
-pub mod simulated;
 
 use anyhow::{Context, Result};
 use clap::{Parser, Subcommand};
@@ -57,9 +59,9 @@ pub enum Command {
     /// Coefficients of retroreflection R_A and R_L (CIE 54.2, ASTM E810, EN 1436) with uncertainties.
     Coefficients(coefficients::CoefficientsArgs),
     /// Fit one model to a data file (ALTA .dat or calibrated CSV), no starting point needed.
-    Fit(fitting::FitArgs),
+    Fit(fit_args::FitArgs),
     /// Fit every model to a data file and compare them (RMSE, NRMSE, NCC).
-    Compare(fitting::CompareArgs),
+    Compare(fit_args::CompareArgs),
     /// Pictures of a data file and fits: incidence-plane, hemisphere and residual plots.
     Plot(plot::PlotArgs),
     /// Write a data file (ALTA .dat or calibrated CSV) as ALTA text.
@@ -135,6 +137,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Sim(a) => sim::sim(a),
         Command::Calibrate(a) => calibrate::calibrate_cmd(a),
         Command::Coefficients(a) => coefficients::coefficients_cmd(a),
+        Command::Fit(a) if a.model == gonio_analysis::rational::file::MODEL => rational::fit_cmd(a),
         Command::Fit(a) => fit::fit_cmd(a),
         Command::Compare(a) => fit::compare_cmd(a),
         Command::Convert(a) => convert::convert_cmd(a),

@@ -2,46 +2,18 @@
 
 use super::detector::DetectorArgs;
 use super::grid::GridArgs;
+use super::in_process;
 use super::material::SimHeadArgs;
-use super::simulated;
+use super::output::{summarise, LiveArgs, OutputArgs};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::interrupt;
 use gonio_acquire::operator::Operator;
 use gonio_acquire::scan::directory::{resume_from, scan_into, Destination};
 use gonio_acquire::scan::page;
-use gonio_scan_dir::record::{parse_geometry, Monitor, RecordedHead, ScanRecord};
-use gonio_scan_dir::run::ScanOutcome;
-use gonio_shared::ScanSpec;
+use gonio_scan_dir::record::{parse_geometry, Monitor, RecordedHead, ScanRecord, SAMPLE_MM};
 use gonio_sim::faults::Faults;
 use gonio_sim::SimConfig;
-use std::path::{Path, PathBuf};
-
-/// Where every scan serves its live page, on this machine (so that `gonio
-/// pause DIR` reaches it from another terminal); `--live` says where, for a
-/// browser.
-#[derive(Debug, Clone, clap::Args)]
-pub struct LiveArgs {
-    /// Print the address of the scan's live page (the hemisphere map filling
-    /// in, signal, gain, state, time left; pause, continue and abort
-    /// buttons) to open in a browser.
-    #[arg(long)]
-    pub live: bool,
-    /// Where the live page and `gonio pause|continue|abort DIR` reach the
-    /// scan: this machine only, any free port unless given.
-    #[arg(long, value_name = "ADDR", default_value = "127.0.0.1:0")]
-    pub live_addr: std::net::SocketAddr,
-}
-
-/// How results are written.
-#[derive(Debug, clap::Args)]
-pub struct OutputArgs {
-    /// Overwrite a scan already in the output directory.
-    #[arg(long)]
-    pub force: bool,
-    /// Print the summary as one JSON object (errors too: `{"error", "kind"}`).
-    #[arg(long)]
-    pub json: bool,
-}
+use std::path::PathBuf;
 
 #[derive(Debug, clap::Args)]
 #[command(group(clap::ArgGroup::new("head").args(["sim", "port"])))]
@@ -117,7 +89,7 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
         // A resume runs on the repaired head: no faults.
         return scan_and_summarise(&record, Faults::default(), to, &a).await;
     }
-    let (spec, det) = (a.grid.spec()?, &a.detector.checked()?);
+    let (spec, det) = (a.grid.scan_spec()?, &a.detector.checked()?);
     let (mut record, faults) = match (&a.port, a.sim) {
         (Some(_), _) if a.sim_head.inject.is_some() => bail!("--inject acts on the simulated head only (--sim), not on a head at a port"),
         (Some(p), _) => (ScanRecord::at_port(p, &spec, det), Faults::default()),
@@ -154,16 +126,11 @@ pub async fn scan(a: ScanArgs) -> Result<()> {
 /// view served, stoppable with Ctrl-C, and prints the summary.
 async fn scan_and_summarise(record: &ScanRecord, faults: Faults, to: Destination<'_>, a: &ScanArgs) -> Result<()> {
     let operator = Operator::for_json(a.output.json);
-    let target = simulated::target(&record.head, faults, a.sim_head.pace);
+    let target = in_process::target(&record.head, faults, a.sim_head.pace);
     let live = page::start(a.live.live_addr, a.live.live, operator).await?;
     let (outcome, samples) = scan_into(record, target, to, operator, &live, interrupt::requested()).await?;
     summarise(&record.spec, &outcome, &samples, a.output.json)
 }
-
-/// The sample a scan assumes unless told (mm): a 100 mm square holds the
-/// 1 mm beam's footprint at EN 1436's 88.76° (46 mm long at 1/e²) with
-/// all but 0.1 % of its light.
-pub const SAMPLE_MM: f64 = 100.0;
 
 /// A sample size: positive and finite.
 fn positive_mm(s: &str) -> Result<f64, String> {
@@ -171,13 +138,4 @@ fn positive_mm(s: &str) -> Result<f64, String> {
         Ok(v) if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err(format!("`{s}` is not a positive size in mm")),
     }
-}
-
-/// Prints what the scan did (one JSON object with `json`).
-pub fn summarise(spec: &ScanSpec, o: &ScanOutcome, samples: &Path, json: bool) -> Result<()> {
-    match json {
-        true => println!("{}", serde_json::to_string_pretty(o)?),
-        false => print!("{}", o.summary(spec, samples)),
-    }
-    Ok(())
 }
