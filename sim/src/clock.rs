@@ -8,9 +8,11 @@
 //! moment (a host timeout, a scripted frame, the E-STOP) registers it with
 //! [`World::wake`], and time stops there exactly: a stop is seen when it
 //! happens, not at the end of a slice. When nothing advances the time (the
-//! head at rest), the link waits: for real frames on the in-process and
-//! pseudo-terminal links, with the wall clock standing in for the time to
-//! the next deadline; for the next scripted frame in tests.
+//! head at rest), the link waits: on the in-process link for the host's
+//! next frame, the host's thinking taking no simulated time (unless paced:
+//! then the wall clock stands in for the time to the next deadline); on a
+//! pseudo-terminal, whose host is another program, with the wall clock
+//! standing in; for the next scripted frame in tests.
 
 use super::world::World;
 use gonio_firmware::hw::{Sentry, Wake};

@@ -35,10 +35,16 @@ impl Link for ChannelLink {
                 return Poll::Ready(r);
             }
             // At rest the sim thread has nothing else to do: blocking is fine.
+            // Unpaced, the host's thinking takes no simulated time: the head
+            // waits for its next frame however long the host computes, so a
+            // run's clock (and the laser drift its samples see) does not
+            // depend on how fast this machine plans. Paced, the wall clock
+            // is the head's, and a deadline at rest passes as it would.
+            let paced = self.world.borrow().pace > 0.0;
             let got = match clock::idle(&self.world) {
                 Idle::Busy => return Poll::Pending,
-                Idle::Wait(None) => self.rx.recv().map_err(|_| mpsc::RecvTimeoutError::Disconnected),
-                Idle::Wait(Some(d)) => self.rx.recv_timeout(d),
+                Idle::Wait(Some(d)) if paced => self.rx.recv_timeout(d),
+                Idle::Wait(_) => self.rx.recv().map_err(|_| mpsc::RecvTimeoutError::Disconnected),
             };
             match got {
                 Ok(f) => Poll::Ready(Ok(take(f, buf))),

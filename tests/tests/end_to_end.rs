@@ -376,3 +376,34 @@ async fn pulling_the_link_mid_move_darkens_the_laser_and_stops_the_motors_before
     drop(events);
     again.close().await;
 }
+
+/// The simulated head's clock runs by what the head does and what the host
+/// asks, never by the host's wall time: a host that thinks for 0.6 s between
+/// two requests finds the clock where it left it (it used to run on by the
+/// head's 250 ms waking ticks while it waited), and a scan whose laser
+/// drifts with that clock, run twice, stores the same samples.
+#[tokio::test]
+async fn the_simulated_clock_does_not_follow_the_hosts_wall_time() {
+    let head = HeadClient::connect(&Simulated(SimConfig::default())).await.unwrap();
+    let before = head.request::<StatusEndpoint>(&()).await.unwrap().uptime_us;
+    tokio::time::sleep(Duration::from_millis(600)).await;
+    let after = head.request::<StatusEndpoint>(&()).await.unwrap().uptime_us;
+    assert!(
+        after - before < 1_000,
+        "the head's clock ran {} µs while the host thought",
+        after - before
+    );
+    drop(head);
+
+    let mut sim = SimConfig::default();
+    sim.photodiode.laser_drift = 0.05;
+    let mut runs = Vec::new();
+    for _ in 0..2 {
+        let mut session = session(Arc::new(Simulated(sim.clone()))).await;
+        let dir = tempfile::tempdir().unwrap();
+        let (outcome, rows) = scan_and_read(&mut session, &small_grid(), dir.path()).await;
+        session.close().await;
+        runs.push((outcome.head_time_s, format!("{rows:?}")));
+    }
+    assert_eq!(runs[0], runs[1], "two runs of one scan differ");
+}

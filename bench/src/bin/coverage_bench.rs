@@ -27,8 +27,8 @@
 //! (default 100, 20 and 500).
 
 use gonio::cli::demo::demo_scan;
-use gonio::cli::fitting::compare;
 use gonio::cli::fit_args::FitOptions;
+use gonio::cli::fitting::compare;
 use gonio::cli::output::OutputArgs;
 use gonio_analysis::calibration;
 use gonio_analysis::calibration::directory::{self, calibrate, Calibrated};
