@@ -18,7 +18,7 @@ pub fn board_plant(root: &Path) -> Result<PathBuf> {
     let cargo = std::env::var("CARGO").unwrap_or_else(|_| "cargo".into());
     let mut build = Command::new(cargo);
     build
-        .args(["build", "--locked", "-p", "tests", "--bin", "board-plant"])
+        .args(["build", "--locked", "-p", "gonio-bench", "--bin", "board-plant"])
         .current_dir(root);
     if !cfg!(debug_assertions) {
         build.arg("--release");
