@@ -51,9 +51,9 @@ impl Detector {
     /// square until the waveform has been learned. The designs are factored
     /// by [`Detector::factor_designs`] once the head is in its place
     /// ([`crate::Head::prepare`]).
-    pub fn new<A: AdcStream>(settings: DetectionSettings) -> Self {
-        let timing = units::chop_timing(&settings, A::TIMER_HZ);
-        let chop_hz = units::chop_hz_actual(timing, A::TIMER_HZ) as f64;
+    pub fn new(settings: DetectionSettings, timer_hz: u32) -> Self {
+        let timing = units::chop_timing(&settings, timer_hz);
+        let chop_hz = units::chop_hz_actual(timing, timer_hz) as f64;
         Self {
             settings,
             timing,
@@ -87,14 +87,15 @@ impl Detector {
     /// A matched reference needs one learned at the same chop timing.
     pub fn configure<B: Board>(&mut self, hw: &mut Hardware<B>, cfg: &HeadConfig, s: DetectionSettings) -> Result<DetectionReport, Fault> {
         s.validate()?;
-        let timing = units::chop_timing(&s, <B::Adc as AdcStream>::TIMER_HZ);
+        let timer_hz = hw.adc.timer_hz();
+        let timing = units::chop_timing(&s, timer_hz);
         let learned = self.learned.as_ref().is_some_and(|(_, t)| *t == timing);
         if s.reference == Kind::Matched && !learned {
             return Err(Fault::NotLearned);
         }
         self.settings = s;
         self.timing = timing;
-        self.chop_hz = units::chop_hz_actual(timing, <B::Adc as AdcStream>::TIMER_HZ) as f64;
+        self.chop_hz = units::chop_hz_actual(timing, timer_hz) as f64;
         self.reference = Reference::new(s.reference, s.samples_per_period as usize, self.learned());
         self.design = Design::new(s.periods as u32, self.chop_hz);
         self.stop(hw);

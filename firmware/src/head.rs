@@ -10,7 +10,7 @@ use crate::active_scan::ActiveScan;
 use crate::config::HeadConfig;
 use crate::conversation::Conversation;
 use crate::detector::Detector;
-use crate::hw::{Board, Clock, Hardware, StepTimer};
+use crate::hw::{AdcStream, Board, Clock, Hardware, StepTimer};
 use crate::kinematics;
 use crate::motion::{self, Position};
 use crate::sanity::geometry::FixedGeometry;
@@ -68,12 +68,13 @@ pub struct Head<B: Board> {
 impl<B: Board> Head<B> {
     /// A head in its safe state; [`Head::prepare`] it once it is in place.
     pub fn new(cfg: HeadConfig, hw: Hardware<B>, info: HeadInfo) -> Self {
+        let timer_hz = hw.adc.timer_hz();
         let mut head = Self {
             cfg,
             hw,
             info,
             pos: Position::default(),
-            detector: Detector::new::<B::Adc>(DetectionSettings::default()),
+            detector: Detector::new(DetectionSettings::default(), timer_hz),
             sanity: None,
             scan: None,
             laser_on: false,

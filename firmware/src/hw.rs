@@ -23,8 +23,10 @@ pub struct Overrun;
 /// whole number of samples; DMA fills a double buffer whose halves are one
 /// chop period each.
 pub trait AdcStream {
-    /// Timer input clock (Hz) that [`ChopTiming::ticks_per_sample`] counts.
-    const TIMER_HZ: u32;
+    /// Timer input clock (Hz) that [`ChopTiming::ticks_per_sample`] counts:
+    /// on the chip, what the clock tree gives the timer, so that a board
+    /// clocked otherwise chops at the frequency asked all the same.
+    fn timer_hz(&self) -> u32;
     /// ADC resolution in bits.
     const BITS: u8;
 

@@ -103,7 +103,11 @@ pub struct SimAdc {
 }
 
 impl AdcStream for SimAdc {
-    const TIMER_HZ: u32 = 84_000_000;
+    /// The reference clock tree's APB1 timer clock (168 MHz / 4 × 2).
+    fn timer_hz(&self) -> u32 {
+        84_000_000
+    }
+
     const BITS: u8 = 12;
 
     fn start(&mut self, timing: ChopTiming) {
@@ -151,7 +155,7 @@ impl SimAdc {
         w.period_edges.clear();
         Some(Period {
             t0: w.t_s,
-            dt: timing.ticks_per_sample as f64 / <Self as AdcStream>::TIMER_HZ as f64,
+            dt: timing.ticks_per_sample as f64 / self.timer_hz() as f64,
             saturated: w.faults.active(w.moves, |f| *f == HardwareFault::AdcSaturated),
             dead: w.faults.active(w.moves, |f| *f == HardwareFault::LaserDead),
             lost,

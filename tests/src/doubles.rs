@@ -73,8 +73,14 @@ pub struct ScriptedAdc {
     pub stops: usize,
 }
 
+/// The timer clock the scripted ADC counts (the reference clock tree's).
+pub const SCRIPTED_TIMER_HZ: u32 = 84_000_000;
+
 impl AdcStream for ScriptedAdc {
-    const TIMER_HZ: u32 = 84_000_000;
+    fn timer_hz(&self) -> u32 {
+        SCRIPTED_TIMER_HZ
+    }
+
     const BITS: u8 = 12;
 
     fn start(&mut self, timing: ChopTiming) {

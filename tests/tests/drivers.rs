@@ -11,7 +11,7 @@ use gonio_firmware::homing::{self, home_axis};
 use gonio_firmware::motion::Position;
 use gonio_firmware::units;
 use gonio_shared::{Axis, DetectionSettings, Fault, Field, Reference as Kind, SampleFlags};
-use gonio_tests::doubles::{chop_period, done, expect, Pins, ScriptedAdc};
+use gonio_tests::doubles::{chop_period, done, expect, Pins, ScriptedAdc, SCRIPTED_TIMER_HZ};
 
 /// The delays of `n` homing chunks, as the core asks for them: each a move
 /// (the drivers' DIR setup time before its first step and hold time after
@@ -142,7 +142,7 @@ fn auto_range_steps_up_to_the_gain_that_fits_and_reports_it() {
     expect(&mut pins.gain[1], &[g1a, g1b]);
     let mut hw = pins.into_hardware(CheckedDelay::new(&[]));
     hw.adc = adc;
-    let mut det = Detector::new::<ScriptedAdc>(s);
+    let mut det = Detector::new(s, SCRIPTED_TIMER_HZ);
     let meas = block_on(det.measure(&mut hw, &REFERENCE)).unwrap();
     assert_eq!(meas.gain_index, 1);
     assert_eq!(meas.gain_v_per_a, REFERENCE.detector.gains_v_per_a[1]);
@@ -172,7 +172,7 @@ fn saturation_at_the_lowest_gain_is_flagged_and_an_empty_stream_is_an_overrun() 
     expect(&mut pins.gain[1], &[g1]);
     let mut hw = pins.into_hardware(CheckedDelay::new(&[]));
     hw.adc = adc;
-    let mut det = Detector::new::<ScriptedAdc>(s);
+    let mut det = Detector::new(s, SCRIPTED_TIMER_HZ);
     let meas = block_on(det.measure(&mut hw, &REFERENCE)).unwrap();
     assert_eq!(meas.gain_index, 0);
     assert!(meas.flags.contains(SampleFlags::SATURATED));
@@ -203,7 +203,7 @@ fn learning_finds_the_phase_and_the_matched_reference_round_trips() {
     expect(&mut pins.gain[0], &[a, c]);
     expect(&mut pins.gain[1], &[b, d]);
     let mut hw = pins.into_hardware(CheckedDelay::new(&[]));
-    let mut det = Detector::new::<ScriptedAdc>(s);
+    let mut det = Detector::new(s, SCRIPTED_TIMER_HZ);
     let matched = DetectionSettings {
         reference: Kind::Matched,
         ..s
@@ -248,7 +248,7 @@ fn learning_refuses_a_weak_or_short_signal() {
     expect(&mut pins.gain[0], &[a]);
     expect(&mut pins.gain[1], &[b]);
     let mut hw = pins.into_hardware(CheckedDelay::new(&[]));
-    let mut det = Detector::new::<ScriptedAdc>(s);
+    let mut det = Detector::new(s, SCRIPTED_TIMER_HZ);
     assert_eq!(
         block_on(det.learn(&mut hw, &REFERENCE, 3)),
         Err(Fault::InvalidValue(Field::Periods))

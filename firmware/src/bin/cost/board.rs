@@ -87,7 +87,9 @@ impl InputPin for HomeSwitch {
 pub struct Adc;
 
 impl AdcStream for Adc {
-    const TIMER_HZ: u32 = 84_000_000;
+    fn timer_hz(&self) -> u32 {
+        84_000_000
+    }
     const BITS: u8 = 12;
     fn start(&mut self, _: ChopTiming) {}
     fn stop(&mut self) {}

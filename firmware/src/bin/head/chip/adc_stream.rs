@@ -53,6 +53,8 @@ pub struct TimedAdc {
     sample_clock: Timer<'static, TIM2>,
     chop: Timer<'static, TIM3>,
     running: bool,
+    /// TIM2's input clock (Hz), as the clock tree set it up.
+    timer_hz: u32,
     /// How long a period may take before the chain counts as stopped (µs).
     stall_us: u64,
     // Kept so the ADC clock and the pins stay configured.
@@ -111,6 +113,7 @@ impl TimedAdc {
             request,
             buf,
             ring: None,
+            timer_hz: sample_clock.get_clock_frequency().0,
             sample_clock,
             chop,
             running: false,
@@ -149,8 +152,10 @@ impl TimedAdc {
 }
 
 impl AdcStream for TimedAdc {
-    /// APB1 timer clock with the reference clock tree (168 MHz / 4 × 2).
-    const TIMER_HZ: u32 = 84_000_000;
+    fn timer_hz(&self) -> u32 {
+        self.timer_hz
+    }
+
     const BITS: u8 = 12;
 
     fn start(&mut self, t: ChopTiming) {
@@ -159,7 +164,7 @@ impl AdcStream for TimedAdc {
         // The ring's two periods plus one, and a millisecond for the DMA's
         // interrupt and the executor.
         let sample_ticks = t.ticks_per_sample.max(2) as u64;
-        self.stall_us = units::ticks_to_us(3 * m as u64 * sample_ticks, Self::TIMER_HZ) + 1_000;
+        self.stall_us = units::ticks_to_us(3 * m as u64 * sample_ticks, self.timer_hz) + 1_000;
         self.sample_clock.regs_core().psc().write_value(0);
         self.sample_clock.set_max_compare_value(t.ticks_per_sample.max(2) - 1);
         self.sample_clock.regs_core().cnt().write(|w| w.set_cnt(0));
@@ -194,7 +199,7 @@ impl AdcStream for TimedAdc {
         pac::ADC1.cr2().modify(|w| w.set_exten(pac::adc::vals::Exten::RISING_EDGE));
         self.sample_clock.start();
         self.running = true;
-        let sample_us = units::ticks_to_us(sample_ticks, Self::TIMER_HZ);
+        let sample_us = units::ticks_to_us(sample_ticks, self.timer_hz);
         guard::watch_chain(sample_us.min(u32::MAX as u64) as u32);
     }
 
