@@ -24,8 +24,10 @@
 //!   reset, enumeration, the port reopened);
 //! - `usb-in-nak`: the host keeps the port open but stops reading.
 //!
-//! Survived means: the laser enable low, and the drivers' enables high,
-//! within the fault's bound (`laser_off_us`, from the board's pin log, in
+//! Survived means: the laser enable and the chop low (the chop high when
+//! the fault struck, so that its cut shows; 10 µs for the E-STOP, 1 ms for
+//! the rest), and the drivers' enables high, within the fault's bound
+//! (`laser_off_us`, `chop_off_us`, from the board's pin log, in
 //! emulated time, from the fault: the faulting access for a fault of the
 //! firmware, the injection otherwise), and then: after a fault of the
 //! firmware or a hung serve loop, the independent watchdog resets the chip
@@ -57,10 +59,14 @@ use gonio_shared::{Fault, HeadState};
 use serde_json::{json, Value};
 use std::path::Path;
 
-/// When the fault strikes, after the laser enable first rises (s).
-const STRIKE_S: f64 = 0.02;
-/// The laser enable must be low this soon after any fault (s).
+/// When the fault strikes, after the laser enable first rises (s): a
+/// quarter period into a chop's high half (230 Hz), so that the cut of the
+/// chop shows at the pin.
+const STRIKE_S: f64 = 0.0185;
+/// The laser enable and the chop must be low this soon after any fault (s).
 const LASER_OFF_BAR_S: f64 = 1e-3;
+/// ...and after the E-STOP's edge, which its interrupt handles at once.
+const ESTOP_CUT_BAR_S: f64 = 10e-6;
 /// Emulated seconds a trial may run: boot, enumeration, a measurement and
 /// the watchdog's timeout.
 const TRIAL_SECONDS: &str = "30";
@@ -117,7 +123,7 @@ impl Trial {
 const TRIALS: [Trial; 9] = [
     Trial::new("hardfault", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
     Trial::new("stack-overflow", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
-    Trial::new("estop-pulse", After::EStop, LASER_OFF_BAR_S, Some(0.1)),
+    Trial::new("estop-pulse", After::EStop, ESTOP_CUT_BAR_S, Some(0.1)),
     Trial::new("dma-freeze", After::Recovers, LASER_OFF_BAR_S, Some(THREAD_STOP_BAR_S)),
     Trial::new("adc-overrun", After::Recovers, LASER_OFF_BAR_S, Some(THREAD_STOP_BAR_S)),
     Trial::new("serve-hang", After::Reset, LASER_OFF_BAR_S, Some(WATCHDOG_BAR_S)),
@@ -189,6 +195,7 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
     let report = board.stop()?;
     let f = &report["fault"];
     let laser_off = f["laser_off_after_s"].as_f64();
+    let chop_off = f["chop_off_after_s"].as_f64();
     let drivers_off = f["drivers_off_after_s"].as_f64();
     let mut problems = Vec::new();
     if f["struck"] != json!(true) {
@@ -199,6 +206,12 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
             "laser enable low {laser_off:?} s after the fault (bar {} s)",
             t.laser_off_bar_s
         ));
+    }
+    if t.after != After::Unheard && f["chop_high_at_fault"] != json!(true) {
+        problems.push("the chop was not high when the fault struck: its cut cannot show".to_string());
+    }
+    if !chop_off.is_some_and(|s| s <= t.laser_off_bar_s) {
+        problems.push(format!("chop low {chop_off:?} s after the fault (bar {} s)", t.laser_off_bar_s));
     }
     if let Some(bar) = t.drivers_off_bar_s {
         if !drivers_off.is_some_and(|s| s <= bar) {
@@ -268,6 +281,7 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
         "kind": t.kind,
         "laser_off_us": laser_off.map(|s| (s * 1e7).round() / 10.0),
         "laser_off_bar_us": t.laser_off_bar_s * 1e6,
+        "chop_off_us": chop_off.map(|s| (s * 1e7).round() / 10.0),
         "drivers_off_us": drivers_off.map(|s| (s * 1e7).round() / 10.0),
         "reset_after_s": f["reset_after_s"],
         "faults_taken": report["faults_taken"],
@@ -298,7 +312,11 @@ pub fn run(root: &Path, image: &Path, plant: &Path) -> Result<Value> {
         results.push(r);
     }
     let survived = results.iter().filter(|r| r["survived"] == json!(true)).count();
+    let estop = results.iter().find(|r| r["kind"] == "estop-pulse");
     Ok(json!({
+        "estop_to_laser_enable_low_us": estop.map(|r| r["laser_off_us"].clone()),
+        "estop_to_chop_low_us": estop.map(|r| r["chop_off_us"].clone()),
+        "estop_to_drivers_off_us": estop.map(|r| r["drivers_off_us"].clone()),
         "faults": results,
         "faults_tried": TRIALS.len(),
         "faults_survived": survived,

@@ -375,6 +375,7 @@ class Board:
                 safe_at[pin] = at
             else:
                 safe_at[pin] = next((t for t, p, v in self.pins if t > at and p == pin and v == want), None)
+        safe_at["PA6"] = self._chop_off(at)
         after = {p: None if t is None else round(t - at, 9) for p, t in safe_at.items()}
         drivers = [after[p] for p in ("PC2", "PC6", "PC10")]
         return {
@@ -383,9 +384,23 @@ class Board:
             "struck_s": round(self.fault_at / HZ, 9),
             "faulted_s": round(faulted[0] / HZ, 9) if faulted else None,
             "laser_off_after_s": after["PB0"],
+            "chop_off_after_s": after["PA6"],
+            "chop_high_at_fault": level.get("PA6", 0) == 1,
             "drivers_off_after_s": None if None in drivers else max(d for d in drivers if d is not None),
             "reset_after_s": None if self.reset_at is None else round(self.reset_at / HZ - at, 9),
         }
+
+    def _chop_off(self, at: float) -> float | None:
+        """When the chop (PA6) went low after `at` for good: low from then
+        until the laser enable next rises (a measurement after the fault may
+        chop again), or to the end; None if it was still chopping."""
+        until = next((t for t, p, v in self.pins if t > at and p == "PB0" and v == 1), float("inf"))
+        level = next((v for t, p, v in reversed(self.pins) if t <= at and p == "PA6"), 0)
+        off: float | None = at if level == 0 else None
+        for t, p, v in self.pins:
+            if at < t < until and p == "PA6":
+                off = (off if off is not None else t) if v == 0 else None
+        return off
 
     def driven_pins(self) -> dict[str, int]:
         """Every pin driven at the end (output or alternate function), its level."""

@@ -4,8 +4,9 @@
 //!
 //! At each tick the handler reads the laser enable (PB0's output register),
 //! the thread loop's turns, and, while a measurement's conversion chain is
-//! watched, DMA2 stream 0's NDTR; on a trip it drives PB0 low with one BSRR
-//! store, as the E-STOP's handler does, and wakes the period reader, which
+//! watched, DMA2 stream 0's NDTR; on a trip it drives the laser enable and
+//! the chop low (`pins::cut_laser`), as the E-STOP's handler does, and wakes
+//! the period reader, which
 //! fails the read at once. The trip holds until the thread sets the laser
 //! enable high again: a measurement retried after a trip (`Head::acquire`
 //! retries a lost block once) finds the laser enable still low and fails
@@ -58,7 +59,7 @@ impl Handler<Tim7Irq> for GuardInterrupt {
         // SAFETY: see `HandlerState`.
         let guard = unsafe { &mut *STATE.0.get() };
         if let Some(trip) = guard.tick(laser_on, TURNS.load(Ordering::Relaxed), chain) {
-            pac::GPIOB.bsrr().write(|w| w.set_br(0, true));
+            super::pins::cut_laser();
             TRIPPED.store(true, Ordering::Release);
             TRIP.wake();
             defmt::error!("guard: laser cut, {}", defmt::Debug2Format(&trip));

@@ -58,6 +58,20 @@ use embassy_stm32::Peri;
 
 pub const NAME: &str = "gonio head STM32F405RG rev A";
 
+/// Darkens the laser from an interrupt, whatever the thread was doing: the
+/// enable (PB0) low with one BSRR store, and the chop (PA6) held low by
+/// TIM3's channel forced inactive, its pin left to the timer so that the
+/// next measurement's `start` chops again. CCMR1 is read, modified and
+/// written here; its only other writers are the thread's chop start and
+/// stop (adc_stream.rs), and a start that this interrupts between its read
+/// and its write puts the chop back on, with the enable already low, until
+/// the thread's stop that follows every trip.
+pub fn cut_laser() {
+    use embassy_stm32::pac::{timer::vals::Ocm, GPIOB, TIM3};
+    GPIOB.bsrr().write(|w| w.set_br(0, true));
+    TIM3.ccmr_output(0).modify(|w| w.set_ocm(0, Ocm::FORCE_INACTIVE));
+}
+
 /// Puts the pins of the table above into the safe state (laser enable and
 /// chop low, STEP low, drivers disabled) by writing the GPIO registers
 /// directly.

@@ -4,8 +4,8 @@
 //! internal pull-up: pressed, or its wire cut, the input reads high. Its
 //! rising edge is latched in hardware terms: EXTI12 pends on the edge
 //! whatever the firmware is doing, and its interrupt (priority just below
-//! the step timer's, cpu.rs) drives the laser enable low at once and counts
-//! the opening. The serve loop trips on an opening it has not handled yet
+//! the step timer's, cpu.rs) drives the laser enable and the chop low at
+//! once (`pins::cut_laser`) and counts the opening. The serve loop trips on an opening it has not handled yet
 //! at every wait ([`Sentry::until`]), so an opening shorter than a turn of
 //! the loop, or one that comes while no wait is armed (a sweep's blocked
 //! publish), still stops the head. The trip is not debounced (the first
@@ -52,8 +52,8 @@ impl Handler<EXTI15_10> for EstopInterrupt {
     unsafe fn on_interrupt() {
         if pac::EXTI.pr(0).read().line(LINE) {
             pac::EXTI.pr(0).write(|w| w.set_line(LINE, true));
-            // Laser enable (PB0) low: a single BSRR store, whoever owns the pin.
-            pac::GPIOB.bsrr().write(|w| w.set_br(0, true));
+            // Laser enable and chop low at once, whoever owns the pins.
+            super::pins::cut_laser();
             OPENINGS.fetch_add(1, Ordering::Release);
             OPENED.wake();
         }
