@@ -250,6 +250,10 @@ fn usb_session(root: &Path, image: &Path, plant: &Path) -> Result<Value> {
     let report = board.stop()?;
     let ((identity, status), measure) =
         client.with_context(|| format!("the host's client on the board's port; the board: {}", report["usb"]))?;
+    // The head runs from its own supply, and says so (USB 2.0 §9.6.3).
+    if report["usb"]["self_powered"] != Value::Bool(true) {
+        bail!("the configuration descriptor does not say self-powered: {}", report["usb"]);
+    }
     let board_signals = measure.context("no measurement")?;
     let sim = simulated_measurement()?;
     // The laser enable's high stretches, from the board's pin log (s).

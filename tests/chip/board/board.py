@@ -47,7 +47,7 @@ from .otg import OTG_FS_BASE, OtgFs
 from .plant import Plant
 from .system import FLASH_BASE, IWDG_BASE, PWR_BASE, RCC_BASE, Iwdg, Rcc
 from .timer import Timer
-from .usb_host import Host
+from .usb_host import Host, bus_power
 
 # The reference board's wiring (firmware/src/bin/head/chip/pins.rs): the
 # E-STOP and the three home switches are normally closed to ground, so they
@@ -550,6 +550,7 @@ class Board:
                 "log": self.host.log,
                 "device_descriptor": self.host.descriptor.hex() if self.host.descriptor else None,
                 "configuration_bytes": len(self.host.configuration or b""),
+                **bus_power(self.host.configuration),
             },
             "conversions": {
                 "ended": self.adc.conversions,

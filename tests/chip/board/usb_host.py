@@ -33,6 +33,15 @@ Steps = Generator[int, None, None]
 T = TypeVar("T", bound=tuple[object, ...])
 
 
+def bus_power(configuration: bytes | None) -> dict[str, bool | int | None]:
+    """What a configuration descriptor says of the device's power (USB 2.0
+    §9.6.3): bmAttributes' bit 6, self-powered, and bMaxPower in 2 mA
+    units; None for both before the host has read it."""
+    if configuration is None or len(configuration) < 9:
+        return {"self_powered": None, "max_power_ma": None}
+    return {"self_powered": bool(configuration[7] & 0x40), "max_power_ma": 2 * configuration[8]}
+
+
 class HostError(Exception):
     pass
 

@@ -257,7 +257,10 @@ pub fn start(spawner: &Spawner, usb: Peri<'static, USB_OTG_FS>, dp: Peri<'static
     dev_cfg.manufacturer = Some("gonio");
     dev_cfg.product = Some("Retroreflection BRDF head");
     dev_cfg.serial_number = Some(embassy_stm32::uid::uid_hex());
-    dev_cfg.max_power = 100;
+    // The head runs from its own supply: from the bus it draws only the
+    // VBUS sense divider's 0.34 mA (pins.rs) and the D+ pull-up's current.
+    dev_cfg.self_powered = true;
+    dev_cfg.max_power = 2;
     dev_cfg.max_packet_size_0 = 64;
 
     let mut builder = Builder::new(
