@@ -132,10 +132,7 @@ fn alta_search(alta: &Alta, file: &Path) -> Value {
 /// unless a row is grazing, where the factor is zero (the gray tape stores
 /// `f_r` out to θo = 90°), as `--no-cosine` fits it.
 fn ours(data: &Dataset, densify: Option<f64>) -> Value {
-    let grazing = data.observations.iter().any(|o| {
-        let d = o.directions();
-        d.cos_i() * d.cos_o() <= 1e-9
-    });
+    let grazing = data.observations.iter().any(rational::grazing);
     let spec = RationalSpec {
         parametrization: Parametrization::LightView,
         segments: SegmentSource::Absolute(HALF_WIDTH),

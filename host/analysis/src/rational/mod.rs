@@ -26,5 +26,5 @@ pub mod text;
 
 pub use fit::{fit, fit_observed, RationalFit, RationalSpec};
 pub use function::Rational;
-pub use programmes::{Attempt, Held};
+pub use programmes::{grazing, Attempt, Held};
 pub use segments::SegmentSource;

@@ -122,20 +122,28 @@ impl Plane {
     }
 }
 
+/// Whether `o` is grazing: its cosine factor cosθi·cosθo is zero (at most
+/// 1e-9) or undefined, so that a fit with the factor cannot divide by it.
+pub fn grazing(o: &Observation) -> bool {
+    let d = o.directions();
+    let c = d.cos_i() * d.cos_o();
+    c.is_nan() || c <= 1e-9
+}
+
 /// Each sample's cosine factor (1 without it), refusing a grazing one.
 pub(super) fn cosine_factors(obs: &[Observation], cosine: bool) -> Result<Vec<f64>> {
     obs.iter()
         .enumerate()
-        .map(|(i, o)| {
-            let d = o.directions();
-            let c = if cosine { d.cos_i() * d.cos_o() } else { 1.0 };
-            if c.is_nan() || c <= 1e-9 {
-                bail!(
-                    "{}: grazing, where the cosine factor cosθi·cosθo is zero (fit without it: --no-cosine)",
-                    sample_text(i, o)
-                );
+        .map(|(i, o)| match cosine {
+            false => Ok(1.0),
+            true if grazing(o) => bail!(
+                "{}: grazing, where the cosine factor cosθi·cosθo is zero (fit without it: --no-cosine)",
+                sample_text(i, o)
+            ),
+            true => {
+                let d = o.directions();
+                Ok(d.cos_i() * d.cos_o())
             }
-            Ok(c)
         })
         .collect()
 }
@@ -228,7 +236,7 @@ impl<'a> Programmes<'a> {
             if terms <= self.failed[k] {
                 continue;
             }
-            match self.solve(k, &basis, min_margin, single)? {
+            match self.solve(k, &basis, min_margin)? {
                 Ok(found) => {
                     self.lead = k;
                     return Ok(Ok(found));
@@ -245,8 +253,9 @@ impl<'a> Programmes<'a> {
     }
 
     /// Plane `k`'s programme of `basis`, its function checked on every
-    /// segment, and the attempt recorded.
-    fn solve(&mut self, k: usize, basis: &Basis, min_margin: f64, single: bool) -> Result<std::result::Result<Found, usize>> {
+    /// segment, and the attempt recorded (in single precision when
+    /// `min_margin` is single precision's).
+    fn solve(&mut self, k: usize, basis: &Basis, min_margin: f64) -> Result<std::result::Result<Found, usize>> {
         let plane = &self.planes[k];
         let t = Instant::now();
         let (held, margin) = match qp::solve(basis, &plane.rows, min_margin)? {
@@ -272,7 +281,7 @@ impl<'a> Programmes<'a> {
             coefficients: 2 * basis.len(),
             feasible: held.is_ok(),
             margin,
-            single_precision: single,
+            single_precision: min_margin >= qp::SINGLE_MARGIN,
             seconds: t.elapsed().as_secs_f64(),
         });
         Ok(held)
