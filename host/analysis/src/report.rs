@@ -230,7 +230,7 @@ fn params_cell(f: &ComparedFit) -> String {
             if fit.function.cosine { ", times cosθi·cosθo" } else { "" },
             fit.function.numerator.len(),
             fit.function.denominator.len(),
-            fit.segments,
+            fit.segments_text(),
             rounding::significant(fit.linf, 4)
         )),
     }

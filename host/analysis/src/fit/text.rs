@@ -126,7 +126,7 @@ impl fmt::Display for ComparisonTable<'_> {
                 ),
                 ComparedFit::Rational { fit, .. } => (
                     "–".to_string(),
-                    format!("(degree {}, segments {})", fit.function.degree, fit.segments),
+                    format!("(degree {}, segments {})", fit.function.degree, fit.segments_text()),
                 ),
             };
             writeln!(

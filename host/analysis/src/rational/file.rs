@@ -30,6 +30,7 @@ pub fn to_json(f: &RationalFit, units: Units, criteria: &Criteria, goodness: Opt
         "numerator": r.numerator,
         "denominator": r.denominator,
         "segments": f.segments,
+        "segment_k": f.segment_k,
         "shifted_segments": f.shifted,
         "worst_violation": f.worst_violation,
         "precision": if f.single_precision { "single" } else { "double" },

@@ -6,10 +6,11 @@
 use super::basis::Basis;
 use super::function::Rational;
 use super::programmes::{cosine_factors, Attempt, Held, Programmes};
-use super::segments::{sample_text, SegmentSource, Segments};
+use super::segments::{sample_text, SegmentSource, Segments, JOINT_COVERAGE};
 use crate::fit::densify::densify;
 use crate::fit::{Dataset, Metrics};
 use crate::moments::plane::Parametrization;
+use crate::rounding::significant;
 use anyhow::{bail, Result};
 use serde::Serialize;
 use std::time::Instant;
@@ -53,6 +54,8 @@ pub struct Densified {
 pub struct RationalFit {
     pub function: Rational,
     pub segments: SegmentSource,
+    /// The multiple of σ the segments came to, when drawn from σ.
+    pub segment_k: Option<f64>,
     /// Segments wholly below zero, moved up (`Segments::shifted`).
     pub shifted: usize,
     pub samples: usize,
@@ -75,6 +78,20 @@ pub struct RationalFit {
     pub attempts: Vec<Attempt>,
     /// Where the samples fitted were a grid between the measured ones.
     pub densified: Option<Densified>,
+}
+
+impl RationalFit {
+    /// The segments as fitted, with the multiple of σ a `joint` source
+    /// came to.
+    pub fn segments_text(&self) -> String {
+        match (self.segments, self.segment_k) {
+            (SegmentSource::Joint, Some(k)) => format!(
+                "joint (value ± {}σ, the truth within all at once at {JOINT_COVERAGE})",
+                significant(k, 3)
+            ),
+            (s, _) => s.to_string(),
+        }
+    }
 }
 
 /// The unit of the programme's values, over the largest segment end. The
@@ -161,6 +178,7 @@ pub fn fit_observed(data: &Dataset, spec: &RationalSpec, mut trying: impl FnMut(
         metrics,
         function,
         segments: spec.segments,
+        segment_k: segs.k,
         shifted: segs.shifted,
         samples: m,
         seconds: start.elapsed().as_secs_f64(),
@@ -218,6 +236,18 @@ mod tests {
         assert_eq!(f.function.degree, 0);
         assert_eq!(f.worst_violation, 0.0);
         assert!(f.linf < 0.01 * 0.3, "{}", f.linf);
+    }
+
+    #[test]
+    fn joint_segments_say_the_multiple_of_sigma_they_came_to() {
+        let mut d = data(|ti, to, _| 0.3 * ti.cos() * to.cos());
+        let n = d.observations.len();
+        d.observations.iter_mut().for_each(|o| o.sigma = Some(0.01 * o.value));
+        let f = fit(&d, &back_spec(SegmentSource::Joint)).unwrap();
+        assert_eq!(f.segment_k, Some(super::super::segments::joint_k(n)));
+        assert!(f.segments_text().starts_with("joint (value ± 3.69σ"), "{}", f.segments_text());
+        let f = fit(&d, &back_spec(SegmentSource::Sigma)).unwrap();
+        assert_eq!(f.segment_k, Some(2.0));
     }
 
     #[test]

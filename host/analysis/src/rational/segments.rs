@@ -7,6 +7,7 @@ use crate::fit::data::Observation;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::{bail, Result};
 use serde::Serialize;
+use statrs::distribution::{ContinuousCDF, Normal};
 use std::fmt;
 use std::str::FromStr;
 
@@ -17,6 +18,12 @@ pub enum SegmentSource {
     /// The sample's k = 2 interval, `value ± 2σ`: the calibrated CSV's
     /// `brdf_lo_sr`–`brdf_hi_sr`, ALTA's `#VS 2`.
     Sigma,
+    /// `value ± kσ`, k wide enough that the true BRDF lies within every
+    /// segment at once with probability `JOINT_COVERAGE` (`joint_k`). With
+    /// thousands of samples, some 5 % of the ±2σ segments miss the truth,
+    /// so a function through all of them must follow the noise: no smooth
+    /// function does, however many coefficients it has.
+    Joint,
     /// `value ± width` (sr⁻¹): Belcour et al. 2014 used 0.5 (1.0 for the
     /// orange coating).
     Absolute(f64),
@@ -36,9 +43,10 @@ impl FromStr for SegmentSource {
         };
         match s.split_once(':') {
             None if s.trim() == "sigma" => Ok(SegmentSource::Sigma),
+            None if s.trim() == "joint" => Ok(SegmentSource::Joint),
             Some(("abs", w)) => Ok(SegmentSource::Absolute(width(w)?)),
             Some(("rel", w)) => Ok(SegmentSource::Relative(width(w)?)),
-            _ => bail!("`--segments {s}`: expected `sigma`, `abs:WIDTH` or `rel:WIDTH`"),
+            _ => bail!("`--segments {s}`: expected `sigma`, `joint`, `abs:WIDTH` or `rel:WIDTH`"),
         }
     }
 }
@@ -47,10 +55,26 @@ impl fmt::Display for SegmentSource {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {
             SegmentSource::Sigma => write!(f, "sigma (value ± {K_COVERAGE}σ)"),
+            SegmentSource::Joint => write!(f, "joint (value ± kσ, the truth within all at once at {JOINT_COVERAGE})"),
             SegmentSource::Absolute(w) => write!(f, "abs:{w} (value ± {w} sr⁻¹)"),
             SegmentSource::Relative(w) => write!(f, "rel:{w} (value × (1 ± {w}))"),
         }
     }
+}
+
+/// The probability that the true BRDF lies within every `joint` segment.
+pub const JOINT_COVERAGE: f64 = 0.95;
+
+/// The multiple of σ whose `n` intervals all hold the truth with
+/// probability `JOINT_COVERAGE`, the errors independent and normal
+/// (Šidák): each must hold it with probability `JOINT_COVERAGE^(1/n)`.
+/// 1.96 at one sample, 4.56 at 10 000. The errors a whole
+/// scan shares (the reference's reflectance, the scale) move every value
+/// together, which a smooth function follows; counted as independent
+/// they only widen the segments.
+pub fn joint_k(n: usize) -> f64 {
+    let each = JOINT_COVERAGE.powf(1.0 / n.max(1) as f64);
+    Normal::standard().inverse_cdf(0.5 + each / 2.0)
 }
 
 /// One sample's interval, `0 ≤ lo < hi`.
@@ -72,6 +96,8 @@ pub struct Segments {
     /// at `h` at least: a dark sample says the BRDF is within about `h` of
     /// zero.
     pub shifted: usize,
+    /// The multiple of σ of segments drawn from the samples' σ.
+    pub k: Option<f64>,
 }
 
 /// Where a sample is, for messages: its index in the file's order and its
@@ -95,21 +121,26 @@ impl Segments {
     pub fn new(observations: &[Observation], source: SegmentSource) -> Result<Segments> {
         let mut segments = Vec::with_capacity(observations.len());
         let mut shifted = 0;
+        let k = match source {
+            SegmentSource::Sigma => Some(K_COVERAGE),
+            SegmentSource::Joint => Some(joint_k(observations.len())),
+            SegmentSource::Absolute(_) | SegmentSource::Relative(_) => None,
+        };
         for (i, o) in observations.iter().enumerate() {
             if !o.value.is_finite() {
                 bail!("{}: the value is not a number", sample_text(i, o));
             }
-            let half = match source {
-                SegmentSource::Sigma => match o.sigma {
-                    Some(s) if s.is_finite() => K_COVERAGE * s,
+            let half = match (source, k) {
+                (SegmentSource::Absolute(w), _) => w,
+                (SegmentSource::Relative(w), _) => w * o.value.abs(),
+                (_, k) => match o.sigma {
+                    Some(s) if s.is_finite() => k.unwrap_or(K_COVERAGE) * s,
                     Some(_) => bail!("{}: its uncertainty is not a number", sample_text(i, o)),
                     None => bail!(
-                        "{}: no uncertainty, which `--segments sigma` needs (a calibrated CSV or an ALTA file with #VS); give `--segments abs:WIDTH` or `rel:WIDTH`",
+                        "{}: no uncertainty, which `--segments sigma` and `joint` need (a calibrated CSV or an ALTA file with #VS); give `--segments abs:WIDTH` or `rel:WIDTH`",
                         sample_text(i, o)
                     ),
                 },
-                SegmentSource::Absolute(w) => w,
-                SegmentSource::Relative(w) => w * o.value.abs(),
             };
             if half < 0.0 {
                 bail!("{}: its uncertainty is negative", sample_text(i, o));
@@ -133,7 +164,7 @@ impl Segments {
             };
             segments.push(s);
         }
-        Ok(Segments { segments, shifted })
+        Ok(Segments { segments, shifted, k })
     }
 }
 
@@ -153,13 +184,41 @@ mod tests {
     }
 
     #[test]
-    fn parses_the_three_sources_and_refuses_the_rest() {
+    fn parses_the_four_sources_and_refuses_the_rest() {
         assert_eq!("sigma".parse::<SegmentSource>().unwrap(), SegmentSource::Sigma);
+        assert_eq!("joint".parse::<SegmentSource>().unwrap(), SegmentSource::Joint);
         assert_eq!("abs:0.5".parse::<SegmentSource>().unwrap(), SegmentSource::Absolute(0.5));
         assert_eq!("rel:0.1".parse::<SegmentSource>().unwrap(), SegmentSource::Relative(0.1));
         for bad in ["abs:0", "rel:-1", "abs:nan", "abs:", "sig", "pct:3"] {
             assert!(bad.parse::<SegmentSource>().is_err(), "{bad}");
         }
+    }
+
+    #[test]
+    fn joint_segments_hold_the_truth_at_once() {
+        assert!((joint_k(1) - 1.959964).abs() < 1e-5);
+        // Drawn: the share of 2 000 draws of 2 000 normal errors that all lie
+        // within ±kσ is the joint coverage, within its binomial scatter.
+        use rand::{rngs::StdRng, SeedableRng};
+        use rand_distr::{Distribution, StandardNormal};
+        let mut rng = StdRng::seed_from_u64(7);
+        let n = 2_000;
+        let k = joint_k(n);
+        assert!((4.1..4.3).contains(&k), "{k}");
+        let draws = 2_000;
+        let held = (0..draws)
+            .filter(|_| {
+                (0..n).all(|_| {
+                    let z: f64 = StandardNormal.sample(&mut rng);
+                    z.abs() <= k
+                })
+            })
+            .count();
+        let share = held as f64 / draws as f64;
+        assert!((share - JOINT_COVERAGE).abs() < 0.015, "{share}");
+        let s = Segments::new(&[obs(1.0, Some(0.1)), obs(2.0, Some(0.1))], SegmentSource::Joint).unwrap();
+        assert_eq!(s.k, Some(joint_k(2)));
+        assert!((s.segments[1].hi - (2.0 + 0.1 * joint_k(2))).abs() < 1e-12);
     }
 
     #[test]

@@ -33,7 +33,7 @@ impl fmt::Display for RationalText<'_> {
             r.degree,
             r.numerator.len(),
             r.denominator.len(),
-            f.segments,
+            f.segments_text(),
             r.quantity.label()
         )?;
         let tried: Vec<String> = f
