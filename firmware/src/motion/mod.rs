@@ -78,8 +78,7 @@ pub fn trapezoid(axis: &AxisConfig, n: u32, dps: f32) -> Profile {
 /// The analytical profile of an `n`-step move of an axis within `limits`,
 /// in stretches at fractions of its speed (`levels`; none: one stretch).
 pub fn ramp(axis: &AxisConfig, n: u32, limits: Limits, levels: &[Level]) -> Profile {
-    let per_deg = axis.microsteps_per_rev as f64 / 360.0;
-    let (v, a) = (limits.speed_dps as f64 * per_deg, limits.accel_dps2 as f64 * per_deg);
+    let (v, a) = step_rates(axis, limits);
     if levels.is_empty() {
         return Profile::new(n, v, a);
     }
@@ -90,6 +89,13 @@ pub fn ramp(axis: &AxisConfig, n: u32, limits: Limits, levels: &[Level]) -> Prof
         )
     });
     Profile::levels(n, a, caps)
+}
+
+/// An axis's `limits` in microsteps: speed (steps/s) and acceleration
+/// (steps/s²).
+fn step_rates(axis: &AxisConfig, limits: Limits) -> (f64, f64) {
+    let per_deg = axis.microsteps_per_rev as f64 / 360.0;
+    (limits.speed_dps as f64 * per_deg, limits.accel_dps2 as f64 * per_deg)
 }
 
 /// A stretch of a move: up to `until`, a fraction (0–1) of its way, at most
@@ -120,7 +126,11 @@ impl Limits {
 /// Duration (s) of a move of every axis by `delta` microsteps at cruise speed.
 pub fn move_time(cfg: &HeadConfig, delta: [i32; 3]) -> f64 {
     (0..3)
-        .map(|i| trapezoid(&cfg.axes[i], delta[i].unsigned_abs(), cfg.axes[i].max_speed_dps).duration())
+        .map(|i| {
+            let axis = &cfg.axes[i];
+            let (v, a) = step_rates(axis, Limits::new(axis.max_speed_dps, axis.max_accel_dps2));
+            Profile::rest_to_rest_s(delta[i].unsigned_abs(), v, a)
+        })
         .fold(0.0, f64::max)
 }
 
