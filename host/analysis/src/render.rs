@@ -10,7 +10,6 @@
 use crate::formats::rgl;
 use anyhow::{bail, Context, Result};
 use gonio_brdf::frame::{cross, dot};
-use gonio_brdf::Directions;
 use serde_json::{json, Value};
 use std::path::Path;
 use std::process::Command;
@@ -70,7 +69,7 @@ pub fn scenes() -> [Scene; 2] {
 impl Scene {
     /// Our integration of the picture: the radiance `f·cos θl·I/r²` averaged
     /// over the square the camera sees, on a grid of its rays.
-    pub fn mean_radiance(&self, brdf: &dyn Fn(&Directions) -> f64) -> f64 {
+    pub fn mean_radiance(&self, brdf: &rgl::Brdf) -> f64 {
         let norm = dot(self.origin, self.origin).sqrt();
         let forward = self.origin.map(|x| -x / norm);
         let right = cross(forward, self.up);
@@ -176,7 +175,7 @@ mod tests {
     #[test]
     fn a_lambertian_plane_gives_the_inverse_square_law() {
         // ρ/π · cos θl · I / r², nearly constant over a small square far away.
-        let f = |_: &Directions| 0.5 / std::f64::consts::PI;
+        let f = |_: &gonio_brdf::Directions| 0.5 / std::f64::consts::PI;
         let side = &scenes()[1];
         let r2 = dot(side.light, side.light);
         let cos = side.light[2] / r2.sqrt();

@@ -350,10 +350,20 @@ pub fn write(dir: &Path, r: &Report) -> Result<PathBuf> {
     if !r.budget.is_empty() {
         html.push_str(&budget_section(r.budget));
     }
-    if let Some(&best) = order.first() {
-        html.push_str(&renders_section(&r.fits[best], &fits_dir, &dir.join("plots"))?);
-    }
-    html.push_str(&pictures_section(r, &order, &dir.join("plots"))?);
+    // The renderer (its tabulation, then Mitsuba's process) and the
+    // pictures are independent: drawn side by side.
+    let plots = dir.join("plots");
+    let (renders, pictures) = rayon::join(
+        || {
+            order
+                .first()
+                .map(|&best| renders_section(&r.fits[best], &fits_dir, &plots))
+                .transpose()
+        },
+        || pictures_section(r, &order, &plots),
+    );
+    html.push_str(&renders?.unwrap_or_default());
+    html.push_str(&pictures?);
     let _ = writeln!(html, "<p><small>gonio {}</small></p>\n</body>\n</html>", env!("CARGO_PKG_VERSION"));
     let path = dir.join("report.html");
     std::fs::write(&path, html).with_context(|| format!("cannot write {}", path.display()))?;

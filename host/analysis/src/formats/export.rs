@@ -138,7 +138,7 @@ pub struct Written {
 }
 
 /// Tabulates `brdf` as an RGL `.bsdf` at `output` and checks it as a renderer reads it.
-pub fn write_bsdf(brdf: &dyn Fn(&Directions) -> f64, name: &str, origin: &str, output: &Path, opt: &rgl::Options) -> Result<Written> {
+pub fn write_bsdf(brdf: &rgl::Brdf, name: &str, origin: &str, output: &Path, opt: &rgl::Options) -> Result<Written> {
     let description = rgl::description(&format!("{origin} ({name})"), opt.spectrum);
     let table = rgl::Table::new(brdf, &description, opt).with_context(|| format!("{name} as .bsdf"))?;
     let bytes = table.bytes();

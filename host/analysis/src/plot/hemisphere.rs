@@ -137,16 +137,19 @@ fn gap(samples: &[(f64, f64)]) -> f64 {
 /// The samples nearest `p` (distance, index), closest first; at most
 /// `NEAREST + 1` (a sample's own position comes first when `p` is one).
 fn nearest(samples: &[(f64, f64)], p: (f64, f64)) -> Vec<(f64, usize)> {
+    // Ranked by squared distance, rooted once chosen: every cell of every
+    // map scans every sample, and `hypot` there was a fifth of a report.
     let mut best: Vec<(f64, usize)> = Vec::with_capacity(NEAREST + 2);
     for (i, s) in samples.iter().enumerate() {
-        let d = (s.0 - p.0).hypot(s.1 - p.1);
-        if best.len() <= NEAREST || d < best[NEAREST].0 {
-            let at = best.partition_point(|b| b.0 <= d);
-            best.insert(at, (d, i));
+        let (dx, dy) = (s.0 - p.0, s.1 - p.1);
+        let d2 = dx * dx + dy * dy;
+        if best.len() <= NEAREST || d2 < best[NEAREST].0 {
+            let at = best.partition_point(|b| b.0 <= d2);
+            best.insert(at, (d2, i));
             best.truncate(NEAREST + 1);
         }
     }
-    best
+    best.iter().map(|&(d2, i)| (d2.sqrt(), i)).collect()
 }
 
 /// Inverse-distance weighting of the four nearest samples, or `None` when

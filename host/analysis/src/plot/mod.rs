@@ -23,6 +23,7 @@ use crate::fit::{data::theta_in, Dataset, Observation};
 use anyhow::{anyhow, Context, Result};
 use plotters::coord::Shift;
 use plotters::prelude::*;
+use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
 /// The font every picture's text is set in, shipped with the tool
@@ -250,27 +251,36 @@ fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &Prepared, data: &
 pub fn render(data: &Dataset, fits: &[FittedBrdf], dir: &Path, options: &Options) -> Result<Vec<PathBuf>> {
     register_font()?;
     std::fs::create_dir_all(dir).with_context(|| format!("creating {}", dir.display()))?;
+    // The incidences are independent: drawn side by side.
+    let per_incidence = data
+        .incidence_angles_deg()
+        .into_par_iter()
+        .map(|ti| render_incidence(data, ti, fits, dir, options))
+        .collect::<Result<Vec<_>>>()?;
+    Ok(per_incidence.concat())
+}
+
+/// Every picture at incidence `ti`.
+fn render_incidence(data: &Dataset, ti: f64, fits: &[FittedBrdf], dir: &Path, options: &Options) -> Result<Vec<PathBuf>> {
     let mut files = Vec::new();
-    for ti in data.incidence_angles_deg() {
-        let at = data.filter(|o| theta_in(o.theta_i, &[ti]));
-        for kind in Picture::ALL {
-            let Some(prepared) = prepare(kind, &at, ti, fits, options) else {
-                continue;
-            };
-            let stem = format!("{}-{ti}", kind.name());
-            let p = dir.join(format!("{stem}.svg"));
-            let root = SVGBackend::new(&p, kind.size()).into_drawing_area();
-            draw(&root, &prepared, &at, ti, fits)?;
-            root.present().map_err(err)?;
-            drop(root);
-            files.push(p);
-            let p = dir.join(format!("{stem}.png"));
-            let root = BitMapBackend::new(&p, kind.size()).into_drawing_area();
-            draw(&root, &prepared, &at, ti, fits)?;
-            root.present().map_err(err)?;
-            drop(root);
-            files.push(p);
-        }
+    let at = data.filter(|o| theta_in(o.theta_i, &[ti]));
+    for kind in Picture::ALL {
+        let Some(prepared) = prepare(kind, &at, ti, fits, options) else {
+            continue;
+        };
+        let stem = format!("{}-{ti}", kind.name());
+        let p = dir.join(format!("{stem}.svg"));
+        let root = SVGBackend::new(&p, kind.size()).into_drawing_area();
+        draw(&root, &prepared, &at, ti, fits)?;
+        root.present().map_err(err)?;
+        drop(root);
+        files.push(p);
+        let p = dir.join(format!("{stem}.png"));
+        let root = BitMapBackend::new(&p, kind.size()).into_drawing_area();
+        draw(&root, &prepared, &at, ti, fits)?;
+        root.present().map_err(err)?;
+        drop(root);
+        files.push(p);
     }
     Ok(files)
 }

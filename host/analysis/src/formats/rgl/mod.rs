@@ -43,6 +43,7 @@ use gonio_brdf::Directions;
 use marginal::{Grid, Marginal};
 use microfacet::Microfacet;
 use rand::{Rng, SeedableRng};
+use rayon::prelude::*;
 use std::f64::consts::{FRAC_PI_2, PI};
 use tensor::Field;
 
@@ -184,9 +185,13 @@ fn solid_angle_per_u(u: f64) -> f64 {
     (2.0 * PI * PI * u * u2theta(u).sin()).max(1e-6)
 }
 
+/// A BRDF to tabulate: sr⁻¹ at a geometry, callable from the threads
+/// that tabulate the incidences side by side.
+pub type Brdf<'a> = dyn Fn(&Directions) -> f64 + Sync + 'a;
+
 /// `f·cos θo` with the light at `wo` and the viewer at `wi` (the table's
 /// incidence): what the `measured` plugin's `eval` returns for them.
-pub fn fr_cos(brdf: &dyn Fn(&Directions) -> f64, wi: [f64; 3], wo: [f64; 3]) -> f64 {
+pub fn fr_cos(brdf: &Brdf, wi: [f64; 3], wo: [f64; 3]) -> f64 {
     let d = Directions::in_frame([0.0, 0.0, 1.0], wo, wi, [1.0, 0.0, 0.0]);
     brdf(&d) * wo[2]
 }
@@ -200,7 +205,7 @@ fn nodes(w: usize) -> impl Iterator<Item = [f64; 2]> {
 impl Table {
     /// Tabulates `brdf` (sr⁻¹, isotropic, in `models.md`'s frame). A value
     /// that is NaN, infinite or negative is an error naming its geometry.
-    pub fn new(brdf: &dyn Fn(&Directions) -> f64, description: &str, opt: &Options) -> Result<Table> {
+    pub fn new(brdf: &Brdf, description: &str, opt: &Options) -> Result<Table> {
         ensure!(
             opt.theta_i_step_deg >= MIN_STEP_DEG && opt.theta_i_step_deg <= 45.0,
             "the incidence step must be in [{MIN_STEP_DEG}°, 45°]"
@@ -251,55 +256,19 @@ impl Table {
             values: nodes(n).map(|[x, _]| micro.sigma(u2theta(x)) as f32).collect(),
         };
 
-        let mut vndf_values = Vec::with_capacity(theta_i.len() * v * v);
-        for &ti in &theta_i {
-            vndf_values.extend(warp_slice(brdf, &micro, &ndf, ti, v, opt));
-        }
+        // The incidences are independent: tabulated side by side.
+        let vndf_values: Vec<f32> = theta_i
+            .par_iter()
+            .map(|&ti| warp_slice(brdf, &micro, &ndf, ti, v, opt))
+            .collect::<Vec<_>>()
+            .concat();
         let vndf = Marginal::new(&vndf_values, v, v, &theta_i);
-
-        let mut spectra_values = Vec::with_capacity(theta_i.len() * s * s);
-        let mut luminance = Vec::with_capacity(theta_i.len() * s * s);
-        for &ti in &theta_i {
-            let wi = unit(ti, 0.0);
-            let scale = 4.0 * sigma.eval([theta2u(ti), phi2u(0.0)], 0.0);
-            let mut lum_slice = Vec::with_capacity(s * s);
-            for node in nodes(s) {
-                let (u, pdf) = vndf.sample(node, ti);
-                let m = unit(u2theta(u[0]), u2phi(u[1]));
-                let cos_im = dot(wi, m);
-                let wo = [
-                    2.0 * cos_im * m[0] - wi[0],
-                    2.0 * cos_im * m[1] - wi[1],
-                    2.0 * cos_im * m[2] - wi[2],
-                ];
-                // Below the horizon no light arrives: f·cos θo = 0 there.
-                let f_cos = if wo[2] > 0.0 { fr_cos(brdf, wi, wo) } else { 0.0 };
-                if !(f_cos.is_finite() && f_cos >= 0.0) {
-                    let (tl, to, dphi) = Directions::in_frame([0.0, 0.0, 1.0], wo, wi, [1.0, 0.0, 0.0]).angles();
-                    bail!(
-                        "cannot tabulate: f = {} at θi = {:.2}°, θo = {:.2}°, Δφ = {:.2}°",
-                        f_cos / wo[2],
-                        tl.to_degrees(),
-                        to.to_degrees(),
-                        dphi.to_degrees()
-                    );
-                }
-                let d = ndf.eval(u, 0.0);
-                let value = f_cos * scale / d;
-                ensure!(
-                    value.is_finite(),
-                    "cannot tabulate: a stored value is {value} (σ = {}, D = {d})",
-                    scale / 4.0
-                );
-                spectra_values.push(value as f32);
-                // The luminance warp: f·cos θo over the warp's own density
-                // of ωo, so that sampling it draws ωo in proportion to f·cos θo.
-                let pdf_wo = pdf / (solid_angle_per_u(u[0]) * 4.0 * cos_im.max(1e-6));
-                lum_slice.push(if cos_im > 0.0 { f_cos / pdf_wo } else { 0.0 });
-            }
-            let mean = lum_slice.iter().sum::<f64>() / lum_slice.len() as f64;
-            luminance.extend(lum_slice.iter().map(|&l| (l + 1e-3 * mean.max(1e-30)) as f32));
-        }
+        let slices = theta_i
+            .par_iter()
+            .map(|&ti| spectra_slice(brdf, &ndf, &sigma, &vndf, ti, s))
+            .collect::<Result<Vec<_>>>()?;
+        let (spectra_values, luminance): (Vec<f32>, Vec<f32>) =
+            slices.into_iter().flat_map(|(values, lum)| values.into_iter().zip(lum)).unzip();
         let spectra = Grid {
             w: s,
             h: s,
@@ -352,7 +321,7 @@ impl Table {
 /// the same, so that neighbouring rows of the warped grid stand for the
 /// same polar angles and interpolating between them does not mix the
 /// inside of a lobe with its outside.
-fn warp_slice(brdf: &dyn Fn(&Directions) -> f64, micro: &Microfacet, ndf: &Grid, theta_i: f64, v: usize, opt: &Options) -> Vec<f32> {
+fn warp_slice(brdf: &Brdf, micro: &Microfacet, ndf: &Grid, theta_i: f64, v: usize, opt: &Options) -> Vec<f32> {
     let (gb, hb) = bump_axes(micro, theta_i, v, opt);
     let (gc, hc) = curvature_axes(brdf, ndf, theta_i, v);
     let share = opt.curvature_share;
@@ -361,6 +330,52 @@ fn warp_slice(brdf: &dyn Fn(&Directions) -> f64, micro: &Microfacet, ndf: &Grid,
     let target = 0.5 * (theta_i / (2.0 * opt.bump_width_deg.to_radians())).min(1.0);
     let g = centred(&g, theta2u(theta_i), target);
     h.iter().flat_map(|&hy| g.iter().map(move |&gx| (gx * hy) as f32)).collect()
+}
+
+/// One incidence's stored values, `f·cos θo · 4σ / D` at the nodes of its
+/// warped square, and its luminance warp's.
+fn spectra_slice(brdf: &Brdf, ndf: &Grid, sigma: &Grid, vndf: &Marginal, ti: f64, s: usize) -> Result<(Vec<f32>, Vec<f32>)> {
+    let wi = unit(ti, 0.0);
+    let scale = 4.0 * sigma.eval([theta2u(ti), phi2u(0.0)], 0.0);
+    let mut values = Vec::with_capacity(s * s);
+    let mut lum_slice = Vec::with_capacity(s * s);
+    for node in nodes(s) {
+        let (u, pdf) = vndf.sample(node, ti);
+        let m = unit(u2theta(u[0]), u2phi(u[1]));
+        let cos_im = dot(wi, m);
+        let wo = [
+            2.0 * cos_im * m[0] - wi[0],
+            2.0 * cos_im * m[1] - wi[1],
+            2.0 * cos_im * m[2] - wi[2],
+        ];
+        // Below the horizon no light arrives: f·cos θo = 0 there.
+        let f_cos = if wo[2] > 0.0 { fr_cos(brdf, wi, wo) } else { 0.0 };
+        if !(f_cos.is_finite() && f_cos >= 0.0) {
+            let (tl, to, dphi) = Directions::in_frame([0.0, 0.0, 1.0], wo, wi, [1.0, 0.0, 0.0]).angles();
+            bail!(
+                "cannot tabulate: f = {} at θi = {:.2}°, θo = {:.2}°, Δφ = {:.2}°",
+                f_cos / wo[2],
+                tl.to_degrees(),
+                to.to_degrees(),
+                dphi.to_degrees()
+            );
+        }
+        let d = ndf.eval(u, 0.0);
+        let value = f_cos * scale / d;
+        ensure!(
+            value.is_finite(),
+            "cannot tabulate: a stored value is {value} (σ = {}, D = {d})",
+            scale / 4.0
+        );
+        values.push(value as f32);
+        // The luminance warp: f·cos θo over the warp's own density
+        // of ωo, so that sampling it draws ωo in proportion to f·cos θo.
+        let pdf_wo = pdf / (solid_angle_per_u(u[0]) * 4.0 * cos_im.max(1e-6));
+        lum_slice.push(if cos_im > 0.0 { f_cos / pdf_wo } else { 0.0 });
+    }
+    let mean = lum_slice.iter().sum::<f64>() / lum_slice.len() as f64;
+    let luminance = lum_slice.iter().map(|&l| (l + 1e-3 * mean.max(1e-30)) as f32).collect();
+    Ok((values, luminance))
 }
 
 /// The fixed part of a warp, per axis: the marginals of the visible
@@ -410,7 +425,7 @@ const CURVATURE_FLOOR: f64 = 0.15;
 /// that one product `g(x)·h(y)` serves every row), with a share
 /// [`CURVATURE_FLOOR`] spread evenly. Views within 3° of the horizon,
 /// where `f·cos θo` bends to zero, take none.
-fn curvature_axes(brdf: &dyn Fn(&Directions) -> f64, ndf: &Grid, theta_i: f64, v: usize) -> (Vec<f64>, Vec<f64>) {
+fn curvature_axes(brdf: &Brdf, ndf: &Grid, theta_i: f64, v: usize) -> (Vec<f64>, Vec<f64>) {
     // The function is sampled four times as finely as the warp's nodes.
     let fine = 4 * (v - 1) + 1;
     let wi = unit(theta_i, 0.0);
@@ -687,10 +702,10 @@ pub fn geometry_deg(wi: [f64; 3], wo: [f64; 3]) -> [f64; 3] {
 
 /// Compares the table, read as the plugin reads it, with `brdf` at
 /// [`pairs`] and at the retro peak.
-pub fn accuracy(table: &Table, brdf: &dyn Fn(&Directions) -> f64, n: usize, lobe: f64) -> Accuracy {
+pub fn accuracy(table: &Table, brdf: &Brdf, n: usize, lobe: f64) -> Accuracy {
     let drawn = pairs(n, lobe, 34);
-    let got: Vec<f64> = drawn.iter().map(|&(wi, wo)| table.eval(wi, wo)).collect();
-    let truth: Vec<f64> = drawn.iter().map(|&(wi, wo)| fr_cos(brdf, wi, wo)).collect();
+    let got: Vec<f64> = drawn.par_iter().map(|&(wi, wo)| table.eval(wi, wo)).collect();
+    let truth: Vec<f64> = drawn.par_iter().map(|&(wi, wo)| fr_cos(brdf, wi, wo)).collect();
     let worst = worst(&drawn, &got, &truth);
     let errors = relative_errors(got.into_iter(), truth.into_iter());
     let retro_peak = retro_directions()
