@@ -14,6 +14,7 @@ use gonio_analysis::fit::{self, Units, Weighting};
 use gonio_analysis::formats::export::Drawn;
 use gonio_analysis::rational::RationalSpec;
 use gonio_brdf::ModelId;
+use indicatif::{MultiProgress, ProgressBar};
 use serde_json::Value;
 use std::path::Path;
 
@@ -68,29 +69,44 @@ pub fn kept(a: &FitArgs, d: &Selection, mut v: Value, fitted: &FittedBrdf) -> Re
 /// bars. A rational function that no degree allowed can make is a note,
 /// not a failure of the comparison: the models still stand.
 pub fn compare(d: &Selection, o: &FitOptions, rational: Option<&RationalSpec>) -> Result<Comparison> {
-    let bar = Operator::for_json(o.json).bar(ModelId::ALL.len() as u64, "fitting", "models");
-    let mut done = 0;
-    let mut comparison = Comparison::of_models(d, &o.settings(&[])?, |model| {
-        bar.set_message(model.name());
-        bar.set_position(done);
-        done += 1;
-    })?;
-    bar.finish_and_clear();
-    if let Some(spec) = rational {
-        match row(d, spec, o.units.unwrap_or(d.train.units), o.weights, o.json) {
-            Ok(row) => comparison.rows.push(row.into()),
-            Err(e) => comparison.unfitted.push(format!("{e:#}")),
-        }
+    // The rational function's solver is one thread, the models' fits use
+    // both cores: the two run side by side, each with its bar.
+    let bars = MultiProgress::new();
+    let shown = |bar: ProgressBar| if o.json { bar } else { bars.add(bar) };
+    let bar = shown(Operator::for_json(o.json).bar(ModelId::ALL.len() as u64, "fitting", "models"));
+    let units = o.units.unwrap_or(d.train.units);
+    let (models, rational) = rayon::join(
+        || {
+            let mut done = 0;
+            let comparison = Comparison::of_models(d, &o.settings(&[])?, |model| {
+                bar.set_message(model.name());
+                bar.set_position(done);
+                done += 1;
+            });
+            bar.finish_and_clear();
+            comparison
+        },
+        || rational.map(|spec| row(d, spec, units, o.weights, shown(rational_bar(spec, o.json)))),
+    );
+    let mut comparison = models?;
+    match rational {
+        Some(Ok(row)) => comparison.rows.push(row.into()),
+        Some(Err(e)) => comparison.unfitted.push(format!("{e:#}")),
+        None => {}
     }
     Ok(comparison)
 }
 
-/// The rational function through `d`'s segments as a comparison ranks it
-/// (its criteria in `units` under `weighting`), with a progress bar over
-/// the coefficients tried.
-pub fn row(d: &Selection, spec: &RationalSpec, units: Units, weighting: Weighting, json: bool) -> Result<RationalRow> {
+/// The bar of a rational fit, over the coefficients its spec allows.
+pub fn rational_bar(spec: &RationalSpec, json: bool) -> ProgressBar {
     let most = 2 * gonio_analysis::rational::basis::Basis::size(spec.max_degree);
-    let bar = Operator::for_json(json).bar(most as u64, "fitting rational", "coefficients");
+    Operator::for_json(json).bar(most as u64, "fitting rational", "coefficients")
+}
+
+/// The rational function through `d`'s segments as a comparison ranks it
+/// (its criteria in `units` under `weighting`), `bar` moving over the
+/// coefficients tried.
+pub fn row(d: &Selection, spec: &RationalSpec, units: Units, weighting: Weighting, bar: ProgressBar) -> Result<RationalRow> {
     let row = rational_fit(d, spec, units, weighting, |coefficients| {
         bar.set_position(coefficients as u64);
         bar.set_message(format!("{coefficients} coefficients"));

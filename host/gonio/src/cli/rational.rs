@@ -3,7 +3,7 @@
 //! fit file.
 
 use super::fit_args::FitArgs;
-use super::fitting::row;
+use super::fitting::{rational_bar, row};
 use anyhow::{bail, Result};
 use gonio_analysis::fit::file::FittedBrdf;
 use gonio_analysis::fit::Weighting;
@@ -16,7 +16,13 @@ pub fn fit_cmd(a: FitArgs) -> Result<()> {
     }
     let spec = a.rational.rational_spec(o.param)?;
     let d = o.select(&a.file)?;
-    let row = row(&d, &spec, o.units.unwrap_or(d.train.units), Weighting::Uniform, o.json)?;
+    let row = row(
+        &d,
+        &spec,
+        o.units.unwrap_or(d.train.units),
+        Weighting::Uniform,
+        rational_bar(&spec, o.json),
+    )?;
     let (f, holdout) = (&row.fit, &row.holdout);
     let v = super::fitting::kept(&a, &d, row.to_json(), &FittedBrdf::Rational(f.function.clone()))?;
     if o.json {
