@@ -75,6 +75,13 @@ pub async fn scan_into(
         plate::measure_plate(session.head(), target.as_ref(), dir, operator).await?;
     }
     let config = *session.head().config();
+    // The lower bound needs only the grid, and takes about a second for a
+    // default scan (quadratic in its positions): worked out while the head
+    // scans.
+    let bound = (resume.is_none() && record.monitor.is_none()).then(|| {
+        let spec = spec.clone();
+        tokio::task::spawn_blocking(move || lower_bound_s(&config, &spec, &detection))
+    });
     let order: Vec<u32> = visit_order(&config, spec, PARK).collect();
     let rest = order.iter().copied().skip(spec.first_order as usize);
     let progress = Progress::new(
@@ -111,10 +118,10 @@ pub async fn scan_into(
             .insert("link lost while preparing the head".into(), reconnected_before_scan);
     }
     let samples = writer.finish()?;
-    match resume {
-        None if record.monitor.is_none() => outcome.lower_bound_s = lower_bound_s(&config, spec, &detection),
-        None => {}
-        Some(_) => whole_scan_counts(&mut outcome, &samples)?,
+    match (resume, bound) {
+        (None, Some(bound)) => outcome.lower_bound_s = bound.await.context("working out the scan's lower bound")?,
+        (None, None) => {}
+        (Some(_), _) => whole_scan_counts(&mut outcome, &samples)?,
     }
     let id = session.head().identity().clone();
     let mut run_record = RunRecord::new(&id, record.material(), spec, &detection, session.learned, outcome.clone());
