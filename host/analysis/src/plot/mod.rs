@@ -236,13 +236,15 @@ fn prepare(kind: Picture, data: &Dataset, ti: f64, fits: &[FittedBrdf], o: &Opti
     }
 }
 
+/// Draws the picture on `root` and writes it out.
 fn draw<DB: DrawingBackend>(root: &DrawingArea<DB, Shift>, p: &Prepared, data: &Dataset, ti: f64, fits: &[FittedBrdf]) -> Result<()> {
     match p {
         Prepared::Plane => plane::draw(root, data, ti, fits),
         Prepared::Cuts => cuts::draw(root, data, ti, fits.first()),
         Prepared::Retro => retro::draw(root, data, ti, fits),
         Prepared::Map(m) => hemisphere::draw(root, m),
-    }
+    }?;
+    root.present().map_err(err)
 }
 
 /// Draws every picture for every incidence angle (residuals only with a
@@ -269,18 +271,12 @@ fn render_incidence(data: &Dataset, ti: f64, fits: &[FittedBrdf], dir: &Path, op
             continue;
         };
         let stem = format!("{}-{ti}", kind.name());
-        let p = dir.join(format!("{stem}.svg"));
-        let root = SVGBackend::new(&p, kind.size()).into_drawing_area();
-        draw(&root, &prepared, &at, ti, fits)?;
-        root.present().map_err(err)?;
-        drop(root);
-        files.push(p);
-        let p = dir.join(format!("{stem}.png"));
-        let root = BitMapBackend::new(&p, kind.size()).into_drawing_area();
-        draw(&root, &prepared, &at, ti, fits)?;
-        root.present().map_err(err)?;
-        drop(root);
-        files.push(p);
+        let svg = dir.join(format!("{stem}.svg"));
+        draw(&SVGBackend::new(&svg, kind.size()).into_drawing_area(), &prepared, &at, ti, fits)?;
+        files.push(svg);
+        let png = dir.join(format!("{stem}.png"));
+        draw(&BitMapBackend::new(&png, kind.size()).into_drawing_area(), &prepared, &at, ti, fits)?;
+        files.push(png);
     }
     Ok(files)
 }
