@@ -279,11 +279,15 @@ impl ModelId {
     }
 
     /// A hand-written `f_r` and gradient in every parameter, where one beats
-    /// dual numbers by enough to matter in a fit (`lafortune`).
+    /// dual numbers by enough to matter in a fit.
     pub fn hand_gradient(self) -> Option<HandGradient> {
         match self {
             ModelId::Lafortune => Some(lafortune::value_and_gradient),
             ModelId::RetroPhong => Some(retro_phong::value_and_gradient),
+            ModelId::AbcRetro => Some(abc_retro::value_and_gradient),
+            ModelId::AbcRetroPerLobe => Some(abc_retro::value_and_gradient_per_lobe),
+            ModelId::BeckmannRetro => Some(beckmann_retro::value_and_gradient),
+            ModelId::BlinnRetro => Some(blinn_retro::value_and_gradient),
             _ => None,
         }
     }
