@@ -138,7 +138,7 @@ fn gap(samples: &[(f64, f64)]) -> f64 {
 /// `NEAREST + 1` (a sample's own position comes first when `p` is one).
 fn nearest(samples: &[(f64, f64)], p: (f64, f64)) -> Vec<(f64, usize)> {
     // Ranked by squared distance, rooted once chosen: every cell of every
-    // map scans every sample, and `hypot` there was a fifth of a report.
+    // map scans every sample, and `hypot` there was 5 % of the demo's time.
     let mut best: Vec<(f64, usize)> = Vec::with_capacity(NEAREST + 2);
     for (i, s) in samples.iter().enumerate() {
         let (dx, dy) = (s.0 - p.0, s.1 - p.1);

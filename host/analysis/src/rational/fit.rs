@@ -6,11 +6,10 @@
 use super::basis::Basis;
 use super::function::Rational;
 use super::programmes::{cosine_factors, Attempt, Held, Programmes};
-use super::segments::{sample_text, SegmentSource, Segments, JOINT_COVERAGE};
+use super::segments::{sample_text, SegmentSource, Segments};
 use crate::fit::densify::densify;
 use crate::fit::{Dataset, Metrics};
 use crate::moments::plane::Parametrization;
-use crate::rounding::significant;
 use anyhow::{bail, Result};
 use serde::Serialize;
 use std::time::Instant;
@@ -84,13 +83,7 @@ impl RationalFit {
     /// The segments as fitted, with the multiple of σ a `joint` source
     /// came to.
     pub fn segments_text(&self) -> String {
-        match (self.segments, self.segment_k) {
-            (SegmentSource::Joint, Some(k)) => format!(
-                "joint (value ± {}σ, the truth within all at once at {JOINT_COVERAGE})",
-                significant(k, 3)
-            ),
-            (s, _) => s.to_string(),
-        }
+        self.segments.text(self.segment_k)
     }
 }
 

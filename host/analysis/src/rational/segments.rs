@@ -4,11 +4,11 @@
 //! (`f_r` or `f_r·cosθo`).
 
 use crate::fit::data::Observation;
+use crate::rounding::significant;
 use crate::uncertainty::K_COVERAGE;
 use anyhow::{bail, Result};
 use serde::Serialize;
 use statrs::distribution::{ContinuousCDF, Normal};
-use std::fmt;
 use std::str::FromStr;
 
 /// Where the segments come from (`--segments`).
@@ -51,13 +51,18 @@ impl FromStr for SegmentSource {
     }
 }
 
-impl fmt::Display for SegmentSource {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+impl SegmentSource {
+    /// What the segments were, in words; `k`, the multiple of σ the
+    /// segments came to (`Segments::k`), is written out for `joint`.
+    pub fn text(self, k: Option<f64>) -> String {
         match self {
-            SegmentSource::Sigma => write!(f, "sigma (value ± {K_COVERAGE}σ)"),
-            SegmentSource::Joint => write!(f, "joint (value ± kσ, the truth within all at once at {JOINT_COVERAGE})"),
-            SegmentSource::Absolute(w) => write!(f, "abs:{w} (value ± {w} sr⁻¹)"),
-            SegmentSource::Relative(w) => write!(f, "rel:{w} (value × (1 ± {w}))"),
+            SegmentSource::Sigma => format!("sigma (value ± {K_COVERAGE}σ)"),
+            SegmentSource::Joint => {
+                let k = k.map_or("k".to_string(), |k| significant(k, 3));
+                format!("joint (value ± {k}σ, the truth within all at once at {JOINT_COVERAGE})")
+            }
+            SegmentSource::Absolute(w) => format!("abs:{w} (value ± {w} sr⁻¹)"),
+            SegmentSource::Relative(w) => format!("rel:{w} (value × (1 ± {w}))"),
         }
     }
 }

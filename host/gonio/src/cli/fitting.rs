@@ -75,7 +75,7 @@ pub fn compare(d: &Selection, o: &FitOptions, rational: Option<&RationalSpec>) -
     let shown = |bar: ProgressBar| if o.json { bar } else { bars.add(bar) };
     let bar = shown(Operator::for_json(o.json).bar(ModelId::ALL.len() as u64, "fitting", "models"));
     let units = o.units.unwrap_or(d.train.units);
-    let (models, rational) = rayon::join(
+    let (models, rational_row) = rayon::join(
         || {
             let mut done = 0;
             let comparison = Comparison::of_models(d, &o.settings(&[])?, |model| {
@@ -89,7 +89,7 @@ pub fn compare(d: &Selection, o: &FitOptions, rational: Option<&RationalSpec>) -
         || rational.map(|spec| row(d, spec, units, o.weights, shown(rational_bar(spec, o.json)))),
     );
     let mut comparison = models?;
-    match rational {
+    match rational_row {
         Some(Ok(row)) => comparison.rows.push(row.into()),
         Some(Err(e)) => comparison.unfitted.push(format!("{e:#}")),
         None => {}
