@@ -22,7 +22,11 @@
 //!   without a reset;
 //! - `usb-replug`: the cable pulled for 100 ms and plugged back (a bus
 //!   reset, enumeration, the port reopened);
-//! - `usb-in-nak`: the host keeps the port open but stops reading.
+//! - `usb-in-nak`: the host keeps the port open but stops reading;
+//! - `crystal-stop`: the crystal stops oscillating (the clock security
+//!   system's NMI, the core on the HSI);
+//! - `stray-irq`: an interrupt the image has no handler for, enabled and
+//!   pended at priority 0.
 //!
 //! Survived means: the laser enable and the chop low (the chop high when
 //! the fault struck, so that its cut shows; 10 µs for the E-STOP, 1 ms for
@@ -31,7 +35,10 @@
 //! emulated time, from the fault: the faulting access for a fault of the
 //! firmware, the injection otherwise), and then: after a fault of the
 //! firmware or a hung serve loop, the independent watchdog resets the chip
-//! within its timeout, every pin safe, and no sample comes back; after the
+//! within its timeout, every pin safe, and no sample comes back; after a
+//! stopped crystal or a stray interrupt the image's own handler resets
+//! the chip within the laser's bound, every pin safe, and no sample comes
+//! back; after the
 //! E-STOP the measurement is refused as an E-STOP, the head re-arms on a
 //! continue once the input has stayed closed, and measures again; after a
 //! stalled conversion chain the measurement is refused and the next one
@@ -87,6 +94,9 @@ const MEASUREMENT_S: f64 = 1.0;
 enum After {
     /// The watchdog resets the chip; no answer comes.
     Reset,
+    /// The image resets the chip at once (a system reset request); no
+    /// answer comes.
+    Restart,
     /// Refused as an E-STOP, held until a continue re-arms it.
     EStop,
     /// The operation refused; the next one succeeds.
@@ -120,17 +130,22 @@ impl Trial {
     }
 }
 
-const TRIALS: [Trial; 9] = [
-    Trial::new("hardfault", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
-    Trial::new("stack-overflow", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
-    Trial::new("estop-pulse", After::EStop, ESTOP_CUT_BAR_S, Some(0.1)),
-    Trial::new("dma-freeze", After::Recovers, LASER_OFF_BAR_S, Some(THREAD_STOP_BAR_S)),
-    Trial::new("adc-overrun", After::Recovers, LASER_OFF_BAR_S, Some(THREAD_STOP_BAR_S)),
-    Trial::new("serve-hang", After::Reset, LASER_OFF_BAR_S, Some(WATCHDOG_BAR_S)),
-    Trial::new("usb-suspend", After::LinkLost, LASER_OFF_BAR_S, Some(0.1)),
-    Trial::new("usb-replug", After::LinkLost, LASER_OFF_BAR_S, Some(0.1)),
-    Trial::new("usb-in-nak", After::Unheard, MEASUREMENT_S, None),
-];
+/// The trials, in the order they run.
+fn trials() -> [Trial; 11] {
+    [
+        Trial::new("hardfault", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
+        Trial::new("stack-overflow", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
+        Trial::new("estop-pulse", After::EStop, ESTOP_CUT_BAR_S, Some(0.1)),
+        Trial::new("dma-freeze", After::Recovers, LASER_OFF_BAR_S, Some(THREAD_STOP_BAR_S)),
+        Trial::new("adc-overrun", After::Recovers, LASER_OFF_BAR_S, Some(THREAD_STOP_BAR_S)),
+        Trial::new("serve-hang", After::Reset, LASER_OFF_BAR_S, Some(WATCHDOG_BAR_S)),
+        Trial::new("usb-suspend", After::LinkLost, LASER_OFF_BAR_S, Some(0.1)),
+        Trial::new("usb-replug", After::LinkLost, LASER_OFF_BAR_S, Some(0.1)),
+        Trial::new("usb-in-nak", After::Unheard, MEASUREMENT_S, None),
+        Trial::new("crystal-stop", After::Restart, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
+        Trial::new("stray-irq", After::Restart, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
+    ]
+}
 
 /// A step's outcome as text.
 fn outcome<T>(r: Result<T>, show: impl Fn(T) -> String) -> Result<String, String> {
@@ -219,17 +234,16 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
         }
     }
     let step = |name: &str| host.iter().find(|(n, _)| n == name).map(|(_, r)| r.clone());
-    if t.after == After::Reset {
-        let timeout = report["watchdog"]["timeout_s"]
-            .as_f64()
-            .unwrap_or(f64::INFINITY)
-            .min(WATCHDOG_BAR_S);
+    if matches!(t.after, After::Reset | After::Restart) {
+        let (stop, bar) = if t.after == After::Reset {
+            let timeout = report["watchdog"]["timeout_s"].as_f64().unwrap_or(f64::INFINITY);
+            ("watchdog reset", timeout.min(WATCHDOG_BAR_S))
+        } else {
+            ("system reset request", t.laser_off_bar_s)
+        };
         let reset = f["reset_after_s"].as_f64();
-        if report["stopped"] != "watchdog reset" || !reset.is_some_and(|r| r <= timeout) {
-            problems.push(format!(
-                "no watchdog reset within its {timeout} s: {} after {reset:?} s",
-                report["stopped"]
-            ));
+        if report["stopped"] != stop || !reset.is_some_and(|r| r <= bar) {
+            problems.push(format!("no {stop} within {bar} s: {} after {reset:?} s", report["stopped"]));
         }
         if report["locked_up"] != json!(false) {
             problems.push("the core locked up".into());
@@ -274,7 +288,7 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
             problems.push(format!("measure again: {:?}", step("measure again")));
         }
     }
-    if t.after != After::Reset && report["stopped"] != "stopped (SIGTERM)" {
+    if !matches!(t.after, After::Reset | After::Restart) && report["stopped"] != "stopped (SIGTERM)" {
         problems.push(format!("the board stopped: {}", report["stopped"]));
     }
     Ok(json!({
@@ -285,6 +299,7 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
         "drivers_off_us": drivers_off.map(|s| (s * 1e7).round() / 10.0),
         "reset_after_s": f["reset_after_s"],
         "faults_taken": report["faults_taken"],
+        "clocks": report["clocks"],
         "thread_turn_longest_laser_on_us": report["thread_turn_longest_laser_on_us"],
         "host": host.iter().map(|(n, r)| json!({"step": n, "ok": r.as_ref().ok(), "error": r.as_ref().err()})).collect::<Vec<_>>(),
         "emulated_s": report["virtual_seconds"],
@@ -294,14 +309,15 @@ fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
     }))
 }
 
-/// Every trial of [`TRIALS`], one after the other: a JSON object with each
+/// Every trial of [`trials`], one after the other: a JSON object with each
 /// trial's figures, `faults_survived` of `faults_tried`, and
 /// `laser_off_us_max` over the faults that call for the laser off (all but
 /// the host that stops reading, whose measurement runs to its end).
 pub fn run(root: &Path, image: &Path, plant: &Path) -> Result<Value> {
     let mut results = Vec::new();
     let mut laser_off_max = f64::NAN;
-    for t in &TRIALS {
+    let trials = trials();
+    for t in &trials {
         eprintln!("board faults: {}", t.kind);
         let r = trial(root, image, plant, t).with_context(|| t.kind)?;
         if t.after != After::Unheard {
@@ -318,7 +334,7 @@ pub fn run(root: &Path, image: &Path, plant: &Path) -> Result<Value> {
         "estop_to_chop_low_us": estop.map(|r| r["chop_off_us"].clone()),
         "estop_to_drivers_off_us": estop.map(|r| r["drivers_off_us"].clone()),
         "faults": results,
-        "faults_tried": TRIALS.len(),
+        "faults_tried": trials.len(),
         "faults_survived": survived,
         "laser_off_us_max": laser_off_max,
         "laser_off_bar_us": LASER_OFF_BAR_S * 1e6,

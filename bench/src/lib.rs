@@ -7,5 +7,6 @@
 pub mod board_scans;
 pub mod chip_costs;
 pub mod chop_signal;
+pub mod clock_trials;
 pub mod fault_trials;
 pub mod virtual_board;

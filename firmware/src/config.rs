@@ -129,6 +129,10 @@ impl HeadConfig {
 /// Core clock of the reference board (Hz): the PLL's 168 MHz.
 pub const CPU_HZ: f64 = 168e6;
 
+/// The reference board's crystal (Hz), which the PLL multiplies to
+/// [`CPU_HZ`] and to the USB's 48 MHz; checked at boot (`crate::crystal`).
+pub const CRYSTAL_HZ: u32 = 8_000_000;
+
 /// 200-step motors at 16 microsteps: rotation stage on a 90:1 worm (800 µsteps/°),
 /// cradle on a 180:1 worm (1600 µsteps/°), arm on a 45:1 reduction (400 µsteps/°).
 pub const REFERENCE: HeadConfig = HeadConfig {

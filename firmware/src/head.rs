@@ -51,6 +51,9 @@ pub struct Head<B: Board> {
     pub(crate) samples_flagged: u32,
     samples_remeasured: u32,
     pub(crate) last_fault: Option<Fault>,
+    /// Why the laser may not come on until the chip restarts (a clock tree
+    /// that failed its check at boot), if it may not.
+    laser_inhibited: Option<Fault>,
     /// What the head is doing (the state table's state).
     pub(crate) mode: Mode,
     drivers_on: bool,
@@ -83,6 +86,7 @@ impl<B: Board> Head<B> {
             samples_flagged: 0,
             samples_remeasured: 0,
             last_fault: None,
+            laser_inhibited: None,
             mode: Mode::Idle,
             drivers_on: false,
             estop_open: false,
@@ -106,9 +110,24 @@ impl<B: Board> Head<B> {
         self.detector.factor_designs();
     }
 
-    /// Reports why the head last restarted (a watchdog reset), in the status.
+    /// Reports why the head last restarted (its watchdog, or a handler that
+    /// made the pins safe and reset the chip), in the status.
     pub fn restarted_by(&mut self, f: Fault) {
         self.last_fault = Some(f);
+    }
+
+    /// Keeps the laser off until the chip restarts, for `why` (reported in
+    /// the status, and as the refusal of everything that needs the laser):
+    /// the chip layer's answer to a clock it cannot trust. The axes still
+    /// home and move, for bring-up.
+    pub fn inhibit_laser(&mut self, why: Fault) {
+        self.laser_inhibited = Some(why);
+        self.last_fault = Some(why);
+    }
+
+    /// Refuses, before anything moves, what would need an inhibited laser.
+    fn laser_permitted(&self) -> Result<(), Fault> {
+        self.laser_inhibited.map_or(Ok(()), Err)
     }
 
     /// Laser off, conversions stopped, drivers disabled, step queues emptied.
@@ -199,6 +218,9 @@ impl<B: Board> Head<B> {
     pub(crate) fn laser(&mut self, on: bool) -> Result<(), Fault> {
         if on && !self.mode.laser_allowed() {
             return Err(Fault::Busy);
+        }
+        if on {
+            self.laser_permitted()?;
         }
         let r = if on { self.hw.laser.set_high() } else { self.hw.laser.set_low() };
         r.map_err(|_| Fault::Gpio)?;
@@ -390,6 +412,7 @@ impl<B: Board> Head<B> {
     }
 
     pub async fn measure(&mut self, req: MeasureRequest) -> Reply<Sample> {
+        self.laser_permitted()?;
         self.apply(Event::Measure)?;
         let r = self.acquire(req.at, None).await;
         self.rest_laser();
@@ -419,6 +442,7 @@ impl<B: Board> Head<B> {
         if !self.pos.all_homed() {
             return Err(Fault::NotHomed);
         }
+        self.laser_permitted()?;
         self.drop_scan(Fault::Aborted);
         self.apply(Event::Scan)?;
         let first_order = spec.first_order;
@@ -475,6 +499,7 @@ impl<B: Board> Head<B> {
             return Err(f);
         }
         self.detector.check_learning(req.periods)?;
+        self.laser_permitted()?;
         self.apply(Event::Measure)?;
         let r = match self.laser(true) {
             Ok(()) => self.detector.learn(&mut self.hw, &self.cfg, req.periods).await,

@@ -140,6 +140,18 @@ pub enum Fault {
     LinkLost,
     /// Pause or continue without a scan to pause or to continue.
     NotScanning,
+    /// The crystal (HSE) did not start (`measured_khz` 0) or runs at another
+    /// frequency than the head's (`expected_khz`), as counted against the
+    /// internal oscillator at boot: the head runs on that oscillator (±1 %),
+    /// its laser inhibited until it restarts with a good crystal.
+    Crystal { measured_khz: u32, expected_khz: u32 },
+    /// The crystal stopped while the head ran: the clock security system's
+    /// interrupt made the pins safe and restarted the head.
+    ClockStopped,
+    /// An interrupt that has no handler of the firmware's fired (its IRQ
+    /// number; negative for the core's own exceptions): the pins were made
+    /// safe and the head restarted.
+    StrayInterrupt(i16),
 }
 
 impl Fault {
@@ -167,6 +179,9 @@ impl Fault {
             Fault::EmergencyStop => 305,
             Fault::LinkLost => 306,
             Fault::NotScanning => 307,
+            Fault::Crystal { .. } => 601,
+            Fault::ClockStopped => 602,
+            Fault::StrayInterrupt(_) => 603,
         }
     }
 }
@@ -196,6 +211,16 @@ impl fmt::Display for Fault {
             Fault::EmergencyStop => f.write_str("E-STOP open: laser off, motion stopped; close it and continue"),
             Fault::LinkLost => f.write_str("the link to the host was lost during the operation"),
             Fault::NotScanning => f.write_str("no scan to pause or to continue"),
+            Fault::Crystal { measured_khz: 0, expected_khz } => write!(
+                f,
+                "the {expected_khz} kHz crystal did not start: running on the internal oscillator, laser inhibited; check the crystal"
+            ),
+            Fault::Crystal { measured_khz, expected_khz } => write!(
+                f,
+                "the crystal runs at {measured_khz} kHz, not {expected_khz} kHz: running on the internal oscillator, laser inhibited; fit the board's {expected_khz} kHz crystal"
+            ),
+            Fault::ClockStopped => f.write_str("the crystal stopped while the head ran: pins made safe, head restarted"),
+            Fault::StrayInterrupt(n) => write!(f, "interrupt {n} fired with no handler: pins made safe, head restarted"),
         }
     }
 }

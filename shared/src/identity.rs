@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 /// are schema-hashed too, so an old head answers new requests with
 /// `UnknownKey`; the identify endpoint keeps its types stable so the host
 /// can always tell *why*.
-pub const PROTOCOL_VERSION: u16 = 17;
+pub const PROTOCOL_VERSION: u16 = 18;
 
 /// USB identity of the head (pid.codes test range until a PID is assigned).
 pub const USB_VID: u16 = 0x1209;

@@ -44,6 +44,10 @@ pub enum HardwareFault {
     Stall,
     /// After the `at`-th move, this many ADC blocks are lost (DMA overrun).
     DmaOverrun(u32),
+    /// From power-up, the crystal runs at this frequency (kHz; 0: it never
+    /// starts) instead of the board's: the head comes up on its internal
+    /// oscillator with the laser inhibited, as the chip does.
+    Crystal(u32),
 }
 
 /// Which way a faulty frame travels.
@@ -94,6 +98,14 @@ impl Faults {
         let n = *count;
         let i = p.link.iter().position(|(w, at, _)| *w == way && *at == n)?;
         Some(p.link.remove(i).2)
+    }
+
+    /// The crystal's frequency (kHz) when it is not the board's.
+    pub fn crystal_khz(&self) -> Option<u32> {
+        self.lock().hardware.iter().find_map(|(_, h)| match h {
+            HardwareFault::Crystal(khz) => Some(*khz),
+            _ => None,
+        })
     }
 
     /// Whether a hardware fault is active after `moves` moves.
@@ -182,9 +194,11 @@ impl Faults {
                     "laser-dead" => p.hardware.push((n, HardwareFault::LaserDead)),
                     "stall" => p.hardware.push((n, HardwareFault::Stall)),
                     "overrun" => p.hardware.push((n, HardwareFault::DmaOverrun(arg(1)?))),
+                    "crystal" => p.hardware.push((0, HardwareFault::Crystal(arg(0)?))),
                     other => bail!(
                         "unknown fault `{other}`; valid: drop, corrupt, duplicate, reorder, delay, disconnect \
-                         (each also with a req- prefix), switch-open, switch-closed, saturated, laser-dead, stall, overrun"
+                         (each also with a req- prefix), switch-open, switch-closed, saturated, laser-dead, stall, overrun, \
+                         crystal"
                     ),
                 }
             }

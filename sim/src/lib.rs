@@ -149,5 +149,12 @@ pub fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World>>) {
     };
     let mut head = Head::new(cfg.machine, hw, info);
     head.prepare();
+    if let Some(measured_khz) = cfg.faults.crystal_khz() {
+        let expected_khz = gonio_firmware::config::CRYSTAL_HZ / 1000;
+        head.inhibit_laser(gonio_shared::Fault::Crystal {
+            measured_khz,
+            expected_khz,
+        });
+    }
     (head, world)
 }

@@ -70,6 +70,12 @@ pub fn fault() -> impl Strategy<Value = Fault> {
         Just(Fault::NoSignal),
         Just(Fault::HostSilent),
         Just(Fault::WatchdogReset),
+        (any::<u32>(), any::<u32>()).prop_map(|(measured_khz, expected_khz)| Fault::Crystal {
+            measured_khz,
+            expected_khz
+        }),
+        Just(Fault::ClockStopped),
+        any::<i16>().prop_map(Fault::StrayInterrupt),
     ]
 }
 

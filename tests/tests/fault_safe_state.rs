@@ -7,8 +7,10 @@
 //! resumption) is host/gonio/tests/fault_recovery.rs.
 
 use gonio_frames::{replies, scan_events, scan_frames, send};
-use gonio_shared::icd::{HomeEndpoint, HomeRequest, MoveEndpoint, SafetyEndpoint, ScanEndpoint};
-use gonio_shared::{AngleRange, Axis, Fault, Geometry, SafetySettings, SampleFlags, ScanEvent, ScanSpec};
+use gonio_shared::icd::{
+    HomeEndpoint, HomeRequest, LearnEndpoint, MeasureEndpoint, MeasureRequest, MoveEndpoint, SafetyEndpoint, ScanEndpoint, StatusEndpoint,
+};
+use gonio_shared::{AngleRange, Axis, Fault, Geometry, LearnRequest, SafetySettings, SampleFlags, ScanEvent, ScanSpec};
 use gonio_sim::faults::Faults;
 use gonio_sim::{FrameHead, Sent, SimConfig};
 
@@ -209,6 +211,50 @@ fn a_damaged_request_is_dropped_unanswered_and_moves_nothing() {
     drop(w);
     assert_eq!(replies::<MoveEndpoint>(&head.serve([good])).len(), 1);
     assert_ne!(head.world().steps, homed, "the undamaged request moves the stages");
+}
+
+/// A head whose crystal failed its check at boot (12 MHz on an 8 MHz
+/// board, or none) says so in its status and refuses everything that needs
+/// the laser, before anything moves; it still homes and moves, for bring-up.
+#[test]
+fn a_head_on_its_internal_oscillator_keeps_its_laser_off() {
+    for khz in [12_000, 0] {
+        let cfg = SimConfig {
+            faults: Faults::parse(&format!("crystal@0:{khz}")).unwrap(),
+            ..SimConfig::default()
+        };
+        let crystal = Fault::Crystal {
+            measured_khz: khz,
+            expected_khz: 8_000,
+        };
+        let mut head = FrameHead::new(&cfg);
+        let status = replies::<StatusEndpoint>(&head.serve([send::<StatusEndpoint>(&())]));
+        assert_eq!(status[0].last_fault, Some(crystal));
+        assert_eq!(
+            replies::<HomeEndpoint>(&head.serve([send::<HomeEndpoint>(&HomeRequest::ALL)])).len(),
+            1
+        );
+        let homed = head.world().steps;
+        let at = Some(Geometry::new(40.0, 30.0, 90.0));
+        let refused = [
+            send::<MeasureEndpoint>(&MeasureRequest { at }),
+            send::<LearnEndpoint>(&LearnRequest { periods: 64 }),
+        ];
+        let sent = head.serve(refused);
+        assert_eq!(replies::<MeasureEndpoint>(&sent), vec![Err(crystal)]);
+        assert_eq!(replies::<LearnEndpoint>(&sent), vec![Err(crystal)]);
+        let scan = head.serve(scan_frames(&scan_spec()));
+        assert_eq!(replies::<ScanEndpoint>(&scan), vec![Err(crystal)]);
+        let w = head.world();
+        assert_eq!(w.steps, homed, "a refused measurement moved the stages");
+        assert_eq!(w.laser_ons, 0, "the laser came on");
+        drop(w);
+        assert_eq!(
+            replies::<MoveEndpoint>(&head.serve([send::<MoveEndpoint>(&Geometry::new(40.0, 30.0, 90.0))])).len(),
+            1
+        );
+        assert_ne!(head.world().steps, homed, "the axes still move");
+    }
 }
 
 /// Safety settings are validated like every command.

@@ -30,6 +30,7 @@ import sys
 import time
 import tty
 from collections import deque
+from fractions import Fraction
 from typing import Any
 
 from unicorn import UC_HOOK_MEM_WRITE, Uc
@@ -46,6 +47,7 @@ from .nvic import Nvic, SystemResetRequest
 from .otg import OTG_FS_BASE, OtgFs
 from .plant import Plant
 from .system import FLASH_BASE, IWDG_BASE, PWR_BASE, RCC_BASE, Iwdg, Rcc
+from .tim11 import TIM11_BASE, Tim11
 from .timer import Timer
 from .usb_host import Host, bus_power
 
@@ -67,6 +69,7 @@ IRQ_NAMES = {
     29: "TIM3",
     30: "TIM4",
     50: "TIM5",
+    0: "WWDG",
     55: "TIM7",
     40: "EXTI15_10",
     56: "DMA2_STREAM0",
@@ -96,7 +99,14 @@ FAULTS = {
     "usb-in-nak": "the host keeps the port open but stops reading: every IN transaction NAKed from then on",
     "usb-replug": "the cable pulled for 100 ms and plugged back: the bus reset, the device enumerated again, the "
     "port reopened by the program that held it, the bytes on their way lost",
+    "crystal-stop": "the crystal stops oscillating: with the clock security system on, its NMI and SYSCLK on the "
+    "HSI; without it, the core stops with its clock",
+    "stray-irq": "WWDG's interrupt (IRQ 0) enabled and pended at its reset priority 0, as a driver that enabled "
+    "an interrupt with no handler would",
 }
+# The interrupt `stray-irq` raises: the window watchdog's, which the image
+# neither uses nor binds.
+STRAY_IRQ = 0
 USB_SUSPEND_S = 0.05
 USB_UNPLUGGED_S = 0.1
 # An instruction that branches to itself, put at the top of SRAM (above the
@@ -112,7 +122,7 @@ class WatchdogReset(Exception):
 
 
 class Board:
-    def __init__(self, image: str, plant: list[str] | None = None) -> None:
+    def __init__(self, image: str, plant: list[str] | None = None, crystal_hz: int | None = 8_000_000) -> None:
         self.elf = Elf(image)
         self.plant: Plant | None = None
         self.clock = Clock()
@@ -123,7 +133,7 @@ class Board:
         uc.mem_write(UID, bytes(range(0x31, 0x3D)))
         self.nvic = Nvic()
         self.nvic.clock = self.clock
-        self.rcc = Rcc()
+        self.rcc = Rcc(crystal_hz)
         self.pins: list[tuple[float, str, int]] = []  # (seconds, pin, level) of every driven change but STEP's
         # The laser enable's level, and when it last fell from high.
         self.laser_high = False
@@ -154,6 +164,7 @@ class Board:
         )
         # TIM7, a basic timer: the registers it has are the general ones'.
         self.tim7 = bus.attach(TIM7_BASE, 0x400, Timer("TIM7", 55, 16, self.clock, self.nvic, self.rcc))
+        bus.attach(TIM11_BASE, 0x400, Tim11(self.clock, self.rcc))
         # TIM3's internal trigger 1 is TIM2 (RM0090 Table 93).
         self.tim3.triggers[1] = self.tim2
         self.tim2.slaves.append(self.tim3)
@@ -182,6 +193,9 @@ class Board:
         bus.map([(0x4000_0000, 0x1000_0000), (OTG_FS_BASE, 0x4_0000), (0xE000_0000, 0x10_0000)])
         self.core = Core(self.machine, self.elf, self.nvic, self.clock)
         self.core.stop_run = bus.stop
+        self.core.speed = self._cycles_per_instruction
+        self.rcc.on_css = self.core.request_nmi
+        self.rcc.on_clock_lost = lambda: setattr(self.core, "locked", True)
         # The thread's longest stretch awake without a turn of its loop,
         # over all and with the laser enable high at some time in it.
         self.core.on_thread_turn = self._thread_turn
@@ -347,6 +361,12 @@ class Board:
         elif kind == "usb-in-nak":
             assert self.host is not None, f"{kind} needs the USB host (--usb or --pty)"
             self.host.reading = False
+        elif kind == "crystal-stop":
+            self.rcc.stop_crystal()
+        elif kind == "stray-irq":
+            self.nvic.enabled[STRAY_IRQ] = True
+            self.nvic.line(STRAY_IRQ, True)
+            self.nvic.line(STRAY_IRQ, False)
         elif kind == "serve-hang":
             self.uc.mem_write(HANG_AT, b"\xfe\xe7")  # b .
             self.core.request_hang(HANG_AT)
@@ -388,6 +408,27 @@ class Board:
             "chop_high_at_fault": level.get("PA6", 0) == 1,
             "drivers_off_after_s": None if None in drivers else max(d for d in drivers if d is not None),
             "reset_after_s": None if self.reset_at is None else round(self.reset_at / HZ - at, 9),
+        }
+
+    def _cycles_per_instruction(self) -> tuple[int, int]:
+        """The board's 168 MHz cycles per instruction at the current SYSCLK."""
+        sysclk = self.rcc.sysclk_hz()
+        ratio = Fraction(HZ, sysclk) if sysclk else Fraction(1)
+        return ratio.numerator, ratio.denominator
+
+    def _clocks(self) -> dict[str, Any]:
+        """The crystal fitted, every SYSCLK the image selected with the USB
+        clock beside it, and the clock security system's state."""
+        cr = self.rcc.regs.get(0x00, 0)
+        return {
+            "crystal_hz": self.rcc.crystal_hz,
+            "crystal_oscillating": self.rcc.oscillating,
+            "selected": [{"sysclk_hz": s, "usb_hz": u} for s, u in self.rcc.selected],
+            "sysclk_hz": self.rcc.sysclk_hz(),
+            "usb_hz": self.rcc.usb_hz(),
+            "pll_source": "HSE" if self.rcc.pll_from_hse() else "HSI",
+            "css_on": bool(cr >> 19 & 1),
+            "css_flag": bool(self.rcc.regs.get(0x0C, 0) >> 7 & 1),
         }
 
     def _chop_off(self, at: float) -> float | None:
@@ -525,6 +566,7 @@ class Board:
                 for c, w, pc, st in self.core.faults
             ],
             "locked_up": self.core.locked,
+            "clocks": self._clocks(),
             "fault": self._fault_report(),
             "first_sleep_instructions": self.core.first_sleep,
             # The longest the thread stayed awake without turning its loop
@@ -583,6 +625,12 @@ def main(prog: str | None = None) -> None:
         "laserN+S: after its N-th rise, or dmaN+S: after DMA2 stream 0's N-th enable); KIND: "
         + "; ".join(f"{k}: {v}" for k, v in FAULTS.items()),
     )
+    ap.add_argument(
+        "--crystal",
+        default="8e6",
+        metavar="HZ|none",
+        help="the crystal fitted (Hz, default the board's 8 MHz), or none",
+    )
     ap.add_argument("--replug", action="store_true", help="after each session, the cable pulled and plugged back")
     ap.add_argument(
         "--pace",
@@ -597,7 +645,8 @@ def main(prog: str | None = None) -> None:
         help="the head behind the pins: `board-plant` and its options (`gonio simulate`'s head options), one string",
     )
     args = ap.parse_args()
-    board = Board(args.image, shlex.split(args.plant) if args.plant else None)
+    crystal = None if args.crystal == "none" else round(float(args.crystal))
+    board = Board(args.image, shlex.split(args.plant) if args.plant else None, crystal)
     # SIGTERM ends a paced run where it is, and the report is printed.
     signal.signal(signal.SIGTERM, lambda *_: setattr(board, "stop_requested", True))
     if args.pty:

@@ -1,5 +1,6 @@
 """The board's virtual time: CPU cycles at 168 MHz, advanced by the
-instructions the core executes (one cycle each) and skipped over while it
+instructions the core executes (one cycle each at the PLL's 168 MHz, 10.5
+on the 16 MHz HSI the chip starts on: core.py) and skipped over while it
 sleeps, with the events the peripherals schedule on it."""
 
 import heapq

@@ -26,10 +26,17 @@ return, B1.5.18 WFE):
   HFSR.FORCED, leaves SP where the frame would have gone and enters the
   handler all the same (B1.5.6, "derived exceptions on exception entry");
   a fault in the HardFault handler locks the core up (B1.5.15): it executes
-  nothing more, every pin as it was, until a reset.
+  nothing more, every pin as it was, until a reset;
+- the NMI (`request_nmi`: the clock security system's) is taken at the
+  next instruction at priority −2, above everything; a fault in it locks
+  the core up; its handler is not expected to return.
 
-Time: one cycle per instruction, counted per translated block (count.c);
-sleep skips to the next event of the clock."""
+Time: one instruction per SYSCLK cycle, counted per translated block
+(count.c), so `speed()` core cycles of the board's 168 MHz clock per
+instruction (10.5 on the HSI's 16 MHz before the PLL is up, 1 after);
+SYSCLK is read at the start of each run of the core, so a switch takes
+effect within a slice (at most 100 µs). Sleep skips to the next event of
+the clock."""
 
 import collections
 import struct
@@ -50,7 +57,7 @@ FP_FRAME = [getattr(arm, f"UC_ARM_REG_S{i}") for i in range(16)] + [arm.UC_ARM_R
 STATE = (arm.UC_ARM_REG_CONTROL, arm.UC_ARM_REG_IPSR, arm.UC_ARM_REG_XPSR, arm.UC_ARM_REG_MSP)
 # unicorn's interrupt number for an exception return (QEMU's EXCP_EXCEPTION_EXIT).
 EXCEPTION_EXIT = 8
-HARDFAULT = 3
+NMI, HARDFAULT = 2, 3
 # The SCB's fault status registers (PM0214 §4.4.14, §4.4.16).
 CFSR, HFSR = 0xD28, 0xD2C
 STKERR, FORCED = 1 << 12, 1 << 30
@@ -109,6 +116,8 @@ class Core:
         # HardFault active; the core locked up; a fault to take at the next
         # instruction (a test's); the faults taken: (cycle, why, PC, stacked).
         self.in_hardfault = False
+        self.in_nmi = False
+        self.nmi_request = False
         self.locked = False
         self.fault_request: str | None = None
         self.faults: list[tuple[int, str, int, bool | None]] = []
@@ -116,7 +125,12 @@ class Core:
         self.hang_at: int | None = None
         # Where the stack's memory ends (a test moves it up: an overflow).
         self.stack_floor = 0
-        clock.executed = lambda: self.m.executed - self._run_start
+        # Board cycles per instruction, as a fraction (numerator,
+        # denominator), and the fraction of a cycle carried between runs.
+        self.speed: Callable[[], tuple[int, int]] = lambda: (1, 1)
+        self._speed = (1, 1)
+        self._carry = 0
+        clock.executed = lambda: (self.m.executed - self._run_start) * self._speed[0] // self._speed[1]
         clock.shorten_run = self._shorten_run
         # Ends the current run from a peripheral's access (the board's bus,
         # which replays the access unicorn will execute again).
@@ -206,6 +220,26 @@ class Core:
         if self._running:
             self.uc.emu_stop()
 
+    def request_nmi(self) -> None:
+        """The NMI pends: taken before the next instruction."""
+        self.nmi_request = True
+        if self._running:
+            self.uc.emu_stop()
+
+    def _enter_nmi(self) -> None:
+        sp, exc_return, stacked = self._stack()
+        if not stacked:
+            self.faults.append((self.clock.now, "lockup: stacking for the NMI", self.pc & ~1, False))
+            self.locked = True
+            return
+        self.trail.append((self.clock.now, "nmi", -14, sp, self.pc & ~1))
+        self.in_nmi = True
+        self.reg.write(arm.UC_ARM_REG_IPSR, NMI)
+        self.reg.write(arm.UC_ARM_REG_LR, exc_return)
+        self.pc = self._vector(NMI) | 1
+        self.reg.write(arm.UC_ARM_REG_PC, self.pc)
+        self.sleeping = False
+
     def _shorten_run(self) -> None:
         """An event now falls due before the current run's end: the run
         ends here, and the next one ends at the event."""
@@ -227,6 +261,8 @@ class Core:
         return self.reg.read(arm.UC_ARM_REG_IPSR) & 0x1FF
 
     def _execution_priority(self, active_excluding: int | None = None) -> int:
+        if self.in_nmi:
+            return -2
         if self.in_hardfault:
             return -1
         p = self.nvic.running_priority(active_excluding)
@@ -302,7 +338,7 @@ class Core:
         """A fault at `self.pc`: HardFault entered (`entry`: the stacking
         an interrupt's entry already did), or the core locked up if it
         faulted in HardFault."""
-        if self.in_hardfault or self.locked:
+        if self.in_hardfault or self.in_nmi or self.locked:
             self.faults.append((self.clock.now, f"lockup: {why}", self.pc & ~1, None))
             self.locked = True
             return
@@ -385,6 +421,9 @@ class Core:
         clock = self.clock
         while clock.now < until:
             clock.fire_due()
+            if self.nmi_request and not self.locked:
+                self.nmi_request = False
+                self._enter_nmi()
             if self.fault_request is not None and not self.locked:
                 why, self.fault_request = self.fault_request, None
                 self.fault(why)
@@ -406,8 +445,9 @@ class Core:
             self._run_start = self.m.executed
             self._running = True
             clock.run_end = clock.now + budget
+            num, den = self._speed = self.speed()
             try:
-                self.uc.emu_start(self.pc, 0xFFFF_FFFF, count=max(budget, 1))
+                self.uc.emu_start(self.pc, 0xFFFF_FFFF, count=max(budget * den // num, 1))
             except UcError as e:
                 # A bus or usage fault on silicon (this image enables none of
                 # the configurable faults): HardFault at the faulting instruction.
@@ -419,6 +459,7 @@ class Core:
                 clock.run_end = 0
                 executed = self.m.executed - self._run_start
                 self._run_start = self.m.executed
-                clock.base += max(executed, 1)
+                charged, self._carry = divmod(executed * num + self._carry, den)
+                clock.base += max(charged, 1)
                 self.instructions += executed
             self.pc = self.reg.read(arm.UC_ARM_REG_PC) | 1

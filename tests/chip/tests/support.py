@@ -10,6 +10,10 @@ from board.system import Rcc
 # 168 MHz), PPRE1 = /4 (PCLK1 42 MHz, TIM2–TIM5 at 84 MHz), PPRE2 = /2
 # (PCLK2 84 MHz).
 CFGR = 0b10 | 0b101 << 10 | 0b100 << 13
+# RCC_PLLCFGR as the image programs it: the 8 MHz crystal /4 *168 /2
+# (168 MHz), /7 for USB (48 MHz); and RCC_CR with the crystal and the PLL on.
+PLLCFGR = 4 | 168 << 6 | 1 << 22 | 7 << 24
+CR_ON = 1 | 1 << 16 | 1 << 24
 TIMER_HZ = 84_000_000
 # Core cycles per timer clock.
 TIMER_CYCLES = HZ // TIMER_HZ
@@ -23,6 +27,8 @@ class Chip:
         self.nvic = Nvic()
         self.nvic.clock = self.clock
         self.rcc = Rcc()
+        self.rcc.write(0x04, PLLCFGR)
+        self.rcc.write(0x00, CR_ON)
         self.rcc.write(0x08, CFGR)
 
     @property

@@ -1,10 +1,12 @@
 //! Chip entry point: clocks, peripherals, tasks.
 
 mod adc_stream;
+mod clocks;
 mod cpu;
 mod fault;
 mod guard;
 mod pins;
+mod restart;
 mod sentry;
 mod step_timer;
 mod usb_link;
@@ -14,7 +16,7 @@ use adc_stream::TimedAdc;
 use defmt_rtt as _;
 use embassy_executor::{raw, Spawner};
 use embassy_futures::select::{select, Either};
-use embassy_stm32::{bind_interrupts, peripherals, usb, Config};
+use embassy_stm32::{bind_interrupts, peripherals, usb};
 use embassy_time::Timer;
 use gonio_firmware::head::HeadInfo;
 use gonio_firmware::hw::{Board, Clock, Hardware};
@@ -50,32 +52,6 @@ impl Clock for UptimeClock {
     }
 }
 
-/// 8 MHz crystal → 168 MHz system clock; PLL Q gives the 48 MHz USB clock.
-fn clocks() -> Config {
-    use embassy_stm32::rcc::{mux, AHBPrescaler, APBPrescaler, Hse, HseMode, Pll, PllMul, PllPDiv, PllPreDiv, PllQDiv, PllSource, Sysclk};
-    use embassy_stm32::time::Hertz;
-    let mut config = Config::default();
-    config.rcc.hse = Some(Hse {
-        freq: Hertz(8_000_000),
-        mode: HseMode::Oscillator,
-    });
-    config.rcc.pll_src = PllSource::HSE;
-    config.rcc.pll = Some(Pll {
-        prediv: PllPreDiv::DIV4,
-        mul: PllMul::MUL168,
-        divp: Some(PllPDiv::DIV2),
-        divq: Some(PllQDiv::DIV7),
-        divr: None,
-    });
-    config.rcc.ahb_pre = AHBPrescaler::DIV1;
-    config.rcc.apb1_pre = APBPrescaler::DIV4;
-    config.rcc.apb2_pre = APBPrescaler::DIV2;
-    config.rcc.sys = Sysclk::PLL1_P;
-    config.rcc.mux.clk48sel = mux::Clk48sel::PLL1_Q;
-    config.dma_interrupt_priority = cpu::DMA;
-    config
-}
-
 /// The head lives in a static, built in a function of its own: `main`'s
 /// poll frame, which every request is handled on top of, then holds none
 /// of its temporaries (31 KiB when built in `main`, enough for a
@@ -101,12 +77,18 @@ fn main() -> ! {
 
 #[embassy_executor::task]
 async fn run(spawner: Spawner) {
-    let p = embassy_stm32::init(clocks());
+    // On the HSI until the crystal has passed its check (clocks.rs).
+    let crystal = clocks::check_crystal();
+    let p = embassy_stm32::init(clocks::tree(crystal.is_ok()));
+    if crystal.is_ok() {
+        clocks::watch_crystal();
+    }
     cpu::setup();
     defmt::info!("gonio head {} starting", env!("CARGO_PKG_VERSION"));
     // Read before anything else can hang: the pins come up safe (pins.rs),
     // the watchdog then guards the rest.
     let restarted_by_watchdog = watchdog::reset_cause();
+    let restarted_for = restart::take_cause();
     watchdog::start(&spawner, p.IWDG);
     guard::start(p.TIM7);
     let pins = pins::Pins::new(
@@ -137,6 +119,12 @@ async fn run(spawner: Spawner) {
     head.prepare();
     if restarted_by_watchdog {
         head.restarted_by(gonio_shared::Fault::WatchdogReset);
+    } else if let Some(cause) = restarted_for {
+        head.restarted_by(cause);
+    }
+    if let Err(fault) = crystal {
+        defmt::warn!("{}", defmt::Display2Format(&fault));
+        head.inhibit_laser(fault);
     }
     loop {
         // Serve until the host goes away (the head is then in its safe
