@@ -18,6 +18,8 @@
 //!   until the firmware clears it;
 //! - `serve-hang`: the serve loop stuck in a loop that never yields, the
 //!   interrupts still served (the watchdog starved);
+//! - `estop-hung`: the E-STOP opens as the serve loop hangs: the thread
+//!   cannot stop the drivers, the guard's backstop must;
 //! - `usb-suspend`: the host suspends the bus for 50 ms and resumes it
 //!   without a reset;
 //! - `usb-replug`: the cable pulled for 100 ms and plugged back (a bus
@@ -81,6 +83,14 @@ const TRIAL_SECONDS: &str = "30";
 /// How soon the thread stops the drivers once the guard has cut the laser
 /// on a stalled conversion chain: two chop periods (230 Hz).
 const THREAD_STOP_BAR_S: f64 = 0.01;
+/// The E-STOP's backstop (`gonio_firmware::guard::backstop_ticks`): the
+/// drivers off this soon after an opening the thread does not stop for,
+/// and a tick of the guard more.
+fn backstop_bar_s() -> f64 {
+    let ticks = gonio_firmware::guard::backstop_ticks(&gonio_firmware::config::REFERENCE) + 1;
+    f64::from(ticks) / f64::from(gonio_firmware::guard::TICK_HZ)
+}
+
 /// The independent watchdog's timeout (`chip/watchdog.rs`); the board
 /// reports the one the image programmed, and that is checked too.
 const WATCHDOG_BAR_S: f64 = 1.0;
@@ -131,7 +141,7 @@ impl Trial {
 }
 
 /// The trials, in the order they run.
-fn trials() -> [Trial; 11] {
+fn trials() -> [Trial; 12] {
     [
         Trial::new("hardfault", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
         Trial::new("stack-overflow", After::Reset, LASER_OFF_BAR_S, Some(LASER_OFF_BAR_S)),
@@ -139,6 +149,7 @@ fn trials() -> [Trial; 11] {
         Trial::new("dma-freeze", After::Recovers, LASER_OFF_BAR_S, Some(THREAD_STOP_BAR_S)),
         Trial::new("adc-overrun", After::Recovers, LASER_OFF_BAR_S, Some(THREAD_STOP_BAR_S)),
         Trial::new("serve-hang", After::Reset, LASER_OFF_BAR_S, Some(WATCHDOG_BAR_S)),
+        Trial::new("estop-hung", After::Reset, ESTOP_CUT_BAR_S, Some(backstop_bar_s())),
         Trial::new("usb-suspend", After::LinkLost, LASER_OFF_BAR_S, Some(0.1)),
         Trial::new("usb-replug", After::LinkLost, LASER_OFF_BAR_S, Some(0.1)),
         Trial::new("usb-in-nak", After::Unheard, MEASUREMENT_S, None),

@@ -26,6 +26,16 @@
 //! Both only matter with the laser enable high. The trip is the chip's to
 //! act on (`chip/guard.rs`): the laser enable low, and every period read
 //! failing until the thread turns the laser on again.
+//!
+//! The guard is also the E-STOP's backstop ([`backstop`]). The E-STOP's
+//! stop is of category 1 (IEC 60204-1 §9.2.2): its interrupt cuts the laser
+//! at once, the thread brakes the motion from its speed (the head stays
+//! homed) and then disables the drivers. Should the drivers still be
+//! enabled [`backstop_ticks`] after the opening, the guard disables them
+//! itself; the steps emitted after that move nothing, and a head whose
+//! backstop fired must be homed again.
+
+use crate::config::HeadConfig;
 
 /// The guard's interrupt rate (Hz), and its tick (µs).
 pub const TICK_HZ: u32 = 8_000;
@@ -36,6 +46,34 @@ pub const TICK_US: u32 = 1_000_000 / TICK_HZ;
 /// last turn (875 µs), and a poll of up to `STUCK_TICKS` ticks (750 µs) is
 /// allowed.
 pub const STUCK_TICKS: u32 = 6;
+
+/// Slack for the thread's part of an E-STOP stop beyond the longest brake
+/// (s): its turn to see the opening, the brake's planning, the enables.
+pub const BACKSTOP_MARGIN_S: f32 = 0.1;
+
+/// Ticks the E-STOP's orderly stop may take before the backstop disables
+/// the drivers: the longest brake of `cfg`'s axes from full speed at full
+/// deceleration (0.5 s for the reference head), plus [`BACKSTOP_MARGIN_S`].
+pub fn backstop_ticks(cfg: &HeadConfig) -> u32 {
+    let brake_s = cfg.axes.iter().map(|a| a.max_speed_dps / a.max_accel_dps2).fold(0.0f32, f32::max);
+    ((brake_s + BACKSTOP_MARGIN_S) * TICK_HZ as f32) as u32 + 1
+}
+
+/// The backstop's state: 0 idle; an E-STOP opening arms it with
+/// `backstop_ticks + 1`, and it counts down while the drivers are enabled;
+/// 1 once the stop is over (the thread disabled them) or overdue: from
+/// then until the E-STOP is re-armed (back to 0), enabled drivers are cut.
+/// One tick with the drivers' state: the state after it, and whether the
+/// drivers must be disabled now.
+pub fn backstop(state: u32, drivers_enabled: bool) -> (u32, bool) {
+    match state {
+        0 => (0, false),
+        1 => (1, drivers_enabled),
+        _ if !drivers_enabled => (1, false),
+        2 => (1, true),
+        n => (n - 1, false),
+    }
+}
 
 /// Why the guard cut the laser.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -164,6 +202,31 @@ mod tests {
             let count = t.checked_div(moves).map_or(7, |n| (1000 - n) as u16);
             g.tick(true, turns, watch.map(|w| (w, count))).map(|trip| (t, trip))
         })
+    }
+
+    /// The backstop from an opening, the drivers enabled for `enabled`
+    /// ticks then disabled by the thread: the tick it cut them, if it did.
+    fn backstop_run(armed: u32, enabled: u32, ticks: u32) -> Option<u32> {
+        let mut state = armed + 1;
+        (1..=ticks).find(|&t| {
+            let (next, cut) = backstop(state, t <= enabled);
+            state = next;
+            cut
+        })
+    }
+
+    #[test]
+    fn the_backstop_cuts_the_drivers_only_when_the_stop_is_overdue() {
+        let ticks = backstop_ticks(&crate::config::REFERENCE);
+        // 0.5 s of brake and 0.1 s of slack at 8 kHz.
+        assert_eq!(ticks, 4801);
+        assert_eq!(backstop_run(ticks, ticks - 1, 10_000), None, "stopped in time");
+        assert_eq!(backstop_run(ticks, 20_000, 10_000), Some(ticks), "overdue");
+        assert_eq!(backstop_run(ticks, 0, 10_000), None, "idle at the opening");
+        // Once the stop is over, drivers enabled before the re-arm are cut at once.
+        assert_eq!(backstop(1, true), (1, true));
+        assert_eq!(backstop(1, false), (1, false));
+        assert_eq!(backstop(0, true), (0, false), "not armed");
     }
 
     #[test]

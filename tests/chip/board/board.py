@@ -99,6 +99,8 @@ FAULTS = {
     "usb-in-nak": "the host keeps the port open but stops reading: every IN transaction NAKed from then on",
     "usb-replug": "the cable pulled for 100 ms and plugged back: the bus reset, the device enumerated again, the "
     "port reopened by the program that held it, the bytes on their way lost",
+    "estop-hung": "the E-STOP opens and, at the same instant, the serve loop hangs (as `serve-hang`): the drivers are "
+    "left to the guard's backstop",
     "crystal-stop": "the crystal stops oscillating: with the clock security system on, its NMI and SYSCLK on the "
     "HSI; without it, the core stops with its clock",
     "stray-irq": "WWDG's interrupt (IRQ 0) enabled and pended at its reset priority 0, as a driver that enabled "
@@ -367,7 +369,9 @@ class Board:
             self.nvic.enabled[STRAY_IRQ] = True
             self.nvic.line(STRAY_IRQ, True)
             self.nvic.line(STRAY_IRQ, False)
-        elif kind == "serve-hang":
+        elif kind in ("serve-hang", "estop-hung"):
+            if kind == "estop-hung":
+                self.set_input("PB12", 1, self.clock.now / HZ)
             self.uc.mem_write(HANG_AT, b"\xfe\xe7")  # b .
             self.core.request_hang(HANG_AT)
 

@@ -11,7 +11,9 @@
 //! enable high again: a measurement retried after a trip (`Head::acquire`
 //! retries a lost block once) finds the laser enable still low and fails
 //! too, rather than measuring dark. The drivers are left to the thread's
-//! orderly stop, or to the watchdog's reset if the thread is stuck.
+//! orderly stop, but for the E-STOP's backstop: armed by the E-STOP's
+//! interrupt, it disables the drivers (their EN high) should the thread's
+//! stop not have within `backstop_ticks` (`gonio_firmware::guard::backstop`).
 //!
 //! The thread's loop is embassy's thread-mode executor loop (poll, then
 //! WFE) with the turn counted: `embassy_executor::Executor::run` has no hook
@@ -27,7 +29,7 @@ use embassy_stm32::time::Hertz;
 use embassy_stm32::timer::low_level::Timer;
 use embassy_stm32::Peri;
 use embassy_sync::waitqueue::AtomicWaker;
-use gonio_firmware::guard::{ChainWatch, Guard, TICK_HZ};
+use gonio_firmware::guard::{backstop, backstop_ticks, ChainWatch, Guard, TICK_HZ};
 
 /// The thread loop's turns, wrapping.
 static TURNS: AtomicU32 = AtomicU32::new(0);
@@ -36,6 +38,10 @@ static CHAIN: AtomicU32 = AtomicU32::new(0);
 /// The thread's count of chain starts (the watch's generation).
 static STARTS: AtomicU16 = AtomicU16::new(0);
 static TRIPPED: AtomicBool = AtomicBool::new(false);
+/// The E-STOP backstop's state (`guard::backstop`), and what an opening
+/// arms it with.
+static BACKSTOP: AtomicU32 = AtomicU32::new(0);
+static BACKSTOP_ARMED: AtomicU32 = AtomicU32::new(0);
 static TRIP: AtomicWaker = AtomicWaker::new();
 
 /// The guard's memory, touched by TIM7's handler only.
@@ -43,6 +49,13 @@ struct HandlerState(UnsafeCell<Guard>);
 // SAFETY: only TIM7's handler uses it, and a handler does not pre-empt itself.
 unsafe impl Sync for HandlerState {}
 static STATE: HandlerState = HandlerState(UnsafeCell::new(Guard::new()));
+
+/// Whether any driver is enabled: its active-low EN (PC2, PC6, PC10) low in
+/// the output register.
+fn drivers_enabled() -> bool {
+    let odr = pac::GPIOC.odr().read().0;
+    odr & (1 << 2 | 1 << 6 | 1 << 10) != 1 << 2 | 1 << 6 | 1 << 10
+}
 
 /// The laser enable (PB0) as driven: its output register, whoever set it.
 fn laser_enabled() -> bool {
@@ -64,11 +77,32 @@ impl Handler<Tim7Irq> for GuardInterrupt {
             TRIP.wake();
             defmt::error!("guard: laser cut, {}", defmt::Debug2Format(&trip));
         }
+        let state = BACKSTOP.load(Ordering::Relaxed);
+        if state != 0 {
+            let (next, cut) = backstop(state, drivers_enabled());
+            BACKSTOP.store(next, Ordering::Relaxed);
+            if cut {
+                super::pins::disable_drivers();
+                defmt::error!("guard: drivers disabled, the E-STOP's stop overdue");
+            }
+        }
     }
+}
+
+/// An E-STOP opening: the backstop counts from now, unless it already runs.
+/// Called from the E-STOP's interrupt, at the guard's priority.
+pub fn arm_backstop() {
+    let _ = BACKSTOP.compare_exchange(0, BACKSTOP_ARMED.load(Ordering::Relaxed), Ordering::Relaxed, Ordering::Relaxed);
+}
+
+/// The E-STOP re-armed (closed, and a continue): the drivers may be enabled again.
+pub fn disarm_backstop() {
+    BACKSTOP.store(0, Ordering::Relaxed);
 }
 
 /// Starts the guard's ticks.
 pub fn start(tim7: Peri<'static, TIM7>) {
+    BACKSTOP_ARMED.store(backstop_ticks(&gonio_firmware::config::REFERENCE) + 1, Ordering::Relaxed);
     let timer = Timer::new(tim7);
     timer.set_frequency(Hertz(TICK_HZ));
     timer.enable_update_interrupt(true);

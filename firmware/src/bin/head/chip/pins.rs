@@ -72,6 +72,16 @@ pub fn cut_laser() {
     TIM3.ccmr_output(0).modify(|w| w.set_ocm(0, Ocm::FORCE_INACTIVE));
 }
 
+/// Disables the drivers (their active-low EN high) with one BSRR store,
+/// whoever owns the pins: the E-STOP's backstop (guard.rs).
+pub fn disable_drivers() {
+    embassy_stm32::pac::GPIOC.bsrr().write(|w| {
+        for axis in 0..3 {
+            w.set_bs(4 * axis + 2, true);
+        }
+    });
+}
+
 /// Puts the pins of the table above into the safe state (laser enable and
 /// chop low, STEP low, drivers disabled) by writing the GPIO registers
 /// directly.

@@ -54,6 +54,7 @@ impl Handler<EXTI15_10> for EstopInterrupt {
             pac::EXTI.pr(0).write(|w| w.set_line(LINE, true));
             // Laser enable and chop low at once, whoever owns the pins.
             super::pins::cut_laser();
+            super::guard::arm_backstop();
             OPENINGS.fetch_add(1, Ordering::Release);
             OPENED.wake();
         }
@@ -91,6 +92,7 @@ impl Sentry for ChipSentry {
 
     fn rearm(&mut self) {
         self.handled = OPENINGS.load(Ordering::Acquire);
+        super::guard::disarm_backstop();
     }
 
     fn now_us(&self) -> u64 {
