@@ -19,6 +19,7 @@ use crate::hw::{Board, Sentry, Wake, ALIVE_EVERY_US};
 use crate::link::{Link, LinkError};
 use crate::state::{Event, Mode};
 use crate::sweep::turns::SweepTurn;
+use core::pin::pin;
 use embassy_futures::select::{select, Either};
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::icd::{
@@ -28,7 +29,7 @@ use gonio_shared::icd::{
 use gonio_shared::sample::ScanPosition;
 use gonio_shared::wire::check;
 use gonio_shared::wire::framing::MAX_FRAME;
-use gonio_shared::{Fault, HeadState, Reply, ScanEvent, Status, Visit};
+use gonio_shared::{Fault, HeadState, Reply, ScanEvent, Status, SweptSample, Visit};
 use heapless::{Deque, Vec};
 use postcard_rpc::header::{VarKeyKind, VarSeq};
 use postcard_rpc::standard_icd::{WireError, ERROR_KEY};
@@ -485,13 +486,18 @@ impl<B: Board> Head<B> {
                     }
                     Ok(Ok(SweepTurn::Sample(s))) => {
                         self.scan = Some(run);
-                        return self.publish::<ScanEventTopic, L>(&ScanEvent::SweptSample(s), link).await;
+                        return self.publish_swept(s, link, sentry).await.map(drop);
                     }
                     Ok(Ok(SweepTurn::Last(s, samples))) => {
-                        if let Err(e) = self.publish::<ScanEventTopic, L>(&ScanEvent::SweptSample(s), link).await {
-                            // Held at this row, which is swept again.
-                            self.scan = Some(run);
-                            return Err(e);
+                        // Held at this row, swept again, should the send fail or the E-STOP open.
+                        self.scan = Some(run);
+                        let sent = self.publish_swept(s, link, sentry).await?;
+                        match (sent, self.scan.take()) {
+                            (true, Some(r)) => run = r,
+                            (_, held) => {
+                                self.scan = held;
+                                return Ok(());
+                            }
                         }
                         Ok(Ok(ScanEvent::Swept { index, order, samples }))
                     }
@@ -521,6 +527,31 @@ impl<B: Board> Head<B> {
             }
         };
         self.publish::<ScanEventTopic, L>(&ev, link).await
+    }
+
+    /// Publishes a sample of a row the stages are still sweeping, raced
+    /// against the E-STOP: no watch runs while it is sent, and a send that
+    /// waits on a full queue (up to the link's timeout, 500 ms on the chip)
+    /// must not hold the stop back. An opening stops the head as under
+    /// watch: the scan held, the row swept again on continuing, this sample
+    /// dropped with it. Whether the sample went out.
+    async fn publish_swept<L: Link, S: Sentry>(&mut self, s: SweptSample, link: &mut L, sentry: &mut S) -> Result<bool, LinkError> {
+        let ev = ScanEvent::SweptSample(s);
+        let opened = {
+            let mut send = pin!(self.publish::<ScanEventTopic, L>(&ev, link));
+            loop {
+                sentry.alive();
+                match select(send.as_mut(), sentry.until(alive_by(sentry, None), true)).await {
+                    Either::First(r) => break r.map(|()| false),
+                    Either::Second(Wake::EStop) => break Ok(true),
+                    Either::Second(Wake::Deadline) => {}
+                }
+            }
+        }?;
+        if opened {
+            self.tripped(Trip::EStop).await?;
+        }
+        Ok(!opened)
     }
 
     /// A running scan whose visit queue has run dry: waits for the host's next

@@ -60,6 +60,8 @@ struct Timed {
     until: f64,
     outbound: Vec<Sent>,
     world: Rc<RefCell<World>>,
+    /// From when to when (s) the host does not read: a send waits.
+    deaf: Option<(f64, f64)>,
 }
 
 impl Timed {
@@ -110,6 +112,10 @@ impl Link for Timed {
     }
 
     async fn send(&mut self, frame: &[u8]) -> Result<(), LinkError> {
+        let now = self.world.borrow().t_s;
+        if let Some((_, to)) = self.deaf.filter(|&(from, to)| (from..to).contains(&now)) {
+            clock::elapse(&self.world, to - now).await;
+        }
         self.outbound.push(Sent::now(&self.world.borrow(), frame));
         Ok(())
     }
@@ -165,12 +171,14 @@ impl Link for Batch {
 pub struct FrameHead {
     head: Head<SimBoard>,
     world: Rc<RefCell<World>>,
+    /// When the host of [`FrameHead::serve_timed`] does not read.
+    deaf: Option<(f64, f64)>,
 }
 
 impl FrameHead {
     pub fn new(cfg: &SimConfig) -> Self {
         let (head, world) = build(cfg);
-        FrameHead { head, world }
+        FrameHead { head, world, deaf: None }
     }
 
     /// Serves `frames` (sealed, as on the wire), then the link closes;
@@ -200,9 +208,17 @@ impl FrameHead {
             until,
             outbound: Vec::new(),
             world: self.world.clone(),
+            deaf: self.deaf,
         };
         clock::run(&self.world, self.head.serve(&mut link, &mut sentry(&self.world)));
         link.outbound
+    }
+
+    /// From `from_s` to `to_s` (the head's clock) the host of
+    /// [`FrameHead::serve_timed`] reads nothing: the head's sends wait, as on
+    /// a full USB queue.
+    pub fn deaf_between(&mut self, from_s: f64, to_s: f64) {
+        self.deaf = Some((from_s, to_s));
     }
 
     /// The head's clock (s).

@@ -104,6 +104,44 @@ fn a_brake_at_any_moment_of_a_move_slows_at_the_limit_without_skipping_a_step() 
     assert!((after - v * v / (2.0 * a)).abs() <= 2.0, "{after} steps after the brake");
 }
 
+/// A host that stops reading while a row is swept (the head's sends wait,
+/// as on a full USB queue) does not hold the E-STOP back: the laser goes
+/// off at once, not once the send is through (491 ms later when the send
+/// was not raced against it), and the head stays homed. (The simulated
+/// stages advance with the detector's reads, so they stand while the send
+/// waits: the brake's timing is the other stop tests'.)
+#[test]
+fn an_estop_while_a_swept_sample_waits_to_be_sent_stops_at_once() {
+    let mut head = FrameHead::new(&SimConfig::default());
+    ready(&mut head);
+    let t0 = head.now();
+    let sent = head.serve_timed(
+        scan_frames(&small_sweep_scan()).into_iter().map(|f| (t0, Cue::Frame(f))),
+        t0 + 600.0,
+    );
+    // The first row's first and last sample, undisturbed.
+    let swept: Vec<f64> = scan_events(&sent)
+        .iter()
+        .filter(|(e, _)| matches!(e, ScanEvent::SweptSample(_)))
+        .map(|(_, s)| s.t_s - t0)
+        .collect();
+    let (first, last) = (swept[0], swept[swept.len() / 2 - 1]);
+    ready(&mut head);
+    // The trial's clock starts a millisecond after `ready`. The host stops
+    // reading 0.3 s before the row's first sample; the E-STOP opens 40 %
+    // into the row, while that sample still waits, and the host reads
+    // again 0.5 s later.
+    let start = head.now() + 0.001;
+    let tau = first + 0.4 * (last - first) - 0.001;
+    head.deaf_between(start + first - 0.3, start + tau + 0.5);
+    let s = trial(&mut head, Activity::SweepScan, Trigger::EStop, tau);
+    assert!(s.laser_was_on, "the laser was off");
+    assert!(s.laser_off_ms < 1.0, "dark after {} ms", s.laser_off_ms);
+    assert_eq!(s.position_error_steps, 0);
+    assert!(s.homed, "unhomed");
+    assert_eq!(s.status.last_fault, Some(Fault::EmergencyStop));
+}
+
 /// Every stop in the middle of a sweep scan's row (the arm sweeping, the
 /// chop running, between two of the serve loop's turns or within one)
 /// darkens the laser at once and brakes the arm from its speed without
