@@ -5,8 +5,8 @@
 //! `tests` (`gonio_tests`).
 
 pub mod board_scans;
+pub mod boot_trials;
 pub mod chip_costs;
 pub mod chop_signal;
-pub mod clock_trials;
 pub mod fault_trials;
 pub mod virtual_board;

@@ -126,7 +126,7 @@ impl<B: Board> Head<B> {
     }
 
     /// Refuses, before anything moves, what would need an inhibited laser.
-    fn laser_permitted(&self) -> Result<(), Fault> {
+    pub(crate) fn laser_permitted(&self) -> Result<(), Fault> {
         self.laser_inhibited.map_or(Ok(()), Err)
     }
 

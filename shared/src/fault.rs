@@ -152,6 +152,9 @@ pub enum Fault {
     /// number; negative for the core's own exceptions): the pins were made
     /// safe and the head restarted.
     StrayInterrupt(i16),
+    /// The image never turns the laser on: built with the firmware's
+    /// `no-laser` feature, for a first power-up (docs/bring-up.md).
+    LaserDisabled,
 }
 
 impl Fault {
@@ -182,6 +185,7 @@ impl Fault {
             Fault::Crystal { .. } => 601,
             Fault::ClockStopped => 602,
             Fault::StrayInterrupt(_) => 603,
+            Fault::LaserDisabled => 604,
         }
     }
 }
@@ -221,6 +225,7 @@ impl fmt::Display for Fault {
             ),
             Fault::ClockStopped => f.write_str("the crystal stopped while the head ran: pins made safe, head restarted"),
             Fault::StrayInterrupt(n) => write!(f, "interrupt {n} fired with no handler: pins made safe, head restarted"),
+            Fault::LaserDisabled => f.write_str("this image never turns the laser on (built with `no-laser`, for bring-up); flash the full image to measure"),
         }
     }
 }

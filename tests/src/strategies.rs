@@ -76,6 +76,7 @@ pub fn fault() -> impl Strategy<Value = Fault> {
         }),
         Just(Fault::ClockStopped),
         any::<i16>().prop_map(Fault::StrayInterrupt),
+        Just(Fault::LaserDisabled),
     ]
 }
 

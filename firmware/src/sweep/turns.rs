@@ -36,6 +36,7 @@ impl<B: Board> Head<B> {
             return Err(f);
         }
         let (start, end, limits) = self.sweep_path(&req).await?;
+        self.laser_permitted()?;
         self.apply(Event::Measure)?;
         let r = async {
             let mut sw = self.begin_sweep(req.periods_per_sample, (limits, &[]), start, end, None).await?;

@@ -125,6 +125,8 @@ async fn run(spawner: Spawner) {
     if let Err(fault) = crystal {
         defmt::warn!("{}", defmt::Display2Format(&fault));
         head.inhibit_laser(fault);
+    } else if cfg!(feature = "no-laser") {
+        head.inhibit_laser(gonio_shared::Fault::LaserDisabled);
     }
     loop {
         // Serve until the host goes away (the head is then in its safe
