@@ -8,5 +8,6 @@ pub mod board_scans;
 pub mod boot_trials;
 pub mod chip_costs;
 pub mod chop_signal;
+pub mod chop_trials;
 pub mod fault_trials;
 pub mod virtual_board;

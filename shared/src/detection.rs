@@ -45,7 +45,15 @@ const _: () = assert!(DetectionSettings::ADC_RATE_MAX_HZ < DetectionSettings::AD
 impl DetectionSettings {
     /// Limits of the reference hardware (ADC rate ≤ 200 kS/s, integration ≤ 10 s).
     pub const CHOP_HZ_MIN: f32 = 1.0;
-    pub const CHOP_HZ_MAX: f32 = 5_000.0;
+    /// The fastest chop: the ADC's DMA ring holds two periods, so the
+    /// thread must read each period within one period, whatever else it
+    /// does. `board-faults` measures at this chop with 200 samples a period
+    /// (200 kS/s): five measurements made, the longest turn of the thread
+    /// 584 µs with the laser on, 416 µs of slack (at 5 kHz, the earlier
+    /// limit, every measurement failed with E500). A sweep's sample end
+    /// and the serve loop's budget between polls fit in a period too
+    /// (`chip-bench`'s `sweep_sample_end_instructions`).
+    pub const CHOP_HZ_MAX: f32 = 1_000.0;
     pub const SAMPLES_PER_PERIOD_MAX: u16 = 512;
     /// Conversions ADC1 completes per second on the reference board: a
     /// 21 MHz ADC clock (APB2 84 MHz / 4), 84 sampling cycles and 12 of

@@ -38,12 +38,6 @@ impl SweepRequest {
     /// Longest sweep (s at cruise): the step timer counts 2³² ticks of
     /// 1 µs (71 min) per move.
     pub const DURATION_MAX_S: f32 = 3000.0;
-    /// Fastest chop a sweep runs with: a sample's end (its last period's
-    /// demodulation, drift fit, estimate and tag, some 31 000 instructions,
-    /// `chip-bench`) and the serve loop's other work (up to 100 000 between
-    /// two polls) must fit in one chop period (168 000 cycles at 1 kHz)
-    /// while the next period fills the ADC's ring of two.
-    pub const CHOP_MAX_HZ: f32 = 1000.0;
 }
 
 /// How narrow the material's lobes are (from the model being fitted or a

@@ -35,8 +35,7 @@
 //!   `sweep_sample_end_instructions` what a sample's end computes (its last
 //!   period's demodulation, drift fit, estimate, tag) while the next period
 //!   fills the ADC's ring of two: with the serve loop's budget it must fit
-//!   in a period of the fastest chop a sweep runs with
-//!   (`SweepRequest::CHOP_MAX_HZ`).
+//!   in a period of the fastest chop (`DetectionSettings::CHOP_HZ_MAX`).
 //! - `resume_instructions_max` (≤ 1 000 000): a scan resumed near its end.
 //! - `await_free_instructions_max` (≤ 100 000): the longest poll of the serve
 //!   loop while it serves the full Belcour grid (all 3 441 points, with a
@@ -76,7 +75,7 @@ use gonio_bench::virtual_board::{board_plant, chip_images, Board};
 use gonio_firmware::config::CPU_HZ;
 use gonio_firmware::motion::blocks::BLOCK_PLAN_INSTRUCTIONS;
 use gonio_shared::scan::VISIT_CHUNK;
-use gonio_shared::SweepRequest;
+use gonio_shared::DetectionSettings;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 use std::process::Command;
@@ -380,11 +379,11 @@ fn main() -> Result<()> {
     // What a sweep computes from a sample's last period to the next sample's
     // first (that period's demodulation, the drift fit, the estimate, the
     // tag): with the serve loop's other work between two polls, it must take
-    // less than a period of the fastest chop a sweep runs with, or the ADC's
-    // ring (two periods) overruns.
+    // less than a period of the fastest chop, or the ADC's ring (two
+    // periods) overruns.
     let demod_period = max("demod_square")?.max(max("demod_sine")?);
     let sweep_sample_end = demod_period + max("sweep_drift")? + max("sweep_estimate")? + sweep_tag;
-    let sweep_sample_end_bar = (CPU_HZ / SweepRequest::CHOP_MAX_HZ as f64) as u64 - AWAIT_FREE_BAR;
+    let sweep_sample_end_bar = (CPU_HZ / DetectionSettings::CHOP_HZ_MAX as f64) as u64 - AWAIT_FREE_BAR;
     let figures = json!({
         "emulator": run["emulator"],
         "cpu_hz_assumed": CPU_HZ,

@@ -13,7 +13,7 @@ use crate::state::{self, Event};
 use crate::units;
 use embedded_hal_async::delay::DelayNs;
 use gonio_shared::sample::ScanPosition;
-use gonio_shared::{AxisAngles, Fault, Field, Reply, SampleFlags, SweepLobe, SweepReport, SweepRequest, SweepRow, SweptSample};
+use gonio_shared::{AxisAngles, Fault, Reply, SampleFlags, SweepLobe, SweepReport, SweepRequest, SweepRow, SweptSample};
 
 /// What one turn of a sweep scan's row did.
 pub(crate) enum SweepTurn {
@@ -83,12 +83,7 @@ impl<B: Board> Head<B> {
 
     /// Checks what a sweep asks of the detector and of its samples.
     pub(crate) fn check_sweep(&self, periods_per_sample: u16, speed_dps: f32, lobe: Option<&SweepLobe>) -> Reply<()> {
-        let chop_hz = self.detector.settings().chop_hz;
-        sweep::check(&self.cfg, periods_per_sample, speed_dps, lobe, chop_hz)?;
-        if chop_hz > SweepRequest::CHOP_MAX_HZ {
-            return Err(Fault::InvalidValue(Field::ChopFrequency));
-        }
-        Ok(())
+        sweep::check(&self.cfg, periods_per_sample, speed_dps, lobe, self.detector.settings().chop_hz)
     }
 
     /// One turn of a sweep scan's row at scan position `at`: the first turn
