@@ -16,7 +16,7 @@
 //! chop never raised where the head refuses to measure.
 
 use crate::chip_costs;
-use crate::virtual_board::{Board, TARGET};
+use crate::virtual_board::{self, TARGET};
 use anyhow::{bail, Context, Result};
 use gonio_acquire::client::HeadClient;
 use gonio_acquire::target::Port;
@@ -132,25 +132,8 @@ fn same_fault(found: Option<Fault>, expected: Fault) -> bool {
 
 fn trial(root: &Path, image: &Path, plant: &Path, boot: &Boot) -> Result<Value> {
     let fitted = boot.crystal.map_or("none".to_string(), |hz| hz.to_string());
-    let board = Board::start(
-        root,
-        image,
-        &[
-            "--seconds".as_ref(),
-            TRIAL_SECONDS.as_ref(),
-            "--plant".as_ref(),
-            plant.as_os_str(),
-            "--crystal".as_ref(),
-            fitted.as_ref(),
-        ],
-    )?;
-    let pty = board.pty.clone();
-    let host = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .context("a runtime for the client")?
-        .block_on(host_side(&pty));
-    let report = board.stop()?;
+    let crystal = ["--crystal".as_ref(), fitted.as_ref()];
+    let (host, report) = virtual_board::trial(root, image, plant, TRIAL_SECONDS, &crystal, async |pty| host_side(&pty).await)?;
     let clocks = &report["clocks"];
     let rose = |pin: &str| {
         report["pins"]

@@ -12,7 +12,7 @@
 //! made, no conversion lost, and the slack, one period less the thread's
 //! longest turn with the laser on, positive.
 
-use crate::virtual_board::Board;
+use crate::virtual_board;
 use anyhow::{Context, Result};
 use gonio_acquire::client::HeadClient;
 use gonio_acquire::target::Port;
@@ -64,15 +64,7 @@ pub fn run(root: &Path, image: &Path, plant: &Path) -> Result<Value> {
         "board chop: {} Hz, {} samples per period",
         settings.chop_hz, settings.samples_per_period
     );
-    let args = ["--seconds".as_ref(), TRIAL_SECONDS.as_ref(), "--plant".as_ref(), plant.as_os_str()];
-    let board = Board::start(root, image, &args)?;
-    let pty = board.pty.clone();
-    let host = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .context("a runtime for the client")?
-        .block_on(host_side(&pty, settings));
-    let report = board.stop()?;
+    let (host, report) = virtual_board::trial(root, image, plant, TRIAL_SECONDS, &[], async |pty| host_side(&pty, settings).await)?;
     let period_us = 1e6 / f64::from(settings.chop_hz);
     let turn_us = report["thread_turn_longest_laser_on_us"].as_f64();
     let slack_us = turn_us.map(|t| period_us - t);

@@ -59,7 +59,7 @@
 //! then the enables) where the thread lives on, and the watchdog's timeout
 //! where it does not.
 
-use crate::virtual_board::Board;
+use crate::virtual_board;
 use anyhow::{Context, Result};
 use gonio_acquire::client::HeadClient;
 use gonio_acquire::target::Port;
@@ -200,25 +200,14 @@ async fn host_side(pty: &str, after: After) -> Vec<(String, Result<String, Strin
 
 fn trial(root: &Path, image: &Path, plant: &Path, t: &Trial) -> Result<Value> {
     let fault = format!("{}@laser+{STRIKE_S}", t.kind);
-    let board = Board::start(
+    let (host, report) = virtual_board::trial(
         root,
         image,
-        &[
-            "--seconds".as_ref(),
-            TRIAL_SECONDS.as_ref(),
-            "--plant".as_ref(),
-            plant.as_os_str(),
-            "--fault".as_ref(),
-            fault.as_ref(),
-        ],
+        plant,
+        TRIAL_SECONDS,
+        &["--fault".as_ref(), fault.as_ref()],
+        async |pty| host_side(&pty, t.after).await,
     )?;
-    let pty = board.pty.clone();
-    let host = tokio::runtime::Builder::new_current_thread()
-        .enable_all()
-        .build()
-        .context("a runtime for the client")?
-        .block_on(host_side(&pty, t.after));
-    let report = board.stop()?;
     let f = &report["fault"];
     let laser_off = f["laser_off_after_s"].as_f64();
     let chop_off = f["chop_off_after_s"].as_f64();

@@ -57,6 +57,29 @@ pub fn head_image(root: &Path) -> Result<PathBuf> {
     Ok(chip_images(root, &["gonio-head"])?.join("gonio-head"))
 }
 
+/// A trial on the board: `image` run for at most `seconds` of emulated
+/// time with `plant` behind its pins and `args` besides, while `host`
+/// drives its port (the pseudo-terminal's path) on a runtime of its own;
+/// what the host met, and the board's report once it is told to stop.
+pub fn trial<T, F: std::future::Future<Output = T>>(
+    root: &Path,
+    image: &Path,
+    plant: &Path,
+    seconds: &str,
+    args: &[&OsStr],
+    host: impl FnOnce(String) -> F,
+) -> Result<(T, Value)> {
+    let mut all: Vec<&OsStr> = vec!["--seconds".as_ref(), seconds.as_ref(), "--plant".as_ref(), plant.as_os_str()];
+    all.extend_from_slice(args);
+    let board = Board::start(root, image, &all)?;
+    let met = tokio::runtime::Builder::new_current_thread()
+        .enable_all()
+        .build()
+        .context("a runtime for the client")?
+        .block_on(host(board.pty.clone()));
+    Ok((met, board.stop()?))
+}
+
 /// A board running `image` with its port on a pseudo-terminal.
 pub struct Board {
     child: Child,

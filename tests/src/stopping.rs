@@ -113,6 +113,29 @@ pub fn small_sweep_scan() -> ScanSpec {
     }
 }
 
+/// An undisturbed run of [`small_sweep_scan`] on a ready head: how long it
+/// took and each row's first and last swept sample, in visit order (s from
+/// the scan's start; the retro point, measured at rest, is no row).
+pub fn swept_rows(head: &mut FrameHead) -> (f64, Vec<(f64, f64)>) {
+    ready(head);
+    let t0 = head.now();
+    let sent = head.serve_timed(
+        scan_frames(&small_sweep_scan()).into_iter().map(|f| (t0, Cue::Frame(f))),
+        t0 + 600.0,
+    );
+    let events = scan_events(&sent);
+    let whole = events.last().map(|(_, s)| s.t_s - t0).expect("the scan ended");
+    let mut rows: std::collections::BTreeMap<u32, (f64, f64)> = Default::default();
+    for (e, sent) in &events {
+        if let ScanEvent::SweptSample(s) = e {
+            let t = sent.t_s - t0;
+            let row = rows.entry(s.scan.expect("a row's sample").order).or_insert((t, t));
+            row.1 = t;
+        }
+    }
+    (whole, rows.into_values().collect())
+}
+
 /// Where an axis's motion was when the trigger came.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum Phase {

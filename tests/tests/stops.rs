@@ -15,7 +15,9 @@ use gonio_shared::icd::{
 };
 use gonio_shared::{Fault, Geometry, HeadState, SafetySettings, ScanEvent};
 use gonio_sim::{Cue, FrameHead, SimConfig};
-use gonio_tests::stopping::{accel_steps, decel_s_max, ready, small_scan, small_sweep_scan, speed_jump, trial, Activity, Trigger};
+use gonio_tests::stopping::{
+    accel_steps, decel_s_max, ready, small_scan, small_sweep_scan, speed_jump, swept_rows, trial, Activity, Trigger,
+};
 use std::cell::Cell;
 use std::convert::Infallible;
 use std::rc::Rc;
@@ -113,19 +115,8 @@ fn a_brake_at_any_moment_of_a_move_slows_at_the_limit_without_skipping_a_step() 
 #[test]
 fn an_estop_while_a_swept_sample_waits_to_be_sent_stops_at_once() {
     let mut head = FrameHead::new(&SimConfig::default());
-    ready(&mut head);
-    let t0 = head.now();
-    let sent = head.serve_timed(
-        scan_frames(&small_sweep_scan()).into_iter().map(|f| (t0, Cue::Frame(f))),
-        t0 + 600.0,
-    );
-    // The first row's first and last sample, undisturbed.
-    let swept: Vec<f64> = scan_events(&sent)
-        .iter()
-        .filter(|(e, _)| matches!(e, ScanEvent::SweptSample(_)))
-        .map(|(_, s)| s.t_s - t0)
-        .collect();
-    let (first, last) = (swept[0], swept[swept.len() / 2 - 1]);
+    let (_, rows) = swept_rows(&mut head);
+    let (first, last) = rows[0];
     ready(&mut head);
     // The trial's clock starts a millisecond after `ready`. The host stops
     // reading 0.3 s before the row's first sample; the E-STOP opens 40 %
@@ -149,29 +140,12 @@ fn an_estop_while_a_swept_sample_waits_to_be_sent_stops_at_once() {
 #[test]
 fn a_stop_mid_row_darkens_the_laser_brakes_the_arm_and_the_row_is_swept_again() {
     let mut head = FrameHead::new(&SimConfig::default());
-    ready(&mut head);
     // When each row is swept, from an undisturbed run: the trials stop it
-    // 40 % into a row's samples.
-    let t0 = head.now();
-    let sent = head.serve_timed(
-        scan_frames(&small_sweep_scan()).into_iter().map(|f| (t0, Cue::Frame(f))),
-        t0 + 600.0,
-    );
-    let events = scan_events(&sent);
-    let whole = events.last().map(|(_, s)| s.t_s - t0).expect("the scan ended");
-    // Each row's first and last sample, by visit position (the retro point,
-    // measured at rest, is none).
-    let mut rows: std::collections::BTreeMap<u32, (f64, f64)> = Default::default();
-    for (e, sent) in &events {
-        if let ScanEvent::SweptSample(s) = e {
-            let row = rows.entry(s.scan.expect("a row's sample").order).or_insert((sent.t_s, sent.t_s));
-            row.1 = sent.t_s;
-        }
-    }
+    // 40 % into a row's samples (the trial's clock starts a millisecond
+    // after `ready`).
+    let (whole, rows) = swept_rows(&mut head);
     assert_eq!(rows.len(), 2);
-    // (The trial's clock starts a millisecond after `ready`.)
-    let mid_rows = rows.values().map(|(a, b)| a + 0.4 * (b - a) - t0 - 0.001);
-    let taus: Vec<f64> = mid_rows.collect();
+    let taus: Vec<f64> = rows.iter().map(|(a, b)| a + 0.4 * (b - a) - 0.001).collect();
     for trigger in Trigger::ALL {
         for &tau in &taus {
             ready(&mut head);
