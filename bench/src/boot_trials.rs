@@ -6,10 +6,11 @@
 //! - the board's 8 MHz crystal: the PLL on it, the clock security system
 //!   on, the measurement made;
 //! - no crystal, and a 12 MHz one (as on several common F405 boards): the
-//!   PLL on the HSI, the status naming the crystal's fault (E601, with the
-//!   frequency counted), the measurement refused with it;
+//!   PLL on the HSI, the status's `laser_inhibited` naming the crystal's
+//!   fault (E601, with the frequency counted), the measurement refused
+//!   with it;
 //! - the `no-laser` image (docs/bring-up.md) with the good crystal: E604 in
-//!   the status, the measurement refused with it.
+//!   `laser_inhibited`, the measurement refused with it.
 //!
 //! Every boot: the core and the USB clock at 168 and 48 MHz (never the 252
 //! and 72 MHz a trusted 12 MHz crystal gives), and the laser enable and the
@@ -99,7 +100,8 @@ pub fn no_laser_image(root: &Path) -> Result<PathBuf> {
     std::path::absolute(dir.join(TARGET).join("release").join("gonio-head")).context("the no-laser image's path")
 }
 
-/// What the host met: the status's last fault and the measurement.
+/// What the host met: why the status says the laser is inhibited, and the
+/// measurement.
 async fn host_side(pty: &str) -> Result<(Option<Fault>, Result<f32, String>)> {
     let head = HeadClient::connect(&Port(pty.to_string())).await.context("connecting")?;
     let status = head.request::<StatusEndpoint>(&()).await.context("the status")?;
@@ -109,7 +111,7 @@ async fn host_side(pty: &str) -> Result<(Option<Fault>, Result<f32, String>)> {
         .map(|s| s.signal.amplitude_v)
         .map_err(|e| format!("{e:#}"));
     head.close().await;
-    Ok((status.last_fault, measured))
+    Ok((status.laser_inhibited, measured))
 }
 
 /// Whether the head's fault is the one expected, the crystal's frequency
@@ -150,7 +152,7 @@ fn trial(root: &Path, image: &Path, plant: &Path, boot: &Boot) -> Result<Value> 
     if clocks["pll_source"] != source || clocks["css_on"] != json!(good_crystal) {
         problems.push(format!("the PLL on {}, CSS {} ({clocks})", clocks["pll_source"], clocks["css_on"]));
     }
-    let (last_fault, measured) = match &host {
+    let (inhibited, measured) = match &host {
         Ok((f, m)) => (*f, m.clone()),
         Err(e) => {
             problems.push(format!("host: {e:#}"));
@@ -159,13 +161,13 @@ fn trial(root: &Path, image: &Path, plant: &Path, boot: &Boot) -> Result<Value> 
     };
     match boot.refused {
         None => {
-            if last_fault.is_some() || measured.is_err() || !laser_rose {
-                problems.push(format!("last fault {last_fault:?}, measurement {measured:?}"));
+            if inhibited.is_some() || measured.is_err() || !laser_rose {
+                problems.push(format!("laser inhibited {inhibited:?}, measurement {measured:?}"));
             }
         }
         Some(expected) => {
-            if !same_fault(last_fault, expected) {
-                problems.push(format!("the status's last fault {last_fault:?}, not {expected:?}"));
+            if !same_fault(inhibited, expected) {
+                problems.push(format!("the laser inhibited for {inhibited:?}, not {expected:?}"));
             }
             let code = format!("E{}", expected.code());
             if !matches!(&measured, Err(e) if e.contains(&code)) {
@@ -180,7 +182,7 @@ fn trial(root: &Path, image: &Path, plant: &Path, boot: &Boot) -> Result<Value> 
         "crystal_hz": boot.crystal,
         "no_laser_image": boot.no_laser,
         "clocks": clocks,
-        "last_fault": last_fault.map(|f| f.to_string()),
+        "laser_inhibited": inhibited.map(|f| f.to_string()),
         "measurement": measured.map_or_else(|e| json!({ "refused": e }), |v| json!({ "amplitude_v": v })),
         "laser_rose": laser_rose,
         "chop_rose": chop_rose,

@@ -117,12 +117,11 @@ impl<B: Board> Head<B> {
     }
 
     /// Keeps the laser off until the chip restarts, for `why` (reported in
-    /// the status, and as the refusal of everything that needs the laser):
-    /// the chip layer's answer to a clock it cannot trust. The axes still
-    /// home and move, for bring-up.
+    /// the status's `laser_inhibited`, and as the refusal of everything that
+    /// needs the laser): the chip layer's answer to a clock it cannot trust,
+    /// or the `no-laser` image. The axes still home and move, for bring-up.
     pub fn inhibit_laser(&mut self, why: Fault) {
         self.laser_inhibited = Some(why);
-        self.last_fault = Some(why);
     }
 
     /// Refuses, before anything moves, what would need an inhibited laser.
@@ -156,7 +155,7 @@ impl<B: Board> Head<B> {
         self.detector.stop(&mut self.hw);
     }
 
-    fn drivers(&mut self, on: bool) {
+    pub(crate) fn drivers(&mut self, on: bool) {
         for en in self.hw.enable_n.iter_mut() {
             let _ = if on { en.set_low() } else { en.set_high() };
         }
@@ -270,6 +269,7 @@ impl<B: Board> Head<B> {
             samples_remeasured: self.samples_remeasured,
             sanity_loaded: self.sanity.is_some(),
             last_fault: self.last_fault,
+            laser_inhibited: self.laser_inhibited,
             uptime_us: self.hw.clock.now_us(),
             requests_held: 0,
         }
@@ -412,6 +412,9 @@ impl<B: Board> Head<B> {
     }
 
     pub async fn measure(&mut self, req: MeasureRequest) -> Reply<Sample> {
+        if let Some(f) = state::transition(self.mode, Event::Measure).refused {
+            return Err(f);
+        }
         self.laser_permitted()?;
         self.apply(Event::Measure)?;
         let r = self.acquire(req.at, None).await;

@@ -120,6 +120,13 @@ pub trait Sentry {
     /// A sentry that latches openings (the chip's) keeps them until
     /// [`Sentry::until`] reports one or this is called.
     fn rearm(&mut self) {}
+    /// The E-STOP is re-armed (closed through the debounce, and a
+    /// continue): a backstop that disables the drivers should the stop
+    /// stall (the chip's guard) stands down. Whether it had to disable them
+    /// since the opening: the steps emitted after that moved nothing.
+    fn rearmed(&mut self) -> bool {
+        false
+    }
     /// The serve loop is alive: called on every turn and from every wait, at
     /// least every [`ALIVE_EVERY_US`]. The chip feeds its
     /// watchdog only while these keep coming, so a serve loop stuck in a

@@ -361,6 +361,13 @@ impl<B: Board> Head<B> {
                 return Err(Fault::EmergencyStop);
             }
             self.estop_open = false;
+            if sentry.rearmed() {
+                // The backstop cut the drivers mid-stop: where the axes
+                // stand is no longer known.
+                self.pos.homed = [false; 3];
+                self.drivers(false);
+                crate::warn!("the E-STOP's backstop disabled the drivers: home again");
+            }
         }
         self.apply(Event::Continue)?;
         self.last_heard_us = sentry.now_us();
@@ -489,7 +496,7 @@ impl<B: Board> Head<B> {
                         return self.publish_swept(s, link, sentry).await.map(drop);
                     }
                     Ok(Ok(SweepTurn::Last(s, samples))) => {
-                        // Held at this row, swept again, should the send fail or the E-STOP open.
+                        // In the head while the sample goes out, for the stop a failed send or the E-STOP makes.
                         self.scan = Some(run);
                         let sent = self.publish_swept(s, link, sentry).await?;
                         match (sent, self.scan.take()) {
@@ -533,8 +540,8 @@ impl<B: Board> Head<B> {
     /// against the E-STOP: no watch runs while it is sent, and a send that
     /// waits on a full queue (up to the link's timeout, 500 ms on the chip)
     /// must not hold the stop back. An opening stops the head as under
-    /// watch: the scan held, the row swept again on continuing, this sample
-    /// dropped with it. Whether the sample went out.
+    /// watch does (the scan dropped, resumed by the host from its row), this
+    /// sample with it. Whether the sample went out.
     async fn publish_swept<L: Link, S: Sentry>(&mut self, s: SweptSample, link: &mut L, sentry: &mut S) -> Result<bool, LinkError> {
         let ev = ScanEvent::SweptSample(s);
         let opened = {

@@ -49,6 +49,10 @@ pub struct Status {
     pub samples_remeasured: u32,
     pub sanity_loaded: bool,
     pub last_fault: Option<Fault>,
+    /// Why the laser may not come on until the head restarts (a crystal
+    /// that failed its check, E601; the `no-laser` image, E604), if so:
+    /// beside `last_fault`, which keeps why the head last restarted.
+    pub laser_inhibited: Option<Fault>,
     pub uptime_us: u64,
     /// Requests received and kept unanswered while an operation or a scan
     /// point runs (answered when it ends). With none kept, a request the

@@ -149,8 +149,10 @@ pub fn build(cfg: &SimConfig) -> (Head<board::SimBoard>, Rc<RefCell<World>>) {
     };
     let mut head = Head::new(cfg.machine, hw, info);
     head.prepare();
-    if let Some(measured_khz) = cfg.faults.crystal_khz() {
-        let expected_khz = gonio_firmware::config::CRYSTAL_HZ / 1000;
+    let expected_hz = gonio_firmware::config::CRYSTAL_HZ;
+    let failed = |khz: &u32| !gonio_firmware::crystal::matches(khz.saturating_mul(1000), expected_hz);
+    if let Some(measured_khz) = cfg.faults.crystal_khz().filter(failed) {
+        let expected_khz = expected_hz / 1000;
         head.inhibit_laser(gonio_shared::Fault::Crystal {
             measured_khz,
             expected_khz,

@@ -221,6 +221,7 @@ pub fn status() -> impl Strategy<Value = Status> {
             any::<u32>(),
             any::<bool>(),
             proptest::option::of(fault()),
+            proptest::option::of(fault()),
             any::<u64>(),
             any::<u8>(),
         ),
@@ -229,7 +230,7 @@ pub fn status() -> impl Strategy<Value = Status> {
             |(
                 state,
                 (homed, laser_on, axes, detection, drivers_enabled, estop_open),
-                (sent, flagged, remeasured, sanity_loaded, last_fault, up, held),
+                (sent, flagged, remeasured, sanity_loaded, last_fault, laser_inhibited, up, held),
             )| Status {
                 state,
                 homed,
@@ -243,6 +244,7 @@ pub fn status() -> impl Strategy<Value = Status> {
                 samples_remeasured: remeasured,
                 sanity_loaded,
                 last_fault,
+                laser_inhibited,
                 uptime_us: up,
                 requests_held: held,
             },

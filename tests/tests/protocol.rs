@@ -238,6 +238,10 @@ fn largest_messages_fit_the_frame_buffer() {
         samples_remeasured: u32::MAX,
         sanity_loaded: true,
         last_fault: Some(Fault::HomeSwitchNotFound(Axis::Arm)),
+        laser_inhibited: Some(Fault::Crystal {
+            measured_khz: u32::MAX,
+            expected_khz: u32::MAX,
+        }),
         uptime_us: u64::MAX,
         requests_held: u8::MAX,
     };

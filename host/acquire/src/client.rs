@@ -318,6 +318,7 @@ mod tests {
             samples_remeasured: 0,
             sanity_loaded: false,
             last_fault: None,
+            laser_inhibited: None,
             uptime_us: 0,
             requests_held: 0,
         }

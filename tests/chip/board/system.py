@@ -30,9 +30,9 @@ class Rcc(Block):
     A crystal that stops (`stop_crystal`) with CSSON set raises the clock
     security system's NMI (`on_css`), sets CIR.CSSF and switches SYSCLK to
     the HSI, the HSE and a PLL fed by it off (RM0090 §7.2.7); without CSSON
-    a core clocked from it stops (`on_clock_lost`). The virtual time stays
-    168 MHz cycles whatever SYSCLK is: the core's instructions take a
-    cycle each on any clock, and `sysclk_hz` says what a real one would run at."""
+    a core clocked from it stops (`on_clock_lost`). CSSON stays as software
+    set it. The virtual time stays in 168 MHz cycles; the core charges
+    168 MHz / SYSCLK of them per instruction (core.py)."""
 
     name = "RCC"
     # BDCR (LSE), CSR (LSI): the enables' bits, each ready bit the next.
@@ -106,7 +106,7 @@ class Rcc(Block):
         on_hse = self._on_hse()
         if cr & CSSON:
             self.regs[0x0C] = self.regs.get(0x0C, 0) | CSSF
-            cr &= ~(HSEON | CSSON)
+            cr &= ~HSEON
             if self.pll_from_hse():
                 cr &= ~PLLON
             self.regs[0x00] = self._cr(cr)

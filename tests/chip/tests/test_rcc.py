@@ -95,6 +95,7 @@ def test_a_stopped_crystal_raises_the_css_and_falls_back_to_the_hsi() -> None:
     assert nmis == [1] and not lost
     assert r.read(0x0C) & 1 << 7  # CSSF
     assert not r.read(CR) & (HSEON | HSERDY | PLLON | PLLRDY)
+    assert r.read(CR) & 1 << 19, "CSSON stays as software set it"
     assert r.sysclk_hz() == 16_000_000 and r.read(CFGR_OFFSET) & 0xF == 0
     r.write(0x0C, 1 << 23)  # CSSC
     assert not r.read(0x0C) & 1 << 7

@@ -27,6 +27,8 @@ const START_TIMEOUT_MS: u32 = 100;
 const START_WRAPS: u32 = (START_TIMEOUT_MS * (crystal::HSI_HZ / 1000)).div_ceil(1 << 16);
 /// A capture later than this many wraps: the crystal stopped counting.
 const CAPTURE_WRAPS: u32 = 2;
+/// Counts tried before one without an overcapture is given up on.
+const COUNTS: u32 = 3;
 /// TIM11_OR's TI1_RMP = 10: HSE_RTC on channel 1.
 const TI1_HSE_RTC: u32 = 0b10;
 /// SR with UIF written 0 and the other flags 1 (rc_w0: only UIF clears).
@@ -47,7 +49,7 @@ pub fn check_crystal() -> Result<(), Fault> {
     tim.cr1().write(|w| w.set_cen(true));
     rcc.cr().modify(|w| w.set_hseon(true));
     let measured_hz = if within(START_WRAPS, || rcc.cr().read().hserdy()) {
-        count()
+        counted()
     } else {
         0
     };
@@ -63,6 +65,22 @@ pub fn check_crystal() -> Result<(), Fault> {
         measured_khz: (measured_hz + 500) / 1000,
         expected_khz: CRYSTAL_HZ / 1000,
     })
+}
+
+/// The crystal's frequency (Hz) over [`COUNTS`] tries: a capture missed
+/// (CC1OF: the core held up, by a debugger at boot) spans two intervals
+/// and is counted again.
+fn counted() -> u32 {
+    let tim = pac::TIM11;
+    let mut hz = 0;
+    for _ in 0..COUNTS {
+        tim.sr().write_value(regs::Sr1ch(0));
+        hz = count();
+        if !tim.sr().read().ccof(0) {
+            break;
+        }
+    }
+    hz
 }
 
 /// HSI ticks over [`crystal::CAPTURES`] captures of HSE_RTC, as a
@@ -88,10 +106,13 @@ fn count() -> u32 {
 }
 
 /// Polls `ready` while TIM11 wraps at most `wraps` times; whether it came.
+/// A poll takes several of the counter's ticks (it counts the HSI the core
+/// runs on), so a poll per tick bounds the wait too: a TIM11 that does not
+/// count cannot hang the boot.
 fn within(wraps: u32, mut ready: impl FnMut() -> bool) -> bool {
     let tim = pac::TIM11;
     let mut seen = 0;
-    loop {
+    for _ in 0..(wraps + 1) << 16 {
         if ready() {
             return true;
         }
@@ -103,6 +124,7 @@ fn within(wraps: u32, mut ready: impl FnMut() -> bool) -> bool {
             }
         }
     }
+    false
 }
 
 /// A 168 MHz core and the 48 MHz USB clock, from the 8 MHz crystal (÷4

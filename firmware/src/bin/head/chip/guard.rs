@@ -42,6 +42,8 @@ static TRIPPED: AtomicBool = AtomicBool::new(false);
 /// arms it with.
 static BACKSTOP: AtomicU32 = AtomicU32::new(0);
 static BACKSTOP_ARMED: AtomicU32 = AtomicU32::new(0);
+/// Whether the backstop disabled the drivers since it was last disarmed.
+static BACKSTOP_FIRED: AtomicBool = AtomicBool::new(false);
 static TRIP: AtomicWaker = AtomicWaker::new();
 
 /// The guard's memory, touched by TIM7's handler only.
@@ -83,6 +85,7 @@ impl Handler<Tim7Irq> for GuardInterrupt {
             BACKSTOP.store(next, Ordering::Relaxed);
             if cut {
                 super::pins::disable_drivers();
+                BACKSTOP_FIRED.store(true, Ordering::Relaxed);
                 defmt::error!("guard: drivers disabled, the E-STOP's stop overdue");
             }
         }
@@ -95,9 +98,11 @@ pub fn arm_backstop() {
     let _ = BACKSTOP.compare_exchange(0, BACKSTOP_ARMED.load(Ordering::Relaxed), Ordering::Relaxed, Ordering::Relaxed);
 }
 
-/// The E-STOP re-armed (closed, and a continue): the drivers may be enabled again.
-pub fn disarm_backstop() {
+/// The E-STOP re-armed (closed through the debounce, and a continue): the
+/// drivers may be enabled again. Whether the backstop had disabled them.
+pub fn disarm_backstop() -> bool {
     BACKSTOP.store(0, Ordering::Relaxed);
+    BACKSTOP_FIRED.swap(false, Ordering::Relaxed)
 }
 
 /// Starts the guard's ticks.

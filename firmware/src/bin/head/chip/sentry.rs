@@ -92,7 +92,10 @@ impl Sentry for ChipSentry {
 
     fn rearm(&mut self) {
         self.handled = OPENINGS.load(Ordering::Acquire);
-        super::guard::disarm_backstop();
+    }
+
+    fn rearmed(&mut self) -> bool {
+        super::guard::disarm_backstop()
     }
 
     fn now_us(&self) -> u64 {
