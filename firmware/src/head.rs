@@ -51,8 +51,8 @@ pub struct Head<B: Board> {
     pub(crate) samples_flagged: u32,
     samples_remeasured: u32,
     pub(crate) last_fault: Option<Fault>,
-    /// Why the laser may not come on until the chip restarts (a clock tree
-    /// that failed its check at boot), if it may not.
+    /// Why the laser may not come on until the chip restarts (a crystal
+    /// that failed its check at boot, or the `no-laser` image), if it may not.
     laser_inhibited: Option<Fault>,
     /// What the head is doing (the state table's state).
     pub(crate) mode: Mode,
